@@ -1,0 +1,211 @@
+//! Axis-aligned boxes: `min ≤ p ≤ max` componentwise; slab-test intersection.
+
+use crate::hit::PrimitiveHit;
+use crate::primitive::GeometryError;
+use crate::ray::{Interval, Ray};
+use crate::real::{Real, Vec3};
+
+/// A closed axis-aligned box. A side may have zero length (a flat box).
+/// Normals point outward, along the axis of the face that was hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    min: Vec3,
+    max: Vec3,
+}
+
+/// Where a ray line enters and leaves a box: parameters and the axis of each face.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct SlabSpan {
+    enter: Real,
+    enter_axis: usize,
+    exit: Real,
+    exit_axis: usize,
+}
+
+impl Aabb {
+    /// The box from `min` to `max`; refused if any coordinate is not finite or
+    /// any `min` exceeds its `max`.
+    pub fn new(min: Vec3, max: Vec3) -> Result<Self, GeometryError> {
+        if !min.is_finite() || !max.is_finite() {
+            return Err(GeometryError::NotFinite("box min or max"));
+        }
+        if min.cmpgt(max).any() {
+            return Err(GeometryError::BoxInverted);
+        }
+        Ok(Self { min, max })
+    }
+
+    /// The smallest box holding both points, whatever their order.
+    pub fn from_corners(a: Vec3, b: Vec3) -> Self {
+        Self { min: a.min(b), max: a.max(b) }
+    }
+
+    /// The smallest box holding all `points`; `None` if there are none.
+    pub fn from_points(points: impl IntoIterator<Item = Vec3>) -> Option<Self> {
+        points.into_iter().fold(None, |acc: Option<Self>, p| {
+            Some(acc.map_or(Self { min: p, max: p }, |b| b.union_point(p)))
+        })
+    }
+
+    /// This box grown to hold `p`.
+    pub fn union_point(self, p: Vec3) -> Self {
+        Self { min: self.min.min(p), max: self.max.max(p) }
+    }
+
+    /// Lower corner.
+    pub fn min(&self) -> Vec3 {
+        self.min
+    }
+    /// Upper corner.
+    pub fn max(&self) -> Vec3 {
+        self.max
+    }
+    /// `(min + max) / 2`.
+    pub fn center(&self) -> Vec3 {
+        0.5 * (self.min + self.max)
+    }
+    /// `(max − min) / 2`: half the side lengths.
+    pub fn half_extents(&self) -> Vec3 {
+        0.5 * (self.max - self.min)
+    }
+    /// `max − min`: the side lengths.
+    pub fn size(&self) -> Vec3 {
+        self.max - self.min
+    }
+    /// Whether `min ≤ p ≤ max` componentwise (the boundary is inside).
+    pub fn contains(&self, p: Vec3) -> bool {
+        p.cmpge(self.min).all() && p.cmple(self.max).all()
+    }
+
+    /// The nearest face hit with `t` in `range`: the entry face from outside,
+    /// the exit face from inside.
+    pub fn intersect(&self, ray: &Ray, range: Interval) -> Option<PrimitiveHit> {
+        let span = self.slab_span(ray)?;
+        let (t, axis, outward_sign) = if range.contains(span.enter) {
+            // Entering through the face the ray meets head-on: normal against the ray.
+            (span.enter, span.enter_axis, -ray.dir[span.enter_axis].signum())
+        } else if range.contains(span.exit) {
+            (span.exit, span.exit_axis, ray.dir[span.exit_axis].signum())
+        } else {
+            return None;
+        };
+        let mut normal = Vec3::ZERO;
+        normal[axis] = outward_sign;
+        Some(PrimitiveHit { t, primitive: 0, normal })
+    }
+
+    /// Whether the ray's segment `range` overlaps the box at all (used to skip
+    /// whole meshes).
+    pub fn overlaps(&self, ray: &Ray, range: Interval) -> bool {
+        self.slab_span(ray).is_some_and(|s| s.enter <= range.max && s.exit >= range.min)
+    }
+
+    /// The slab test (Kay & Kajiya 1986): on each axis the ray line is between
+    /// the two face planes for `t` in `[(min−o)/d, (max−o)/d]` (ordered); the
+    /// box is the intersection of the three intervals.
+    ///
+    /// An axis with `d = ±0` is handled on its own: the ray is inside that slab
+    /// for all `t` when `min ≤ o ≤ max` and never otherwise, so no `0·∞` NaN
+    /// can arise. A ray running along a face is inside (the box is closed).
+    fn slab_span(&self, ray: &Ray) -> Option<SlabSpan> {
+        let mut span =
+            SlabSpan { enter: Real::NEG_INFINITY, enter_axis: 0, exit: Real::INFINITY, exit_axis: 0 };
+        for axis in 0..3 {
+            let (o, d) = (ray.origin[axis], ray.dir[axis]);
+            let (lo, hi) = (self.min[axis], self.max[axis]);
+            if d == 0.0 {
+                if o < lo || o > hi {
+                    return None;
+                }
+                continue;
+            }
+            let (t_lo, t_hi) = ((lo - o) / d, (hi - o) / d);
+            let (near, far) = if t_lo <= t_hi { (t_lo, t_hi) } else { (t_hi, t_lo) };
+            if near > span.enter {
+                span.enter = near;
+                span.enter_axis = axis;
+            }
+            if far < span.exit {
+                span.exit = far;
+                span.exit_axis = axis;
+            }
+        }
+        (span.enter <= span.exit && span.exit.is_finite()).then_some(span)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ALL: Interval = Interval::new(0.0, Real::INFINITY);
+
+    fn unit_box() -> Aabb {
+        Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0)).unwrap()
+    }
+
+    fn hit(o: Vec3, d: Vec3) -> Option<(Real, Vec3)> {
+        unit_box().intersect(&Ray::new(o, d), ALL).map(|h| (h.t, h.normal))
+    }
+
+    #[test]
+    fn ray_from_the_front_enters_through_the_front_face() {
+        // From z = −5 along +z: enters at z = −1 (t = 4), normal −z.
+        assert_eq!(hit(Vec3::new(0.2, 0.3, -5.0), Vec3::Z), Some((4.0, -Vec3::Z)));
+    }
+
+    #[test]
+    fn oblique_ray_enters_through_the_face_it_meets_last() {
+        // From (−3,0.5,−2) along (1,0,0.5): x-slab t ∈ [2,4], z-slab t ∈ [2,6]; y always in.
+        // Enter at t = 2 on the x face (ties keep the first axis), normal −x.
+        assert_eq!(hit(Vec3::new(-3.0, 0.5, -2.0), Vec3::new(1.0, 0.0, 0.5)), Some((2.0, -Vec3::X)));
+        // From (−3,0.5,−4) along (1,0,1): x ∈ [2,4], z ∈ [3,5]: enters at t = 3 through −z.
+        assert_eq!(hit(Vec3::new(-3.0, 0.5, -4.0), Vec3::new(1.0, 0.0, 1.0)), Some((3.0, -Vec3::Z)));
+    }
+
+    #[test]
+    fn ray_from_inside_leaves_through_a_face_with_the_outward_normal() {
+        assert_eq!(hit(Vec3::ZERO, -Vec3::Y), Some((1.0, -Vec3::Y)));
+        assert_eq!(hit(Vec3::new(0.5, 0.0, 0.0), Vec3::new(2.0, 0.0, 0.0)), Some((0.25, Vec3::X)));
+    }
+
+    #[test]
+    fn rays_missing_or_pointing_away_miss() {
+        assert_eq!(hit(Vec3::new(0.0, 0.0, -5.0), -Vec3::Z), None);
+        assert_eq!(hit(Vec3::new(2.0, 0.0, -5.0), Vec3::Z), None);
+        // Passes the corner region: x-slab t ∈ [1,3], y-slab t ∈ [3.5,5.5] don't overlap.
+        assert_eq!(hit(Vec3::new(-2.0, -4.5, 0.0), Vec3::new(1.0, 1.0, 0.0)), None);
+    }
+
+    #[test]
+    fn zero_direction_components_of_either_sign_never_make_nan() {
+        for d in [Vec3::new(0.0, 0.0, 1.0), Vec3::new(-0.0, -0.0, 1.0)] {
+            // Inside the x and y slabs: hit; outside the x slab: miss; on the x face plane: hit.
+            assert_eq!(hit(Vec3::new(0.0, 0.0, -3.0), d), Some((2.0, -Vec3::Z)));
+            assert_eq!(hit(Vec3::new(1.5, 0.0, -3.0), d), None);
+            assert_eq!(hit(Vec3::new(1.0, 0.0, -3.0), d), Some((2.0, -Vec3::Z)));
+            assert_eq!(hit(Vec3::new(-1.0, 1.0, -3.0), d), Some((2.0, -Vec3::Z)));
+        }
+    }
+
+    #[test]
+    fn center_and_extents_follow_from_min_and_max() {
+        let b = Aabb::new(Vec3::new(-1.0, 0.0, 2.0), Vec3::new(3.0, 1.0, 2.0)).unwrap();
+        assert_eq!(b.center(), Vec3::new(1.0, 0.5, 2.0));
+        assert_eq!(b.half_extents(), Vec3::new(2.0, 0.5, 0.0));
+        assert_eq!(b.size(), Vec3::new(4.0, 1.0, 0.0));
+        assert!(b.contains(Vec3::new(3.0, 1.0, 2.0)) && !b.contains(Vec3::new(3.1, 1.0, 2.0)));
+    }
+
+    #[test]
+    fn inverted_boxes_are_refused() {
+        assert_eq!(Aabb::new(Vec3::ONE, Vec3::ZERO), Err(GeometryError::BoxInverted));
+    }
+
+    #[test]
+    fn flat_box_is_hit_on_its_face() {
+        let b = Aabb::new(Vec3::new(-1.0, -1.0, 2.0), Vec3::new(1.0, 1.0, 2.0)).unwrap();
+        let h = b.intersect(&Ray::new(Vec3::ZERO, Vec3::Z), ALL).unwrap();
+        assert_eq!((h.t, h.normal), (2.0, -Vec3::Z));
+    }
+}

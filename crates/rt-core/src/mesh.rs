@@ -1,0 +1,237 @@
+//! Triangle meshes loaded from Wavefront OBJ files.
+
+use std::path::{Path, PathBuf};
+
+use thiserror::Error;
+
+use crate::aabb::Aabb;
+use crate::hit::PrimitiveHit;
+use crate::ray::{Interval, Ray};
+use crate::real::{Real, Vec3};
+use crate::triangle::{geometric_normal, intersect_watertight};
+
+/// Most triangles one mesh may have (after fanning faces): 2²⁶ ≈ 67 M.
+pub const MAX_MESH_TRIANGLES: usize = 1 << 26;
+
+/// Why an OBJ file cannot be used as a mesh.
+#[derive(Debug, Error)]
+pub enum MeshError {
+    /// The file is missing, unreadable or not valid OBJ (tobj's reason).
+    #[error("cannot load OBJ file {path}: {reason}")]
+    Load {
+        /// The OBJ file.
+        path: PathBuf,
+        /// What tobj reported.
+        reason: tobj::LoadError,
+    },
+    /// The file has no faces with three or more corners.
+    #[error("OBJ file {0} has no triangles or polygons")]
+    Empty(PathBuf),
+    /// A vertex is NaN or infinite (after the mesh's transform).
+    #[error("OBJ file {path}: vertex {index} is not finite")]
+    NotFinite {
+        /// The OBJ file.
+        path: PathBuf,
+        /// 0-based vertex index in the file.
+        index: usize,
+    },
+    /// More than [`MAX_MESH_TRIANGLES`] triangles.
+    #[error("OBJ file {path} has {count} triangles, more than the limit of {MAX_MESH_TRIANGLES}")]
+    TooLarge {
+        /// The OBJ file.
+        path: PathBuf,
+        /// Triangle count after fanning.
+        count: usize,
+    },
+}
+
+/// A triangle mesh: shared vertex positions and triangles as index triples.
+///
+/// Triangle `i` is the i-th triangle in file order, faces of more than three
+/// corners fanned in order into `(v0, v1, v2), (v0, v2, v3), …`. Its normal is
+/// `normalize((b−a)×(c−a))`. Zero-area triangles keep their index but are
+/// never hit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mesh {
+    positions: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+    /// Per-triangle unit normal; zero for a degenerate triangle.
+    normals: Vec<Vec3>,
+    bounds: Aabb,
+}
+
+impl Mesh {
+    /// A mesh from positions and index triples. Returns `None` if there are no
+    /// triangles or an index is out of range.
+    pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Option<Self> {
+        if triangles.is_empty() || triangles.iter().flatten().any(|&i| i as usize >= positions.len()) {
+            return None;
+        }
+        let normals = triangles
+            .iter()
+            .map(|&[a, b, c]| {
+                let p = |i: u32| positions[i as usize];
+                geometric_normal(p(a), p(b), p(c)).unwrap_or(Vec3::ZERO)
+            })
+            .collect();
+        let bounds = Aabb::from_points(triangles.iter().flatten().map(|&i| positions[i as usize]))?;
+        Some(Self { positions, triangles, normals, bounds })
+    }
+
+    /// Loads an OBJ file with tobj, then scales every vertex by `scale` about
+    /// the origin and moves it by `translate` (`p' = scale·p + translate`).
+    /// Points, lines, normals, texture coordinates and materials are ignored.
+    pub fn load_obj(path: &Path, scale: Real, translate: Vec3) -> Result<Self, MeshError> {
+        let options = tobj::LoadOptions {
+            triangulate: false, // We fan faces ourselves, in the order SPEC.md fixes.
+            single_index: false,
+            ignore_points: true,
+            ignore_lines: true,
+        };
+        let (models, _materials) = tobj::load_obj(path, &options)
+            .map_err(|reason| MeshError::Load { path: path.to_owned(), reason })?;
+
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for model in &models {
+            let m = &model.mesh;
+            let base = positions.len();
+            for (i, xyz) in m.positions.chunks_exact(3).enumerate() {
+                let p = Vec3::new(xyz[0] as Real, xyz[1] as Real, xyz[2] as Real);
+                let p = scale * p + translate;
+                if !p.is_finite() {
+                    return Err(MeshError::NotFinite { path: path.to_owned(), index: base + i });
+                }
+                positions.push(p);
+            }
+            let global = |i: u32| (base + i as usize) as u32;
+            let mut fan_face = |corners: &[u32]| {
+                for k in 1..corners.len().saturating_sub(1) {
+                    triangles.push([global(corners[0]), global(corners[k]), global(corners[k + 1])]);
+                }
+            };
+            if m.face_arities.is_empty() {
+                m.indices.chunks_exact(3).for_each(&mut fan_face);
+            } else {
+                let mut start = 0;
+                for &arity in &m.face_arities {
+                    let end = start + arity as usize;
+                    fan_face(&m.indices[start..end]);
+                    start = end;
+                }
+            }
+            if triangles.len() > MAX_MESH_TRIANGLES {
+                return Err(MeshError::TooLarge { path: path.to_owned(), count: triangles.len() });
+            }
+        }
+        // tobj checks every index against the vertex count, so `new` only fails when empty.
+        Self::new(positions, triangles).ok_or_else(|| MeshError::Empty(path.to_owned()))
+    }
+
+    /// Number of triangles, degenerate ones included.
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+    /// The corners of triangle `i`.
+    pub fn triangle(&self, i: usize) -> [Vec3; 3] {
+        self.triangles[i].map(|v| self.positions[v as usize])
+    }
+    /// Unit normal of triangle `i`, or zero if it is degenerate.
+    pub fn normal(&self, i: usize) -> Vec3 {
+        self.normals[i]
+    }
+    /// The box around all triangles.
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// The nearest triangle hit with `t` in `range`, by testing every triangle
+    /// inside the mesh's bounding box (the BVH issue replaces this loop).
+    /// Ties keep the lower triangle index.
+    pub fn intersect(&self, ray: &Ray, range: Interval) -> Option<PrimitiveHit> {
+        if !self.bounds.overlaps(ray, range) {
+            return None;
+        }
+        let mut range = range;
+        let mut closest = None;
+        for (i, normal) in self.normals.iter().enumerate() {
+            if *normal == Vec3::ZERO {
+                continue;
+            }
+            let [a, b, c] = self.triangle(i);
+            if let Some(hit) = intersect_watertight(a, b, c, ray, range) {
+                range.max = hit.t;
+                closest = Some(PrimitiveHit { t: hit.t, primitive: i, normal: *normal });
+            }
+        }
+        closest
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+
+    const ALL: Interval = Interval::new(0.0, Real::INFINITY);
+
+    fn obj(text: &str) -> tempfile::NamedTempFile {
+        let mut f = tempfile::Builder::new().suffix(".obj").tempfile().unwrap();
+        f.write_all(text.as_bytes()).unwrap();
+        f
+    }
+
+    #[test]
+    fn a_quad_is_fanned_into_two_triangles_in_order() {
+        // Quad (0,0,1) (1,0,1) (1,1,1) (0,1,1): fanned (v0,v1,v2), (v0,v2,v3).
+        let f = obj("v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nf 1 2 3 4\n");
+        let m = Mesh::load_obj(f.path(), 1.0, Vec3::ZERO).unwrap();
+        assert_eq!(m.triangle_count(), 2);
+        assert_eq!(
+            m.triangle(1),
+            [Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 1.0, 1.0), Vec3::new(0.0, 1.0, 1.0)]
+        );
+        // (1,0,0)×(1,1,0) = (0,0,1).
+        assert_eq!(m.normal(0), Vec3::Z);
+        // (0.2, 0.7) is above the diagonal: second triangle.
+        let hit = m.intersect(&Ray::new(Vec3::new(0.2, 0.7, 0.0), Vec3::Z), ALL).unwrap();
+        assert_eq!((hit.t, hit.primitive, hit.normal), (1.0, 1, Vec3::Z));
+        let hit = m.intersect(&Ray::new(Vec3::new(0.7, 0.2, 0.0), Vec3::Z), ALL).unwrap();
+        assert_eq!(hit.primitive, 0);
+    }
+
+    #[test]
+    fn relative_indices_and_a_transform_are_applied() {
+        let f = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n");
+        let m = Mesh::load_obj(f.path(), 2.0, Vec3::new(0.0, 0.0, 5.0)).unwrap();
+        assert_eq!(
+            m.triangle(0),
+            [Vec3::new(0.0, 0.0, 5.0), Vec3::new(2.0, 0.0, 5.0), Vec3::new(0.0, 2.0, 5.0)]
+        );
+    }
+
+    #[test]
+    fn the_nearest_of_several_triangles_wins_and_degenerate_ones_are_skipped() {
+        // Triangle 0 is degenerate (collinear) but keeps its index; 1 at z=2, 2 at z=1.
+        let f = obj("v 0 0 0\nv 1 0 0\nv 2 0 0\n\
+             v -1 -1 2\nv 3 -1 2\nv -1 3 2\n\
+             v -1 -1 1\nv 3 -1 1\nv -1 3 1\n\
+             f 1 2 3\nf 4 5 6\nf 7 8 9\n");
+        let m = Mesh::load_obj(f.path(), 1.0, Vec3::ZERO).unwrap();
+        assert_eq!(m.normal(0), Vec3::ZERO);
+        let hit = m.intersect(&Ray::new(Vec3::new(0.5, 0.0, -1.0), Vec3::Z), ALL).unwrap();
+        assert_eq!((hit.t, hit.primitive), (2.0, 2));
+    }
+
+    #[test]
+    fn missing_empty_and_out_of_range_files_are_errors() {
+        let missing = Mesh::load_obj(Path::new("/nonexistent/x.obj"), 1.0, Vec3::ZERO);
+        assert!(matches!(missing, Err(MeshError::Load { .. })));
+        let empty = obj("# nothing\nv 0 0 0\n");
+        assert!(matches!(Mesh::load_obj(empty.path(), 1.0, Vec3::ZERO), Err(MeshError::Empty(_))));
+        let bad = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n");
+        assert!(matches!(Mesh::load_obj(bad.path(), 1.0, Vec3::ZERO), Err(MeshError::Load { .. })));
+        let zero = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
+        assert!(matches!(Mesh::load_obj(zero.path(), 1.0, Vec3::ZERO), Err(MeshError::Load { .. })));
+    }
+}

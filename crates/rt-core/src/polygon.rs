@@ -1,0 +1,189 @@
+//! Planar polygons: a plane hit, then a point-in-polygon test in 2D.
+
+use crate::aabb::Aabb;
+use crate::hit::PrimitiveHit;
+use crate::primitive::GeometryError;
+use crate::ray::{Interval, Ray};
+use crate::real::{Real, Vec3, magnitude_scale};
+
+/// Relative planarity tolerance: a corner may be off the best-fit plane by
+/// this fraction of the polygon's diagonal (plus rounding at its magnitude).
+pub const PLANARITY_TOLERANCE: Real = 1e-4;
+
+/// A simple or self-intersecting planar polygon with ≥ 3 corners (even–odd
+/// rule for what is inside). Its normal comes from the winding of the corners
+/// by Newell's method, which for a triangle equals `normalize((b−a)×(c−a))`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Polygon {
+    points: Vec<Vec3>,
+    normal: Vec3,
+    d: Real,
+    /// The two axes the polygon is projected on (the normal's largest axis dropped).
+    axes: [usize; 2],
+    bounds: Aabb,
+}
+
+impl Polygon {
+    /// A polygon from its corners in order; refused if fewer than 3, not
+    /// finite, of zero area, or not planar within [`PLANARITY_TOLERANCE`].
+    pub fn new(points: Vec<Vec3>) -> Result<Self, GeometryError> {
+        if points.len() < 3 {
+            return Err(GeometryError::PolygonTooFewPoints(points.len()));
+        }
+        if !points.iter().all(|p| p.is_finite()) {
+            return Err(GeometryError::NotFinite("polygon point"));
+        }
+        let centroid = points.iter().copied().sum::<Vec3>() / points.len() as Real;
+        let normal = newell_normal(&points, centroid).try_normalize();
+        let normal = normal.ok_or(GeometryError::PolygonDegenerate)?;
+        let d = normal.dot(centroid);
+        let bounds = Aabb::from_points(points.iter().copied()).expect("at least three points");
+        let scale = points.iter().map(|&p| magnitude_scale(p)).fold(1.0, Real::max);
+        let tolerance = PLANARITY_TOLERANCE * bounds.size().length() + 16.0 * Real::EPSILON * scale;
+        let (worst, distance) = points
+            .iter()
+            .map(|p| (normal.dot(*p) - d).abs())
+            .enumerate()
+            .fold((0, 0.0), |best, (i, e)| if e > best.1 { (i, e) } else { best });
+        if distance > tolerance {
+            return Err(GeometryError::PolygonNotPlanar { point: worst, distance, tolerance });
+        }
+        let drop = normal.abs().max_position();
+        let axes = [(drop + 1) % 3, (drop + 2) % 3];
+        Ok(Self { points, normal, d, axes, bounds })
+    }
+
+    /// The corners, in order.
+    pub fn points(&self) -> &[Vec3] {
+        &self.points
+    }
+    /// Unit normal given by the winding.
+    pub fn normal(&self) -> Vec3 {
+        self.normal
+    }
+    /// The box around the corners.
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// Whether `p`, projected onto the polygon's plane, is inside it: the
+    /// crossing-number test (even–odd rule) on the two axes kept by the
+    /// projection (W. R. Franklin's PNPOLY).
+    pub fn contains_projected(&self, p: Vec3) -> bool {
+        let [u, v] = self.axes;
+        let (px, py) = (p[u], p[v]);
+        let mut inside = false;
+        let mut j = self.points.len() - 1;
+        for (i, pi) in self.points.iter().enumerate() {
+            let pj = self.points[j];
+            let (xi, yi, xj, yj) = (pi[u], pi[v], pj[u], pj[v]);
+            if (yi > py) != (yj > py) && px < (xj - xi) * (py - yi) / (yj - yi) + xi {
+                inside = !inside;
+            }
+            j = i;
+        }
+        inside
+    }
+
+    /// The hit with `t` in `range` from either side: the plane `p·n = d`,
+    /// then [`Polygon::contains_projected`].
+    pub fn intersect(&self, ray: &Ray, range: Interval) -> Option<PrimitiveHit> {
+        let denom = ray.dir.dot(self.normal);
+        if denom == 0.0 {
+            return None;
+        }
+        let t = (self.d - ray.origin.dot(self.normal)) / denom;
+        if !range.contains(t) || !self.contains_projected(ray.at(t)) {
+            return None;
+        }
+        Some(PrimitiveHit { t, primitive: 0, normal: self.normal })
+    }
+}
+
+/// Newell's area vector Σ (pᵢ − c) × (pᵢ₊₁ − c): twice the polygon's area
+/// times its unit normal, oriented by the winding.
+fn newell_normal(points: &[Vec3], center: Vec3) -> Vec3 {
+    let n = points.len();
+    (0..n).map(|i| (points[i] - center).cross(points[(i + 1) % n] - center)).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ALL: Interval = Interval::new(0.0, Real::INFINITY);
+
+    /// An L-shaped (concave) hexagon in the plane z = 3, wound so that
+    /// (b−a)×(c−a) = (2,0,0)×(2,1,0) = (0,0,2): normal +z.
+    fn l_shape() -> Polygon {
+        Polygon::new(vec![
+            Vec3::new(0.0, 0.0, 3.0),
+            Vec3::new(2.0, 0.0, 3.0),
+            Vec3::new(2.0, 1.0, 3.0),
+            Vec3::new(1.0, 1.0, 3.0),
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(0.0, 2.0, 3.0),
+        ])
+        .unwrap()
+    }
+
+    #[test]
+    fn normal_follows_the_winding() {
+        assert_eq!(l_shape().normal(), Vec3::Z);
+        let mut reversed = l_shape().points().to_vec();
+        reversed.reverse();
+        assert_eq!(Polygon::new(reversed).unwrap().normal(), -Vec3::Z);
+    }
+
+    #[test]
+    fn ray_through_the_filled_part_hits_and_through_the_notch_misses() {
+        let p = l_shape();
+        let hit = p.intersect(&Ray::new(Vec3::new(0.5, 1.5, 0.0), Vec3::Z), ALL).unwrap();
+        assert_eq!((hit.t, hit.normal), (3.0, Vec3::Z));
+        assert!(p.intersect(&Ray::new(Vec3::new(1.5, 0.5, 0.0), Vec3::Z), ALL).is_some());
+        // (1.5, 1.5) is in the notch of the L.
+        assert_eq!(p.intersect(&Ray::new(Vec3::new(1.5, 1.5, 0.0), Vec3::Z), ALL), None);
+    }
+
+    #[test]
+    fn rays_parallel_behind_or_outside_miss() {
+        let p = l_shape();
+        assert_eq!(p.intersect(&Ray::new(Vec3::new(0.5, 0.5, 3.0), Vec3::X), ALL), None);
+        assert_eq!(p.intersect(&Ray::new(Vec3::new(0.5, 0.5, 4.0), Vec3::Z), ALL), None);
+        assert_eq!(p.intersect(&Ray::new(Vec3::new(3.0, 0.5, 0.0), Vec3::Z), ALL), None);
+    }
+
+    #[test]
+    fn a_tilted_polygon_is_hit_from_behind() {
+        // Square in the plane x + z = 4.
+        let sq = Polygon::new(vec![
+            Vec3::new(2.0, -1.0, 2.0),
+            Vec3::new(2.0, 1.0, 2.0),
+            Vec3::new(3.0, 1.0, 1.0),
+            Vec3::new(3.0, -1.0, 1.0),
+        ])
+        .unwrap();
+        let h = sq.intersect(&Ray::new(Vec3::new(5.0, 0.0, 1.5), -Vec3::X), ALL).unwrap();
+        // x + 1.5 = 4 → x = 2.5, t = 2.5. Winding: (b−a)×(c−a) = (0,2,0)×(1,2,−1)
+        // = (2·(−1) − 0·2, 0·1 − 0·(−1), 0·2 − 2·1) = (−2,0,−2).
+        assert!((h.t - 2.5).abs() < 1e-6);
+        assert!((h.normal + Vec3::new(1.0, 0.0, 1.0).normalize()).length() < 1e-6);
+    }
+
+    #[test]
+    fn bad_polygons_are_refused_with_the_reason() {
+        assert_eq!(Polygon::new(vec![Vec3::ZERO, Vec3::X]), Err(GeometryError::PolygonTooFewPoints(2)));
+        let collinear = vec![Vec3::ZERO, Vec3::X, 2.0 * Vec3::X, 3.0 * Vec3::X];
+        assert_eq!(Polygon::new(collinear), Err(GeometryError::PolygonDegenerate));
+        let bent = vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.1), Vec3::Y];
+        assert!(matches!(Polygon::new(bent), Err(GeometryError::PolygonNotPlanar { .. })));
+    }
+
+    #[test]
+    fn a_slightly_rounded_polygon_far_from_the_origin_is_still_planar() {
+        let o = Vec3::new(12345.678, -9876.5, 4321.0);
+        let pts =
+            vec![o, o + Vec3::new(1.0, 0.0, 0.3), o + Vec3::new(1.0, 1.0, 0.3), o + Vec3::new(0.0, 1.0, 0.0)];
+        assert!(Polygon::new(pts).is_ok());
+    }
+}

@@ -1,0 +1,214 @@
+//! Spheres: centre and radius; inside/on/outside test and ray intersection.
+
+use crate::aabb::Aabb;
+use crate::hit::PrimitiveHit;
+use crate::primitive::GeometryError;
+use crate::ray::{Interval, Ray};
+use crate::real::{Real, Vec3};
+
+/// Where a point lies relative to a closed surface.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Containment {
+    /// Strictly inside, by more than the tolerance.
+    Inside,
+    /// Within the tolerance of the surface.
+    On,
+    /// Strictly outside, by more than the tolerance.
+    Outside,
+}
+
+/// The sphere `|p − center| = radius`, world units. Normals point outward.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    center: Vec3,
+    radius: Real,
+}
+
+impl Sphere {
+    /// A sphere; the radius must be positive and finite, the centre finite.
+    pub fn new(center: Vec3, radius: Real) -> Result<Self, GeometryError> {
+        if !center.is_finite() {
+            return Err(GeometryError::NotFinite("sphere center"));
+        }
+        if !(radius > 0.0 && radius.is_finite()) {
+            return Err(GeometryError::SphereRadius(radius));
+        }
+        Ok(Self { center, radius })
+    }
+
+    /// Centre, world units.
+    pub fn center(&self) -> Vec3 {
+        self.center
+    }
+    /// Radius, world units, > 0.
+    pub fn radius(&self) -> Real {
+        self.radius
+    }
+
+    /// Inside, on (|‖p − c‖ − r| ≤ `tolerance`) or outside the sphere.
+    pub fn classify(&self, p: Vec3, tolerance: Real) -> Containment {
+        let distance = (p - self.center).length() - self.radius;
+        if distance.abs() <= tolerance {
+            Containment::On
+        } else if distance < 0.0 {
+            Containment::Inside
+        } else {
+            Containment::Outside
+        }
+    }
+
+    /// The box `center ± radius`.
+    pub fn bounds(&self) -> Aabb {
+        Aabb::from_corners(self.center - self.radius, self.center + self.radius)
+    }
+
+    /// The nearest hit with `t` in `range`, from outside (near root) or from
+    /// inside (far root).
+    ///
+    /// With `f = o − c`, the roots of `a·t² − 2b·t + (f·f − r²) = 0`, where
+    /// `a = d·d` and `b = −f·d`, are `t = (b ± √Δ) / a`. Following Haines,
+    /// Günther and Akenine-Möller, "Precision Improvements for Ray/Sphere
+    /// Intersection" (*Ray Tracing Gems*, ch. 7, 2019):
+    /// - `Δ = a·(r² − |l|²)` with `l = f + (b/a)·d`, the vector from the centre
+    ///   to the ray's closest approach, instead of the cancelling `b² − a·(f·f − r²)`;
+    /// - `q = b + sign(b)·√Δ`, roots `c/q` and `q/a`, so neither root is a
+    ///   difference of nearly equal numbers.
+    ///
+    /// The hit point relative to the centre is `l ∓ (√Δ/a)·d` (near/far root),
+    /// which gives the normal without subtracting two large coordinates.
+    pub fn intersect(&self, ray: &Ray, range: Interval) -> Option<PrimitiveHit> {
+        let f = ray.origin - self.center;
+        let d = ray.dir;
+        let a = d.dot(d);
+        let b = -f.dot(d);
+        let l = f + (b / a) * d;
+        let r2 = self.radius * self.radius;
+        let discriminant = a * (r2 - l.dot(l));
+        if discriminant < 0.0 || discriminant.is_nan() {
+            return None;
+        }
+        let root = discriminant.sqrt();
+        let q = if b >= 0.0 { b + root } else { b - root };
+        if q == 0.0 {
+            return None; // b = Δ = 0: tangent at the origin itself, t = 0.
+        }
+        let c = f.dot(f) - r2;
+        let (t0, t1) = (c / q, q / a);
+        let (near, far) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
+        let half_chord = (root / a) * d;
+        let (t, to_hit) = if range.contains(near) {
+            (near, l - half_chord)
+        } else if range.contains(far) {
+            (far, l + half_chord)
+        } else {
+            return None;
+        };
+        let normal =
+            to_hit.try_normalize().unwrap_or_else(|| (ray.at(t) - self.center).normalize_or(Vec3::X));
+        Some(PrimitiveHit { t, primitive: 0, normal })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ALL: Interval = Interval::new(0.0, Real::INFINITY);
+
+    fn unit_sphere_at(center: Vec3) -> Sphere {
+        Sphere::new(center, 1.0).unwrap()
+    }
+
+    #[test]
+    fn ray_towards_the_centre_hits_the_near_side_with_an_outward_normal() {
+        // Sphere at (0,0,5) r=1, ray from the origin along +z: |t·ẑ − 5ẑ| = 1 → t = 4 or 6.
+        let hit =
+            unit_sphere_at(Vec3::new(0.0, 0.0, 5.0)).intersect(&Ray::new(Vec3::ZERO, Vec3::Z), ALL).unwrap();
+        assert_eq!(hit.t, 4.0);
+        assert_eq!(hit.normal, -Vec3::Z);
+    }
+
+    #[test]
+    fn t_is_for_the_rays_own_unnormalised_direction() {
+        // Same ray with dir = (0,0,2): the hit at distance 4 has t = 2.
+        let hit = unit_sphere_at(Vec3::new(0.0, 0.0, 5.0))
+            .intersect(&Ray::new(Vec3::ZERO, Vec3::new(0.0, 0.0, 2.0)), ALL)
+            .unwrap();
+        assert_eq!(hit.t, 2.0);
+    }
+
+    #[test]
+    fn off_centre_ray_hits_where_pythagoras_says() {
+        // Ray y = 0.6 along +z: the sphere's surface is at z = 5 − √(1 − 0.36) = 4.2,
+        // normal (0, 0.6, −0.8).
+        let hit = unit_sphere_at(Vec3::new(0.0, 0.0, 5.0))
+            .intersect(&Ray::new(Vec3::new(0.0, 0.6, 0.0), Vec3::Z), ALL)
+            .unwrap();
+        assert!((hit.t - 4.2).abs() < 1e-6);
+        assert!((hit.normal - Vec3::new(0.0, 0.6, -0.8)).length() < 1e-6);
+    }
+
+    #[test]
+    fn ray_from_inside_hits_the_far_side_with_the_outward_normal() {
+        // From the centre of a radius-2 sphere along +x: t = 2, normal +x.
+        let s = Sphere::new(Vec3::new(1.0, 1.0, 1.0), 2.0).unwrap();
+        let hit = s.intersect(&Ray::new(Vec3::new(1.0, 1.0, 1.0), Vec3::X), ALL).unwrap();
+        assert_eq!(hit.t, 2.0);
+        assert_eq!(hit.normal, Vec3::X);
+    }
+
+    #[test]
+    fn ray_pointing_away_misses() {
+        let s = unit_sphere_at(Vec3::new(0.0, 0.0, 5.0));
+        assert_eq!(s.intersect(&Ray::new(Vec3::ZERO, -Vec3::Z), ALL), None);
+    }
+
+    #[test]
+    fn ray_passing_beside_misses() {
+        // Closest approach 1.5 > r = 1.
+        let s = unit_sphere_at(Vec3::new(0.0, 0.0, 5.0));
+        assert_eq!(s.intersect(&Ray::new(Vec3::new(1.5, 0.0, 0.0), Vec3::Z), ALL), None);
+    }
+
+    #[test]
+    fn hits_outside_the_interval_do_not_count() {
+        // Roots 4 and 6: with max 3.9 nothing; with min 4.5 the far root.
+        let s = unit_sphere_at(Vec3::new(0.0, 0.0, 5.0));
+        let ray = Ray::new(Vec3::ZERO, Vec3::Z);
+        assert_eq!(s.intersect(&ray, Interval::new(0.0, 3.9)), None);
+        let far = s.intersect(&ray, Interval::new(4.5, Real::INFINITY)).unwrap();
+        assert_eq!(far.t, 6.0);
+        assert_eq!(far.normal, Vec3::Z);
+    }
+
+    #[test]
+    fn far_tiny_sphere_is_hit_at_the_right_distance() {
+        // r = 1 at 1e6 along +z: t = 1e6 − 1 exactly representable in f32.
+        let s = unit_sphere_at(Vec3::new(0.0, 0.0, 1e6));
+        let hit = s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z), ALL).unwrap();
+        assert_eq!(hit.t, 1e6 - 1.0);
+        assert!((hit.normal + Vec3::Z).length() < 1e-6);
+    }
+
+    #[test]
+    fn classify_puts_points_inside_on_or_outside() {
+        let s = Sphere::new(Vec3::new(1.0, 0.0, 0.0), 2.0).unwrap();
+        assert_eq!(s.classify(Vec3::new(1.5, 0.0, 0.0), 1e-6), Containment::Inside);
+        assert_eq!(s.classify(Vec3::new(3.0, 0.0, 0.0), 1e-6), Containment::On);
+        assert_eq!(s.classify(Vec3::new(1.0, 2.0 + 1e-7, 0.0), 1e-6), Containment::On);
+        assert_eq!(s.classify(Vec3::new(4.0, 0.0, 0.0), 1e-6), Containment::Outside);
+    }
+
+    #[test]
+    fn radius_must_be_positive_and_finite() {
+        for r in [0.0, -1.0, Real::NAN, Real::INFINITY] {
+            assert!(matches!(Sphere::new(Vec3::ZERO, r), Err(GeometryError::SphereRadius(_))));
+        }
+    }
+
+    #[test]
+    fn bounds_contain_the_sphere() {
+        let b = Sphere::new(Vec3::new(1.0, 2.0, 3.0), 0.5).unwrap().bounds();
+        assert_eq!((b.min(), b.max()), (Vec3::new(0.5, 1.5, 2.5), Vec3::new(1.5, 2.5, 3.5)));
+    }
+}

@@ -1,0 +1,230 @@
+//! Triangles: barycentric coordinates and the watertight ray/triangle test.
+
+use crate::aabb::Aabb;
+use crate::hit::PrimitiveHit;
+use crate::primitive::GeometryError;
+use crate::ray::{Interval, Ray};
+use crate::real::{Real, Vec3, difference_of_products, gamma};
+
+/// A hit on a triangle: the ray parameter and the barycentric weights of its
+/// corners `(a, b, c)`, which sum to 1; the hit point is `w_a·a + w_b·b + w_c·c`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleHit {
+    /// Ray parameter, for the ray's own direction.
+    pub t: Real,
+    /// Weights of corners a, b, c.
+    pub barycentric: [Real; 3],
+}
+
+/// A triangle with corners a, b, c. Its normal is `normalize((b−a)×(c−a))`:
+/// with the usual cross product in a left-handed world, corners that appear
+/// clockwise to a viewer have the normal pointing towards the viewer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    corners: [Vec3; 3],
+    normal: Vec3,
+}
+
+impl Triangle {
+    /// A triangle; refused if a corner is not finite or its area is zero (or
+    /// too small for its normal to be computed).
+    pub fn new(a: Vec3, b: Vec3, c: Vec3) -> Result<Self, GeometryError> {
+        if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+            return Err(GeometryError::NotFinite("triangle corner"));
+        }
+        let normal = geometric_normal(a, b, c).ok_or(GeometryError::TriangleDegenerate)?;
+        Ok(Self { corners: [a, b, c], normal })
+    }
+
+    /// The corners a, b, c.
+    pub fn corners(&self) -> [Vec3; 3] {
+        self.corners
+    }
+    /// `normalize((b−a)×(c−a))`.
+    pub fn normal(&self) -> Vec3 {
+        self.normal
+    }
+    /// The box around the corners.
+    pub fn bounds(&self) -> Aabb {
+        Aabb::from_points(self.corners).expect("three corners")
+    }
+
+    /// Barycentric weights `(w_a, w_b, w_c)` of `p` by area ratios (the course's
+    /// test): with `n = (b−a)×(c−a)`,
+    /// `w_a = ((c−b)×(p−b))·n / n·n`, `w_b = ((a−c)×(p−c))·n / n·n`, `w_c = 1 − w_a − w_b`.
+    /// `p` is projected onto the triangle's plane along the normal; it lies
+    /// inside exactly when all three weights are ≥ 0.
+    pub fn barycentric(&self, p: Vec3) -> [Real; 3] {
+        let [a, b, c] = self.corners;
+        let n = (b - a).cross(c - a);
+        let nn = n.dot(n);
+        let wa = (c - b).cross(p - b).dot(n) / nn;
+        let wb = (a - c).cross(p - c).dot(n) / nn;
+        [wa, wb, 1.0 - wa - wb]
+    }
+
+    /// The hit with `t` in `range`, from either side.
+    pub fn intersect(&self, ray: &Ray, range: Interval) -> Option<PrimitiveHit> {
+        let [a, b, c] = self.corners;
+        let hit = intersect_watertight(a, b, c, ray, range)?;
+        Some(PrimitiveHit { t: hit.t, primitive: 0, normal: self.normal })
+    }
+
+    /// The hit with its barycentric weights.
+    pub fn intersect_barycentric(&self, ray: &Ray, range: Interval) -> Option<TriangleHit> {
+        let [a, b, c] = self.corners;
+        intersect_watertight(a, b, c, ray, range)
+    }
+}
+
+/// `normalize((b−a)×(c−a))`, or `None` for a zero-area triangle.
+pub fn geometric_normal(a: Vec3, b: Vec3, c: Vec3) -> Option<Vec3> {
+    (b - a).cross(c - a).try_normalize()
+}
+
+/// Watertight ray/triangle intersection: Woop, Benthin and Wald, "Watertight
+/// Ray/Triangle Intersection", *JCGT* 2(1), 2013, as in pbrt-v4
+/// (`IntersectTriangle`, *PBR* 4th ed. §6.5.3).
+///
+/// The corners are moved to the ray's frame (origin at the ray origin, the
+/// direction's largest axis as z, sheared so the ray is the +z axis); the
+/// ray hits where the three 2D edge functions have one sign. Each edge
+/// function depends only on its edge's two corners, with a sign-exact product
+/// difference ([`difference_of_products`]), so a ray through an edge shared by
+/// two triangles hits at least one of them: no leaks through meshes.
+/// A zero-area triangle gives `det = 0` and is never hit. A ray with a zero
+/// direction must not be passed (the scene filters those).
+///
+/// The final check, `t > δt`, makes `t` conservatively positive with pbrt's
+/// bound on its rounding error.
+pub fn intersect_watertight(a: Vec3, b: Vec3, c: Vec3, ray: &Ray, range: Interval) -> Option<TriangleHit> {
+    let kz = ray.dir.abs().max_position();
+    let kx = (kz + 1) % 3;
+    let ky = (kx + 1) % 3;
+    let permute = |v: Vec3| Vec3::new(v[kx], v[ky], v[kz]);
+    let d = permute(ray.dir);
+    let (sx, sy, sz) = (-d.x / d.z, -d.y / d.z, 1.0 / d.z);
+    let shear = |p: Vec3| {
+        let p = permute(p - ray.origin);
+        Vec3::new(p.x + sx * p.z, p.y + sy * p.z, p.z)
+    };
+    let (p0, p1, p2) = (shear(a), shear(b), shear(c));
+
+    let e0 = difference_of_products(p1.x, p2.y, p1.y, p2.x);
+    let e1 = difference_of_products(p2.x, p0.y, p2.y, p0.x);
+    let e2 = difference_of_products(p0.x, p1.y, p0.y, p1.x);
+    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+        return None;
+    }
+    let det = e0 + e1 + e2;
+    if det == 0.0 {
+        return None;
+    }
+
+    let (z0, z1, z2) = (p0.z * sz, p1.z * sz, p2.z * sz);
+    let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
+    // Compare t = t_scaled/det with the range without dividing.
+    if det < 0.0 && (t_scaled >= 0.0 || t_scaled < range.max * det) {
+        return None;
+    }
+    if det > 0.0 && (t_scaled <= 0.0 || t_scaled > range.max * det) {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    let t = t_scaled * inv_det;
+
+    // pbrt's conservative bound δt on the error of t.
+    let max_z = Vec3::new(z0, z1, z2).abs().max_element();
+    let max_x = Vec3::new(p0.x, p1.x, p2.x).abs().max_element();
+    let max_y = Vec3::new(p0.y, p1.y, p2.y).abs().max_element();
+    let delta_z = gamma(3) * max_z;
+    let delta_x = gamma(5) * (max_x + max_z);
+    let delta_y = gamma(5) * (max_y + max_z);
+    let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    let max_e = Vec3::new(e0, e1, e2).abs().max_element();
+    let delta_t = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
+    if t <= delta_t || !range.contains(t) {
+        return None;
+    }
+    Some(TriangleHit { t, barycentric: [e0 * inv_det, e1 * inv_det, e2 * inv_det] })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ALL: Interval = Interval::new(0.0, Real::INFINITY);
+
+    /// The triangle (0,0,2), (0,1,2), (1,0,2) in the plane z = 2.
+    /// n = (b−a)×(c−a) = (0,1,0)×(1,0,0) = (1·0 − 0·0, 0·1 − 0·0, 0·0 − 1·1) = (0,0,−1).
+    fn tri() -> Triangle {
+        Triangle::new(Vec3::new(0.0, 0.0, 2.0), Vec3::new(0.0, 1.0, 2.0), Vec3::new(1.0, 0.0, 2.0)).unwrap()
+    }
+
+    #[test]
+    fn normal_follows_the_winding_by_the_cross_product() {
+        assert_eq!(tri().normal(), -Vec3::Z);
+    }
+
+    #[test]
+    fn ray_through_the_inside_hits_with_barycentric_weights() {
+        // Through (0.25, 0.5, 2): t = 2; weights w_b = y = 0.5, w_c = x = 0.25, w_a = 0.25.
+        let h = tri().intersect_barycentric(&Ray::new(Vec3::new(0.25, 0.5, 0.0), Vec3::Z), ALL).unwrap();
+        assert_eq!(h.t, 2.0);
+        let [wa, wb, wc] = h.barycentric;
+        assert!((wa - 0.25).abs() < 1e-6 && (wb - 0.5).abs() < 1e-6 && (wc - 0.25).abs() < 1e-6);
+    }
+
+    #[test]
+    fn the_course_barycentric_test_agrees_with_the_hit_weights() {
+        let w = tri().barycentric(Vec3::new(0.25, 0.5, 2.0));
+        assert!((w[0] - 0.25).abs() < 1e-6 && (w[1] - 0.5).abs() < 1e-6 && (w[2] - 0.25).abs() < 1e-6);
+        // Outside: (1,1,2) has w_a = 1 − 1 − 1 = −1.
+        let w = tri().barycentric(Vec3::new(1.0, 1.0, 2.0));
+        assert!((w[0] + 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn the_back_side_is_hit_too_and_reports_the_same_normal() {
+        let h = tri().intersect(&Ray::new(Vec3::new(0.2, 0.2, 5.0), -Vec3::Z), ALL).unwrap();
+        assert!((h.t - 3.0).abs() <= 4.0 * Real::EPSILON * 3.0, "t = {}", h.t);
+        assert_eq!(h.normal, -Vec3::Z);
+    }
+
+    #[test]
+    fn rays_beside_behind_or_parallel_miss() {
+        let t = tri();
+        assert_eq!(t.intersect(&Ray::new(Vec3::new(0.8, 0.8, 0.0), Vec3::Z), ALL), None);
+        assert_eq!(t.intersect(&Ray::new(Vec3::new(0.2, 0.2, 0.0), -Vec3::Z), ALL), None);
+        assert_eq!(t.intersect(&Ray::new(Vec3::new(-1.0, 0.2, 2.0), Vec3::X), ALL), None);
+        assert_eq!(t.intersect(&Ray::new(Vec3::new(0.2, 0.2, 0.0), Vec3::Z), Interval::new(0.0, 1.5)), None);
+    }
+
+    #[test]
+    fn zero_area_triangles_are_refused_and_never_hit() {
+        let (a, b, c) = (Vec3::ZERO, Vec3::new(1.0, 1.0, 1.0), Vec3::new(2.0, 2.0, 2.0));
+        assert_eq!(Triangle::new(a, b, c), Err(GeometryError::TriangleDegenerate));
+        let ray = Ray::new(Vec3::new(1.0, 1.0, -1.0), Vec3::Z);
+        assert_eq!(intersect_watertight(a, b, c, &ray, ALL), None);
+        assert_eq!(intersect_watertight(a, a, a, &ray, ALL), None);
+    }
+
+    #[test]
+    fn a_ray_through_a_shared_edge_hits_one_of_the_two_triangles() {
+        // Square split along its diagonal from (0,0) to (1,1); rays along that diagonal.
+        let (p00, p10, p01, p11) = (
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(1.0, 0.0, 1.0),
+            Vec3::new(0.0, 1.0, 1.0),
+            Vec3::new(1.0, 1.0, 1.0),
+        );
+        let eye = Vec3::new(0.3, -0.2, -2.0);
+        for i in 1..1000 {
+            let s = i as Real / 1000.0;
+            let ray = Ray::new(eye, Vec3::new(s, s, 1.0) - eye);
+            let first = intersect_watertight(p00, p10, p11, &ray, ALL);
+            let second = intersect_watertight(p00, p11, p01, &ray, ALL);
+            assert!(first.is_some() || second.is_some(), "leak at s = {s}");
+        }
+    }
+}

@@ -1,0 +1,97 @@
+//! The command line: `rt-view [SCENE]`, `rt-view render`, `rt-view cast`.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+
+/// A CPU ray tracer: render RON scene files to PNG, or query rays against them.
+#[derive(Debug, Parser)]
+#[command(
+    name = "rt-view",
+    version,
+    args_conflicts_with_subcommands = true,
+    after_help = "Examples:\n  \
+        rt-view render scenes/showcase.ron -o showcase.png\n  \
+        rt-view render scenes/sphere.ron -o sphere.png --width 1280 --height 960 --spp 16\n  \
+        echo '0,0,-5,0,0,1' | rt-view cast scenes/sphere.ron\n  \
+        rt-view cast scenes/sphere.ron --pixels > pixels.csv"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    /// Scene to open in the interactive viewer (not built yet: use `render`).
+    pub scene: Option<PathBuf>,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Render a scene to a PNG file, with a progress bar on stderr.
+    ///
+    /// The PNG is written to a temporary file next to OUT and renamed over
+    /// OUT only when complete, so OUT is never left half-written.
+    Render(RenderArgs),
+    /// Cast rays into a scene and print what each hits, as CSV on stdout.
+    ///
+    /// Input: one ray a line, `ox,oy,oz,dx,dy,dz` (blank lines and lines
+    /// starting with `#` are skipped). Output header:
+    /// `ox,oy,oz,dx,dy,dz,hit,t,object,primitive,nx,ny,nz`; on a miss `hit` is 0
+    /// and the later columns are empty. `t` is for the ray's own direction;
+    /// `object` is the 0-based index in the scene's object list, `primitive`
+    /// the triangle index inside a mesh (else 0); the normal is the unit
+    /// geometric normal. Hits closer to the origin than 2^-16 * max(1, largest
+    /// |origin coordinate|) are ignored (the ray is taken to leave that surface).
+    Cast(CastArgs),
+}
+
+/// `rt-view render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// The scene file (RON).
+    pub scene: PathBuf,
+    /// Output PNG file.
+    #[arg(short, long, value_name = "OUT.png")]
+    pub output: PathBuf,
+    /// Image width in pixels (default: the scene's).
+    #[arg(long, value_name = "W")]
+    pub width: Option<u32>,
+    /// Image height in pixels (default: the scene's).
+    #[arg(long, value_name = "H")]
+    pub height: Option<u32>,
+    /// Samples per pixel, for anti-aliasing (default: the scene's, else 1).
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
+}
+
+/// `rt-view cast`.
+#[derive(Debug, Args)]
+pub struct CastArgs {
+    /// The scene file (RON).
+    pub scene: PathBuf,
+    /// File of rays, one `ox,oy,oz,dx,dy,dz` a line; `-` or absent: standard input.
+    #[arg(long, value_name = "FILE", conflicts_with = "pixels")]
+    pub rays: Option<PathBuf>,
+    /// Instead of reading rays, cast the camera's primary ray through every
+    /// pixel centre (row-major, top row first); rows start with `px,py`.
+    #[arg(long)]
+    pub pixels: bool,
+    /// With --pixels: image width (default: the scene's).
+    #[arg(long, value_name = "W", requires = "pixels")]
+    pub width: Option<u32>,
+    /// With --pixels: image height (default: the scene's).
+    #[arg(long, value_name = "H", requires = "pixels")]
+    pub height: Option<u32>,
+}
+
+/// Runs the parsed command line.
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Some(Command::Render(args)) => crate::render_cmd::run(&args),
+        Some(Command::Cast(args)) => crate::cast_cmd::run(&args),
+        None => anyhow::bail!(
+            "the interactive viewer is not part of this build yet; \
+             render headless instead: rt-view render {} -o out.png",
+            cli.scene.map_or("SCENE.ron".into(), |p| p.display().to_string())
+        ),
+    }
+}

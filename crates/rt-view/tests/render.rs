@@ -1,0 +1,180 @@
+//! `rt-view render`: output, options, and refusal of bad input without writing anything.
+
+mod common;
+
+use common::{read_png, rt_view, scenes_dir, stderr};
+
+#[test]
+fn render_writes_a_png_of_the_requested_size_showing_the_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sphere.png");
+    let scene = scenes_dir().join("sphere.ron");
+    let o = rt_view(
+        &["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--width", "64", "--height", "48"],
+        "",
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = read_png(&out);
+    assert_eq!(img.dimensions(), (64, 48));
+    // Centre: the sphere's colour (0.9, 0.15, 0.1); corner: the background (0.05, 0.05, 0.1).
+    assert_eq!(img.get_pixel(32, 24).0, [230, 38, 26]);
+    assert_eq!(img.get_pixel(0, 0).0, [13, 13, 26]);
+    // Nothing else is left in the directory (no temporary file).
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    // The image is readable by others like any new file, not private like a temporary one.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = std::fs::metadata(&out).unwrap().permissions().mode();
+        assert_ne!(mode & 0o077, 0, "mode {mode:o}: private temporary-file permissions leaked");
+    }
+}
+
+#[test]
+fn render_takes_the_size_from_the_scene_by_default_and_spp_from_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("aa.png");
+    let scene = scenes_dir().join("sphere.ron");
+    let o = rt_view(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--spp", "4"], "");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("320x240, 4 spp"), "{}", stderr(&o));
+    let img = read_png(&out);
+    assert_eq!(img.dimensions(), (320, 240));
+    // Anti-aliased edge pixels mix sphere red and background.
+    assert!(img.pixels().any(|p| p.0[0] > 13 && p.0[0] < 230), "no blended edge pixels");
+}
+
+/// A valid scene with one line replaced.
+fn broken_scene(from: &str, to: &str) -> String {
+    let good = std::fs::read_to_string(scenes_dir().join("sphere.ron")).unwrap();
+    assert!(good.contains(from), "{from}");
+    good.replacen(from, to, 1)
+}
+
+#[test]
+fn every_bad_scene_is_refused_with_file_line_and_reason_and_writes_nothing() {
+    let cases: &[(&str, String, &str)] = &[
+        ("syntax", broken_scene("radius: 1.2,", "radius: 1.2,,"), "bad.ron:17:47: Expected identifier"),
+        (
+            "unknown field",
+            broken_scene("radius: 1.2,", "radius: 1.2, colour: 1,"),
+            "Unexpected field named `colour`",
+        ),
+        (
+            "missing material",
+            broken_scene("material: \"red\"", "material: \"blue\""),
+            "objects[0] (Sphere): unknown material \"blue\"",
+        ),
+        ("NaN", broken_scene("fov_y: 40", "fov_y: NaN"), "expected a finite number, found NaN"),
+        ("infinity", broken_scene("radius: 1.2", "radius: inf"), "expected a finite number, found inf"),
+        ("negative radius", broken_scene("radius: 1.2", "radius: -1.2"), "sphere radius must be positive"),
+        ("up parallel", broken_scene("up: (0, 1, 0)", "up: (0, 0, 1)"), "camera.up is zero or parallel"),
+        (
+            "C == COI",
+            broken_scene("position: (0, 0, -5)", "position: (0, 0, 0)"),
+            "coincides with camera.position",
+        ),
+        (
+            "fov 180",
+            broken_scene("fov_y: 40", "fov_y: 180"),
+            "camera.fov_y must be strictly between 0 and 180",
+        ),
+        ("near 0", broken_scene("near: 1", "near: 0"), "camera.near must be a positive finite number"),
+        (
+            "bent polygon",
+            broken_scene(
+                "Sphere(center: (0, 0, 0), radius: 1.2, material: \"red\")",
+                "Polygon(points: [(0,0,0), (1,0,0), (1,1,1), (0,1,0)], material: \"red\")",
+            ),
+            "polygon is not planar",
+        ),
+        (
+            "degenerate polygon",
+            broken_scene(
+                "Sphere(center: (0, 0, 0), radius: 1.2, material: \"red\")",
+                "Polygon(points: [(0,0,0), (1,1,1), (2,2,2)], material: \"red\")",
+            ),
+            "polygon has zero area",
+        ),
+        (
+            "missing OBJ",
+            broken_scene(
+                "Sphere(center: (0, 0, 0), radius: 1.2, material: \"red\")",
+                "Mesh(file: \"no/such.obj\", material: \"red\")",
+            ),
+            "objects[0] (Mesh): cannot load OBJ file",
+        ),
+    ];
+    for (name, text, expected) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = dir.path().join("bad.ron");
+        std::fs::write(&scene, text).unwrap();
+        let out = dir.path().join("out.png");
+        let o = rt_view(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()], "");
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{name}: {err}");
+        assert!(
+            err.starts_with("error: ") && err.contains("bad.ron") && err.contains(expected),
+            "{name}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{name}: {err}");
+        // Nothing written: only the scene file is in the directory.
+        assert!(!out.exists(), "{name}: output written");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "{name}: stray files");
+    }
+}
+
+#[test]
+fn a_failed_render_leaves_an_existing_output_untouched() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("bad.ron");
+    std::fs::write(&scene, broken_scene("radius: 1.2", "radius: -1")).unwrap();
+    let out = dir.path().join("keep.png");
+    std::fs::write(&out, b"precious").unwrap();
+    let o = rt_view(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()], "");
+    assert!(!o.status.success());
+    assert_eq!(std::fs::read(&out).unwrap(), b"precious");
+}
+
+#[test]
+fn missing_scene_files_and_bad_outputs_are_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.png");
+    let o = rt_view(&["render", "/no/such/scene.ron", "-o", out.to_str().unwrap()], "");
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("/no/such/scene.ron: cannot read scene file"), "{}", stderr(&o));
+
+    let scene = scenes_dir().join("sphere.ron");
+    let o = rt_view(&["render", scene.to_str().unwrap(), "-o", "/no/such/dir/x.png"], "");
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("cannot write to directory /no/such/dir"), "{}", stderr(&o));
+
+    let o =
+        rt_view(&["render", scene.to_str().unwrap(), "-o", dir.path().join("x.jpg").to_str().unwrap()], "");
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("output must be a .png file"), "{}", stderr(&o));
+}
+
+#[test]
+fn out_of_range_sizes_and_sample_counts_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.png");
+    let scene = scenes_dir().join("sphere.ron");
+    for (flag, value, expected) in [
+        ("--width", "0", "image size 0x240 is out of range"),
+        ("--height", "100000", "image size 320x100000 is out of range"),
+        ("--spp", "0", "samples per pixel must be 1 to"),
+    ] {
+        let o = rt_view(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), flag, value], "");
+        assert_eq!(o.status.code(), Some(1), "{flag} {value}");
+        assert!(stderr(&o).contains(expected), "{flag} {value}: {}", stderr(&o));
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn the_viewer_command_says_it_is_not_built_yet_and_fails() {
+    let o = rt_view(&["scenes/sphere.ron"], "");
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("rt-view render scenes/sphere.ron -o out.png"), "{}", stderr(&o));
+}
