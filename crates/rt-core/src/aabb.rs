@@ -208,4 +208,60 @@ mod tests {
         let h = b.intersect(&Ray::new(Vec3::ZERO, Vec3::Z), ALL).unwrap();
         assert_eq!((h.t, h.normal), (2.0, -Vec3::Z));
     }
+
+    proptest::proptest! {
+        /// Random rays against a random box: every hit lies on the box's
+        /// surface with a unit axis normal pointing out of the face it is on,
+        /// and agrees with a brute-force check of the six face rectangles.
+        #[test]
+        fn box_hits_lie_on_a_face_and_match_the_six_face_planes(
+            lo in proptest::array::uniform3(-10f32..10.0),
+            size in proptest::array::uniform3(0.0f32..5.0),
+            o in proptest::array::uniform3(-20f32..20.0),
+            d in proptest::array::uniform3(-1f32..1.0),
+            zero_axis in 0usize..4,
+        ) {
+            let min = Vec3::new(lo[0] as Real, lo[1] as Real, lo[2] as Real);
+            let max = min + Vec3::new(size[0] as Real, size[1] as Real, size[2] as Real);
+            let b = Aabb::new(min, max).unwrap();
+            let mut dir = Vec3::new(d[0] as Real, d[1] as Real, d[2] as Real);
+            if zero_axis < 3 {
+                dir[zero_axis] = 0.0;
+            }
+            proptest::prop_assume!(dir.length() > 1e-3);
+            let ray = Ray::new(Vec3::new(o[0] as Real, o[1] as Real, o[2] as Real), dir);
+            let hit = b.intersect(&ray, ALL);
+            // Brute force: each face is a plane hit clipped to the other two axes' bounds.
+            let mut nearest: Option<Real> = None;
+            for axis in 0..3 {
+                if dir[axis] == 0.0 { continue; }
+                for face in [min[axis], max[axis]] {
+                    let t = (face - ray.origin[axis]) / dir[axis];
+                    let p = ray.at(t);
+                    let inside = (0..3).filter(|&a| a != axis).all(|a| p[a] >= min[a] - 1e-4 && p[a] <= max[a] + 1e-4);
+                    if t > 0.0 && inside && nearest.is_none_or(|n| t < n) {
+                        nearest = Some(t);
+                    }
+                }
+            }
+            match (hit, nearest) {
+                (Some(h), Some(t)) => {
+                    proptest::prop_assert!((h.t - t).abs() <= 1e-3 * (1.0 + t.abs()), "{} vs {}", h.t, t);
+                    let axis = h.normal.abs().max_position();
+                    proptest::prop_assert_eq!(h.normal.abs().element_sum(), 1.0);
+                    let p = ray.at(h.t);
+                    let face = if h.normal[axis] > 0.0 { max[axis] } else { min[axis] };
+                    proptest::prop_assert!((p[axis] - face).abs() <= 1e-3 * (1.0 + face.abs()));
+                }
+                (None, None) => {}
+                // Grazing an edge within the brute force's 1e-4 slack may disagree.
+                (h, n) => {
+                    let t = h.map(|h| h.t).or(n).unwrap();
+                    let p = ray.at(t);
+                    let slack = (0..3).filter(|&a| (p[a] - min[a]).abs() < 1e-3 || (p[a] - max[a]).abs() < 1e-3).count();
+                    proptest::prop_assert!(slack >= 2, "disagreement away from an edge: {:?} vs {:?}", h, n);
+                }
+            }
+        }
+    }
 }

@@ -306,4 +306,24 @@ mod tests {
         let c = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 90.0, 2.0, Projection::Perspective).unwrap();
         assert!((c.view_plane_height() - 4.0).abs() < 1e-5);
     }
+
+    proptest::proptest! {
+        #[test]
+        fn any_camera_is_either_refused_or_orthonormal_and_left_handed(
+            c in proptest::array::uniform3(-1e4f32..1e4),
+            coi in proptest::array::uniform3(-1e4f32..1e4),
+            up in proptest::array::uniform3(-1f32..1.0),
+        ) {
+            let v = |a: [f32; 3]| Vec3::new(a[0] as Real, a[1] as Real, a[2] as Real);
+            if let Ok(b) = CameraBasis::new(v(c), v(coi), v(up)) {
+                for axis in [b.x, b.y, b.z] {
+                    proptest::prop_assert!((axis.length() - 1.0).abs() < 1e-5);
+                }
+                proptest::prop_assert!(b.x.dot(b.y).abs() < 1e-5 && b.y.dot(b.z).abs() < 1e-5 && b.z.dot(b.x).abs() < 1e-5);
+                proptest::prop_assert!((b.z.cross(b.x) - b.y).length() < 1e-5);
+                // True up leans the same way as the given up.
+                proptest::prop_assert!(b.y.dot(v(up)) >= 0.0);
+            }
+        }
+    }
 }

@@ -234,4 +234,36 @@ mod tests {
         let zero = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
         assert!(matches!(Mesh::load_obj(zero.path(), 1.0, Vec3::ZERO), Err(MeshError::Load { .. })));
     }
+
+    #[test]
+    fn every_ray_from_inside_a_closed_mesh_hits_an_outward_face() {
+        // A regular octahedron |x| + |y| + |z| = 1 with faces wound outward:
+        // from any interior point, every direction must hit (no leak through
+        // an edge or vertex), on the face whose normal points along the ray.
+        let f = obj("v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n\
+             f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n");
+        let m = Mesh::load_obj(f.path(), 1.0, Vec3::ZERO).unwrap();
+        for i in 0..m.triangle_count() {
+            let centroid = m.triangle(i).iter().copied().sum::<Vec3>() / 3.0;
+            assert!(m.normal(i).dot(centroid) > 0.0, "face {i} is wound inward");
+        }
+        // Directions on a fine lattice, including exact vertex and edge directions.
+        let origin = Vec3::new(0.01, -0.02, 0.015);
+        let steps = 24;
+        for i in -steps..=steps {
+            for j in -steps..=steps {
+                for k in [-steps, steps] {
+                    for dir in [
+                        Vec3::new(i as Real, j as Real, k as Real),
+                        Vec3::new(k as Real, i as Real, j as Real),
+                        Vec3::new(j as Real, k as Real, i as Real),
+                    ] {
+                        let hit = m.intersect(&Ray::new(origin, dir), ALL);
+                        let hit = hit.unwrap_or_else(|| panic!("ray along {dir} leaked out"));
+                        assert!(hit.normal.dot(dir) > 0.0);
+                    }
+                }
+            }
+        }
+    }
 }

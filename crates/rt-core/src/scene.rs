@@ -77,3 +77,103 @@ impl Scene {
         ViewPlane::new(self.camera, width, height)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::aabb::Aabb;
+    use crate::camera::Projection;
+    use crate::material::Material;
+    use crate::plane::Plane;
+    use crate::polygon::Polygon;
+    use crate::real::Vec3;
+    use crate::sphere::Sphere;
+    use crate::triangle::Triangle;
+    use proptest::prelude::*;
+
+    fn v(a: [f32; 3]) -> Vec3 {
+        Vec3::new(a[0] as Real, a[1] as Real, a[2] as Real)
+    }
+
+    /// One random primitive of any bounded or unbounded kind built from 9
+    /// numbers; `None` where those numbers make an invalid one.
+    fn primitive(kind: u8, p: [f32; 3], q: [f32; 3], r: [f32; 3]) -> Option<Primitive> {
+        match kind % 5 {
+            0 => Sphere::new(v(p), q[0].abs() as Real).ok().map(Primitive::Sphere),
+            1 => Plane::new(v(q), p[0] as Real).ok().map(Primitive::Plane),
+            2 => Some(Primitive::Aabb(Aabb::from_corners(v(p), v(q)))),
+            3 => Triangle::new(v(p), v(q), v(r)).ok().map(Primitive::Triangle),
+            _ => Polygon::new(vec![v(p), v(q), v(q) + v(r) - v(p), v(r)]).ok().map(Primitive::Polygon),
+        }
+    }
+
+    fn scene(objects: Vec<Object>) -> Scene {
+        let camera = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 60.0, 1.0, Projection::Perspective).unwrap();
+        Scene {
+            camera,
+            width: 8,
+            height: 8,
+            background: Color::ZERO,
+            samples_per_pixel: 1,
+            materials: vec![Material { color: Color::ONE }],
+            material_names: vec!["white".into()],
+            objects,
+        }
+    }
+
+    proptest! {
+        /// Random scenes and rays (including axis-parallel ones with ±0
+        /// components): a hit always has a finite t beyond the origin rule, a
+        /// unit normal, and a valid object index. No NaN reaches a `cast` row.
+        #[test]
+        fn random_scenes_never_give_nan_or_broken_hits(
+            parts in proptest::collection::vec(
+                (any::<u8>(), prop::array::uniform3(-50f32..50.0), prop::array::uniform3(-50f32..50.0), prop::array::uniform3(-50f32..50.0)),
+                1..8,
+            ),
+            origin in prop::array::uniform3(-60f32..60.0),
+            dir in prop::array::uniform3(-1f32..1.0),
+            zero_mask in 0u8..8,
+            negative_zero in any::<bool>(),
+        ) {
+            let objects: Vec<Object> = parts
+                .into_iter()
+                .filter_map(|(k, p, q, r)| primitive(k, p, q, r))
+                .map(|primitive| Object { primitive, material: 0 })
+                .collect();
+            let s = scene(objects);
+            let mut d = v(dir);
+            for axis in 0..3 {
+                if zero_mask & (1 << axis) != 0 {
+                    d[axis] = if negative_zero { -0.0 } else { 0.0 };
+                }
+            }
+            let ray = Ray::new(v(origin), d);
+            if let Some(hit) = s.cast(&ray) {
+                prop_assert!(hit.t.is_finite() && hit.t > cast_min_t(ray.origin, ray.dir));
+                prop_assert!((hit.normal.length() - 1.0).abs() < 1e-5, "normal {}", hit.normal);
+                prop_assert!(hit.object < s.objects.len());
+                prop_assert!(ray.at(hit.t).is_finite());
+            }
+        }
+    }
+
+    #[test]
+    fn the_first_listed_object_wins_an_exact_tie() {
+        let sphere = Primitive::Sphere(Sphere::new(Vec3::new(0.0, 0.0, 5.0), 1.0).unwrap());
+        let s = scene(vec![
+            Object { primitive: sphere.clone(), material: 0 },
+            Object { primitive: sphere, material: 0 },
+        ]);
+        assert_eq!(s.cast(&Ray::new(Vec3::ZERO, Vec3::Z)).unwrap().object, 0);
+    }
+
+    #[test]
+    fn zero_and_non_finite_rays_hit_nothing() {
+        let sphere = Primitive::Sphere(Sphere::new(Vec3::ZERO, 100.0).unwrap());
+        let s = scene(vec![Object { primitive: sphere, material: 0 }]);
+        assert_eq!(s.cast(&Ray::new(Vec3::ZERO, Vec3::ZERO)), None);
+        assert_eq!(s.cast(&Ray::new(Vec3::ZERO, Vec3::new(Real::NAN, 0.0, 1.0))), None);
+        assert_eq!(s.cast(&Ray::new(Vec3::splat(Real::INFINITY), Vec3::Z)), None);
+    }
+}

@@ -211,4 +211,46 @@ mod tests {
         let b = Sphere::new(Vec3::new(1.0, 2.0, 3.0), 0.5).unwrap().bounds();
         assert_eq!((b.min(), b.max()), (Vec3::new(0.5, 1.5, 2.5), Vec3::new(1.5, 2.5, 3.5)));
     }
+
+    proptest::proptest! {
+        /// Rays aimed at a random point of a random sphere hit it from outside
+        /// (near root, surface point, outward normal) and, leaving that point
+        /// outward under the cast rule, never hit it again.
+        #[test]
+        fn rays_aimed_at_a_sphere_hit_its_surface_and_leave_it_cleanly(
+            center in proptest::array::uniform3(-1e3f32..1e3),
+            radius in 0.01f32..100.0,
+            theta in 0.0f32..std::f32::consts::PI,
+            phi in 0.0f32..std::f32::consts::TAU,
+            distance in 1.5f32..50.0,
+            spread in proptest::array::uniform3(-0.3f32..0.3),
+        ) {
+            let c = Vec3::new(center[0] as Real, center[1] as Real, center[2] as Real);
+            let r = radius as Real;
+            let s = Sphere::new(c, r).unwrap();
+            let dir_to_surface = Vec3::new(
+                (theta.sin() * phi.cos()) as Real,
+                theta.cos() as Real,
+                (theta.sin() * phi.sin()) as Real,
+            );
+            let target = c + r * dir_to_surface;
+            let offset = dir_to_surface + Vec3::new(spread[0] as Real, spread[1] as Real, spread[2] as Real);
+            let origin = target + (distance as Real) * r * offset.normalize();
+            proptest::prop_assume!(s.classify(origin, 1e-3 * r) == Containment::Outside);
+            let ray = Ray::new(origin, target - origin);
+            let hit = s.intersect(&ray, ALL);
+            proptest::prop_assert!(hit.is_some());
+            let hit = hit.unwrap();
+            let p = ray.at(hit.t);
+            let scale = crate::real::magnitude_scale(p);
+            proptest::prop_assert!(((p - c).length() - r).abs() <= 1e-4 * r + 1e-5 * scale);
+            proptest::prop_assert!((hit.normal.length() - 1.0).abs() < 1e-5);
+            proptest::prop_assert!(hit.normal.dot(p - c) > 0.0);
+            proptest::prop_assert!(hit.t <= 1.0 + 1e-4, "the aimed-at point is at t = 1 or beyond the near side");
+            // Leave along the normal: no second hit on this convex surface.
+            let out = Ray::new(p, hit.normal);
+            let range = Interval::new(crate::real::cast_min_t(out.origin, out.dir), Real::INFINITY);
+            proptest::prop_assert_eq!(s.intersect(&out, range), None);
+        }
+    }
 }
