@@ -7,6 +7,7 @@
 use rayon::prelude::*;
 use thiserror::Error;
 
+use crate::camera::Camera;
 use crate::material::Color;
 use crate::ray::Ray;
 use crate::sampler::subpixel_offset;
@@ -48,12 +49,24 @@ pub struct Renderer<'s> {
 }
 
 impl<'s> Renderer<'s> {
-    /// A renderer for `scene` at `width`×`height` with `spp` samples per pixel.
+    /// A renderer for `scene` seen by its own camera at `width`×`height` with
+    /// `spp` samples per pixel.
     pub fn new(scene: &'s Scene, width: u32, height: u32, spp: u32) -> Result<Self, RenderError> {
+        Self::with_camera(scene, scene.camera, width, height, spp)
+    }
+
+    /// A renderer for `scene` seen by another `camera` (the viewer's).
+    pub fn with_camera(
+        scene: &'s Scene,
+        camera: Camera,
+        width: u32,
+        height: u32,
+        spp: u32,
+    ) -> Result<Self, RenderError> {
         if !(1..=MAX_SAMPLES_PER_PIXEL).contains(&spp) {
             return Err(RenderError::SamplesPerPixel(spp));
         }
-        Ok(Self { scene, view: scene.view_plane(width, height)?, spp })
+        Ok(Self { scene, view: ViewPlane::new(camera, width, height)?, spp })
     }
 
     /// The view plane rays are generated from.

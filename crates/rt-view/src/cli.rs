@@ -4,13 +4,20 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 
-/// A CPU ray tracer: render RON scene files to PNG, or query rays against them.
+/// A CPU ray tracer: view RON scene files live, render them to PNG, or query rays against them.
+///
+/// With no command, opens the interactive viewer on SCENE (or a built-in
+/// scene): drag to orbit, shift- or right-drag to pan, wheel to zoom; the side
+/// panel has FOV, near, position and look-at controls. Saving the scene file
+/// in an editor reloads it.
 #[derive(Debug, Parser)]
 #[command(
     name = "rt-view",
     version,
     args_conflicts_with_subcommands = true,
     after_help = "Examples:\n  \
+        rt-view                      (the viewer, on the built-in scene)\n  \
+        rt-view scenes/showcase.ron  (the viewer, on a scene file)\n  \
         rt-view render scenes/showcase.ron -o showcase.png\n  \
         rt-view render scenes/sphere.ron -o sphere.png --width 1280 --height 960 --spp 16\n  \
         echo '0,0,-5,0,0,1' | rt-view cast scenes/sphere.ron\n  \
@@ -19,8 +26,12 @@ use clap::{Args, Parser, Subcommand};
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
-    /// Scene to open in the interactive viewer (not built yet: use `render`).
+    /// Scene to open in the interactive viewer (default: a built-in scene).
     pub scene: Option<PathBuf>,
+    /// Viewer: once the first full-resolution frame is on screen, save a
+    /// screenshot of the window to this PNG and exit.
+    #[arg(long, value_name = "OUT.png")]
+    pub screenshot: Option<PathBuf>,
 }
 
 /// The subcommands.
@@ -88,10 +99,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Some(Command::Render(args)) => crate::render_cmd::run(&args),
         Some(Command::Cast(args)) => crate::cast_cmd::run(&args),
-        None => anyhow::bail!(
-            "the interactive viewer is not part of this build yet; \
-             render headless instead: rt-view render {} -o out.png",
-            cli.scene.map_or("SCENE.ron".into(), |p| p.display().to_string())
-        ),
+        None => {
+            crate::viewer::run(crate::viewer::ViewerOptions { scene: cli.scene, screenshot: cli.screenshot })
+        }
     }
 }

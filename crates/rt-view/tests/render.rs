@@ -171,10 +171,3 @@ fn out_of_range_sizes_and_sample_counts_are_refused() {
         assert!(!out.exists());
     }
 }
-
-#[test]
-fn the_viewer_command_says_it_is_not_built_yet_and_fails() {
-    let o = rt_view(&["scenes/sphere.ron"], "");
-    assert_eq!(o.status.code(), Some(1));
-    assert!(stderr(&o).contains("rt-view render scenes/sphere.ron -o out.png"), "{}", stderr(&o));
-}

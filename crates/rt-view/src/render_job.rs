@@ -1,0 +1,230 @@
+//! A render running in the background, streaming finished rows.
+//!
+//! The job knows nothing about the UI beyond its row type: each finished row
+//! is an [`egui::Color32`] vector tagged with the job's generation, sent over
+//! a channel, followed by a call to the `on_row` hook (the viewer passes
+//! `request_repaint`). Workers take rows from a shared counter, so rows finish
+//! roughly top to bottom, like the course's line-at-a-time renderer, while
+//! every rayon thread is busy.
+//!
+//! Cancelling (or dropping the job, or dropping its receiver) stops the
+//! workers after the row each is on; rows already in the channel keep their
+//! old generation, and [`crate::canvas::Canvas`] refuses them.
+
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::mpsc::{self, Receiver, TryIter};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use egui::Color32;
+use rt_core::render::RenderError;
+use rt_core::{Camera, Renderer, Scene};
+
+/// What to render: a scene seen by a camera at a size and sample count.
+#[derive(Clone, Debug)]
+pub struct JobSpec {
+    /// The scene (shared with the UI, never copied).
+    pub scene: Arc<Scene>,
+    /// The camera to render with (the viewer's, not necessarily the file's).
+    pub camera: Camera,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+}
+
+/// One finished row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Row {
+    /// The generation of the job that rendered it.
+    pub generation: u64,
+    /// Row index, 0 at the top.
+    pub y: u32,
+    /// One colour per column.
+    pub pixels: Vec<Color32>,
+}
+
+/// A running (or finished, or cancelled) render.
+pub struct RenderJob {
+    generation: u64,
+    spec: JobSpec,
+    cancel: Arc<AtomicBool>,
+    rows: Receiver<Row>,
+    elapsed: Arc<Mutex<Option<Duration>>>,
+}
+
+impl RenderJob {
+    /// Starts rendering `spec` on rayon's global pool from a thread of its
+    /// own, so the caller never waits. `on_row` runs after each row is sent.
+    pub fn start(
+        spec: JobSpec,
+        generation: u64,
+        on_row: impl Fn() + Send + Sync + 'static,
+    ) -> Result<Self, RenderError> {
+        // Validate on the caller's thread, so errors are returned, not lost.
+        Renderer::with_camera(&spec.scene, spec.camera, spec.width, spec.height, spec.spp)?;
+        let cancel = Arc::new(AtomicBool::new(false));
+        let elapsed = Arc::new(Mutex::new(None));
+        let (tx, rows) = mpsc::channel();
+        let worker_spec = spec.clone();
+        let (worker_cancel, worker_elapsed) = (cancel.clone(), elapsed.clone());
+        std::thread::Builder::new()
+            .name(format!("render-job-{generation}"))
+            .spawn(move || {
+                let s = worker_spec;
+                let renderer = Renderer::with_camera(&s.scene, s.camera, s.width, s.height, s.spp)
+                    .expect("validated before the thread started");
+                let start = Instant::now();
+                let next_row = AtomicU32::new(0);
+                rayon::broadcast(|_| {
+                    let mut rgb = vec![[0u8; 3]; s.width as usize];
+                    while !worker_cancel.load(Ordering::Relaxed) {
+                        let y = next_row.fetch_add(1, Ordering::Relaxed);
+                        if y >= s.height {
+                            break;
+                        }
+                        renderer.render_row(y, &mut rgb);
+                        let pixels = rgb.iter().map(|&[r, g, b]| Color32::from_rgb(r, g, b)).collect();
+                        if worker_cancel.load(Ordering::Relaxed)
+                            || tx.send(Row { generation, y, pixels }).is_err()
+                        {
+                            worker_cancel.store(true, Ordering::Relaxed);
+                            break;
+                        }
+                        on_row();
+                    }
+                });
+                if !worker_cancel.load(Ordering::Relaxed) {
+                    *worker_elapsed.lock().unwrap() = Some(start.elapsed());
+                    on_row();
+                }
+            })
+            .expect("the OS can start a thread");
+        Ok(Self { generation, spec, cancel, rows, elapsed })
+    }
+
+    /// This job's generation tag.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// What this job renders.
+    pub fn spec(&self) -> &JobSpec {
+        &self.spec
+    }
+
+    /// Asks the workers to stop after their current row.
+    pub fn cancel(&self) {
+        self.cancel.store(true, Ordering::Relaxed);
+    }
+
+    /// Rows that have arrived since the last call, without waiting.
+    pub fn try_rows(&self) -> TryIter<'_, Row> {
+        self.rows.try_iter()
+    }
+
+    /// Waits for the next row; `None` once the job has ended and every row
+    /// has been taken (used by tests and headless callers).
+    pub fn next_row_blocking(&self) -> Option<Row> {
+        self.rows.recv().ok()
+    }
+
+    /// Wall time from start to the last row, once every row is rendered
+    /// (`None` while running or if cancelled).
+    pub fn elapsed(&self) -> Option<Duration> {
+        *self.elapsed.lock().unwrap()
+    }
+}
+
+impl Drop for RenderJob {
+    fn drop(&mut self) {
+        self.cancel();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn spec(width: u32, height: u32) -> JobSpec {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/showcase.ron");
+        let scene = Arc::new(rt_core::load_scene(&path).unwrap());
+        JobSpec { camera: scene.camera, scene, width, height, spp: 1 }
+    }
+
+    #[test]
+    fn every_row_is_delivered_exactly_once_with_the_jobs_generation() {
+        let job = RenderJob::start(spec(60, 40), 7, || {}).unwrap();
+        let mut seen = vec![0; 40];
+        while let Some(row) = job.next_row_blocking() {
+            assert_eq!((row.generation, row.pixels.len()), (7, 60));
+            seen[row.y as usize] += 1;
+        }
+        assert_eq!(seen, vec![1; 40]);
+        assert!(job.elapsed().is_some());
+    }
+
+    #[test]
+    fn streamed_rows_equal_the_headless_render_bit_for_bit() {
+        let s = spec(80, 45);
+        let frame = Renderer::with_camera(&s.scene, s.camera, 80, 45, 1).unwrap().render(|_| {});
+        let job = RenderJob::start(s, 1, || {}).unwrap();
+        let mut image = vec![Color32::BLACK; 80 * 45];
+        while let Some(row) = job.next_row_blocking() {
+            let y = row.y as usize;
+            image[y * 80..(y + 1) * 80].copy_from_slice(&row.pixels);
+        }
+        let expected: Vec<Color32> =
+            frame.pixels.iter().map(|&[r, g, b]| Color32::from_rgb(r, g, b)).collect();
+        assert!(image == expected, "streamed image differs from `render`");
+    }
+
+    #[test]
+    fn a_cancelled_job_stops_early_and_reports_no_time() {
+        // Large enough that two threads cannot finish it before the cancel lands.
+        let job = RenderJob::start(spec(2000, 2000), 3, || {}).unwrap();
+        job.cancel();
+        let mut delivered = 0;
+        while job.next_row_blocking().is_some() {
+            delivered += 1;
+        }
+        assert!(delivered < 2000, "all {delivered} rows rendered despite the cancel");
+        assert_eq!(job.elapsed(), None);
+    }
+
+    #[test]
+    fn after_a_restart_no_row_of_the_old_job_reaches_the_new_canvas() {
+        use crate::canvas::Canvas;
+        let old = RenderJob::start(spec(400, 300), 1, || {}).unwrap();
+        // Let some old rows arrive, as they would while the user drags.
+        let first = old.next_row_blocking().unwrap();
+        let mut canvas = Canvas::replacing(None, 1, 400, 300);
+        assert!(canvas.apply(&first));
+        // The view changes: a new job and a new canvas replace the old ones.
+        let new = RenderJob::start(spec(400, 300), 2, || {}).unwrap();
+        old.cancel();
+        let mut canvas = Canvas::replacing(Some(&canvas), 2, 400, 300);
+        // Everything the old job still delivers is refused ...
+        let mut stale = 0;
+        while let Some(row) = old.next_row_blocking() {
+            assert!(!canvas.apply(&row), "a row of the old job was applied");
+            stale += 1;
+        }
+        // ... and the new job completes the canvas on its own.
+        while let Some(row) = new.next_row_blocking() {
+            assert!(canvas.apply(&row));
+        }
+        assert!(canvas.is_complete());
+        assert!(stale < 300, "the old job was not cancelled");
+    }
+
+    #[test]
+    fn invalid_specs_are_refused_before_a_thread_starts() {
+        let mut s = spec(10, 10);
+        s.spp = 0;
+        assert!(matches!(RenderJob::start(s, 1, || {}), Err(RenderError::SamplesPerPixel(0))));
+    }
+}

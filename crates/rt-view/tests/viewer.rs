@@ -1,0 +1,117 @@
+//! The viewer's window: start-up errors, and a smoke test of the real window
+//! under Xvfb that checks the screenshot shows the rendered scene.
+//!
+//! The smoke test needs `xvfb-run` (Debian: xvfb, xauth, and Mesa's GL
+//! libraries; `.ci/run` installs them). Without it the test says so and
+//! passes, unless `RT_REQUIRE_XVFB` is set, as CI sets it, where it fails.
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+use common::{read_png, scenes_dir, stderr};
+
+fn rt_view_bin() -> &'static str {
+    env!("CARGO_BIN_EXE_rt-view")
+}
+
+#[test]
+fn the_viewer_refuses_a_bad_scene_before_opening_a_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("bad.ron");
+    std::fs::write(&scene, "Scene(camera: (").unwrap();
+    let o = Command::new(rt_view_bin())
+        .arg(&scene)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).starts_with("error: ") && stderr(&o).contains("bad.ron:1:"), "{}", stderr(&o));
+}
+
+#[test]
+fn without_a_display_the_viewer_fails_with_a_clear_error_not_a_panic() {
+    let o = Command::new(rt_view_bin())
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("WAYLAND_SOCKET")
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.starts_with("error: cannot open the viewer window"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+fn have_xvfb() -> bool {
+    let found =
+        Command::new("sh").args(["-c", "command -v xvfb-run"]).output().is_ok_and(|o| o.status.success());
+    if !found {
+        assert!(
+            std::env::var_os("RT_REQUIRE_XVFB").is_none(),
+            "RT_REQUIRE_XVFB is set but xvfb-run is not installed"
+        );
+        eprintln!("SKIPPED: xvfb-run is not installed (apt-get install xvfb xauth libgl1-mesa-dri ...)");
+    }
+    found
+}
+
+/// Opens the window under Xvfb in `cwd`, on `scene` (the built-in scene for
+/// `None`), and returns its screenshot.
+fn screenshot(scene: Option<&Path>, cwd: &Path) -> image::RgbImage {
+    let out = cwd.join("shot.png");
+    let mut command = Command::new("xvfb-run");
+    command.args(["-a", "-s", "-screen 0 1280x800x24"]).arg(rt_view_bin()).arg("--screenshot").arg(&out);
+    command.args(scene).current_dir(cwd).env_remove("WAYLAND_DISPLAY");
+    let o = command.output().unwrap();
+    assert!(o.status.success(), "viewer failed: {}\n{}", stderr(&o), String::from_utf8_lossy(&o.stdout));
+    read_png(&out)
+}
+
+/// Whether `pixel` is within 3 levels per channel of `rgb`.
+fn near(pixel: &image::Rgb<u8>, rgb: [u8; 3]) -> bool {
+    pixel.0.iter().zip(rgb).all(|(&a, b)| (a as i32 - b as i32).abs() <= 3)
+}
+
+/// Pixels within 3 levels per channel of `rgb`.
+fn count_colour(img: &image::RgbImage, rgb: [u8; 3]) -> usize {
+    img.pixels().filter(|p| near(p, rgb)).count()
+}
+
+#[test]
+fn the_real_window_shows_the_rendered_scene() {
+    if !have_xvfb() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let img = screenshot(Some(&scenes_dir().join("sphere.ron")), dir.path());
+    let (w, h) = img.dimensions();
+    assert!(w >= 640 && h >= 400, "screenshot {w}x{h}");
+    // sphere.ron: the sphere's flat colour (0.9, 0.15, 0.1) → (230, 38, 26), the
+    // background (0.05, 0.05, 0.1) → (13, 13, 26). The image fills most of the
+    // central panel; the sphere covers about a fifth of the image.
+    let sphere = count_colour(&img, [230, 38, 26]);
+    let background = count_colour(&img, [13, 13, 26]);
+    let total = (w * h) as usize;
+    assert!(sphere > total / 40, "only {sphere} sphere pixels of {total}: the scene is not shown");
+    assert!(background > total / 5, "only {background} background pixels of {total}");
+    // The sphere is round and in the middle of the image: the widest run of
+    // sphere pixels is on the row through its centre, well inside the window.
+    let row_of_widest =
+        (0..h).max_by_key(|&y| (0..w).filter(|&x| near(img.get_pixel(x, y), [230, 38, 26])).count()).unwrap();
+    assert!(row_of_widest > h / 4 && row_of_widest < 3 * h / 4, "sphere centre row {row_of_widest} of {h}");
+}
+
+#[test]
+fn the_built_in_default_scene_opens_without_a_scene_file() {
+    if !have_xvfb() {
+        return;
+    }
+    // Run where there is no scenes/ folder: the scene must be built in.
+    let dir = tempfile::tempdir().unwrap();
+    let img = screenshot(None, dir.path());
+    // default.ron's red sphere (0.85, 0.18, 0.15) → (217, 46, 38).
+    assert!(count_colour(&img, [217, 46, 38]) > 1000, "the default scene's red sphere is missing");
+}
