@@ -15,7 +15,7 @@
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::real::{Real, Vec3, magnitude_scale};
+use crate::real::{Real, Vec3, normalize_robust};
 
 /// How primary rays leave the view plane.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -89,12 +89,12 @@ impl CameraBasis {
         check_finite("up", up)?;
         let view = center_of_interest - position;
         // Coordinates that differ by a few ulps give a direction made of rounding noise.
-        let scale = magnitude_scale(position).max(magnitude_scale(center_of_interest));
+        let scale = position.abs().max_element().max(center_of_interest.abs().max_element());
         if view.abs().max_element() <= 8.0 * Real::EPSILON * scale {
             return Err(CameraError::NoViewDirection);
         }
-        let z = view.try_normalize().ok_or(CameraError::NoViewDirection)?;
-        let up = up.try_normalize().ok_or(CameraError::UpParallelToView)?;
+        let z = normalize_robust(view).ok_or(CameraError::NoViewDirection)?;
+        let up = normalize_robust(up).ok_or(CameraError::UpParallelToView)?;
         let right = up.cross(z);
         if right.length() < MIN_UP_SINE {
             return Err(CameraError::UpParallelToView);
@@ -257,6 +257,15 @@ mod tests {
         let p = Vec3::splat(1e6);
         let q = Vec3::new(Real::from_bits(p.x.to_bits() + 1), p.y, p.z);
         assert_eq!(camera(p, q, Vec3::Y), Err(CameraError::NoViewDirection));
+    }
+
+    #[test]
+    fn cameras_at_extreme_but_representable_scales_are_accepted() {
+        // Far from the origin, tiny, and with a huge up vector: all valid.
+        assert!(camera(Vec3::new(0.0, 0.0, -1e20), Vec3::ZERO, Vec3::Y).is_ok());
+        assert!(camera(Vec3::new(0.0, 0.0, -1e-7), Vec3::ZERO, Vec3::Y).is_ok());
+        assert!(camera(Vec3::new(0.0, 0.0, -5.0), Vec3::ZERO, Vec3::new(0.0, 1e20, 0.0)).is_ok());
+        assert!(camera(Vec3::new(0.0, 0.0, -5.0), Vec3::ZERO, Vec3::new(0.0, 1e-30, 0.0)).is_ok());
     }
 
     #[test]

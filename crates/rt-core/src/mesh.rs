@@ -266,4 +266,31 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn a_fine_grid_far_away_has_no_holes() {
+        // 100 × 100 quads of 0.01 units (20 000 triangles) seen from 5000 units:
+        // 5·10⁵ triangle sizes away. Every ray aimed into the grid must hit it.
+        let n = 100;
+        let positions: Vec<Vec3> = (0..=n)
+            .flat_map(|j| (0..=n).map(move |i| Vec3::new(i as Real * 0.01, j as Real * 0.01, 0.0)))
+            .collect();
+        let at = |i: u32, j: u32| j * (n + 1) + i;
+        let triangles: Vec<[u32; 3]> = (0..n)
+            .flat_map(|j| {
+                (0..n).flat_map(move |i| {
+                    [[at(i, j), at(i + 1, j), at(i + 1, j + 1)], [at(i, j), at(i + 1, j + 1), at(i, j + 1)]]
+                })
+            })
+            .collect();
+        let grid = Mesh::new(positions, triangles).unwrap();
+        let eye = Vec3::new(0.3, 0.6, -5000.0);
+        for k in 0..2000u32 {
+            // Targets on a lattice that includes vertices and shared edges.
+            let target =
+                Vec3::new((k % 50) as Real * 0.02 + 0.005 * (k % 3) as Real, (k / 50) as Real * 0.025, 0.0);
+            let hit = grid.intersect(&Ray::new(eye, target - eye), ALL);
+            assert!(hit.is_some(), "ray to {target} slipped through the grid");
+        }
+    }
 }

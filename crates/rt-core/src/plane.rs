@@ -31,11 +31,18 @@ impl Plane {
         if !normal.is_finite() || !d.is_finite() {
             return Err(GeometryError::NotFinite("plane normal or d"));
         }
-        let len = normal.length();
-        if !(len > 0.0 && len.is_finite()) {
+        // Divide by the largest component first, so |n| cannot overflow or underflow.
+        let m = normal.abs().max_element();
+        if m == 0.0 {
             return Err(GeometryError::PlaneNormalZero);
         }
-        Ok(Self { normal: normal / len, d: d / len })
+        let n = normal / m;
+        let len = n.length();
+        let (normal, d) = (n / len, d / m / len);
+        if !d.is_finite() {
+            return Err(GeometryError::NotFinite("plane d / |normal|"));
+        }
+        Ok(Self { normal, d })
     }
 
     /// Unit normal n.
@@ -127,6 +134,12 @@ mod tests {
         let p = Plane::new(Vec3::new(0.0, 2.0, 0.0), -2.0).unwrap();
         assert_eq!((p.normal(), p.d()), (Vec3::Y, -1.0));
         assert_eq!(Plane::new(Vec3::ZERO, 1.0), Err(GeometryError::PlaneNormalZero));
+        // Huge and tiny normals are fine: only their direction matters.
+        assert_eq!(
+            Plane::new(Vec3::new(0.0, 1e20, 0.0), 1e20).map(|p| (p.normal(), p.d())),
+            Ok((Vec3::Y, 1.0))
+        );
+        assert_eq!(Plane::new(Vec3::new(0.0, 1e-30, 0.0), 0.0).map(|p| p.normal()), Ok(Vec3::Y));
     }
 
     #[test]

@@ -4,7 +4,7 @@ use crate::aabb::Aabb;
 use crate::hit::PrimitiveHit;
 use crate::primitive::GeometryError;
 use crate::ray::{Interval, Ray};
-use crate::real::{Real, Vec3, magnitude_scale};
+use crate::real::{Real, Vec3, magnitude_scale, normalize_robust};
 
 /// Relative planarity tolerance: a corner may be off the best-fit plane by
 /// this fraction of the polygon's diagonal (plus rounding at its magnitude).
@@ -34,8 +34,7 @@ impl Polygon {
             return Err(GeometryError::NotFinite("polygon point"));
         }
         let centroid = points.iter().copied().sum::<Vec3>() / points.len() as Real;
-        let normal = newell_normal(&points, centroid).try_normalize();
-        let normal = normal.ok_or(GeometryError::PolygonDegenerate)?;
+        let normal = newell_normal(&points, centroid).ok_or(GeometryError::PolygonDegenerate)?;
         let d = normal.dot(centroid);
         let bounds = Aabb::from_points(points.iter().copied()).expect("at least three points");
         let scale = points.iter().map(|&p| magnitude_scale(p)).fold(1.0, Real::max);
@@ -100,11 +99,19 @@ impl Polygon {
     }
 }
 
-/// Newell's area vector Σ (pᵢ − c) × (pᵢ₊₁ − c): twice the polygon's area
-/// times its unit normal, oriented by the winding.
-fn newell_normal(points: &[Vec3], center: Vec3) -> Vec3 {
+/// The unit normal from Newell's area vector Σ (pᵢ − c) × (pᵢ₊₁ − c), which is
+/// twice the area times the normal, oriented by the winding. The offsets are
+/// divided by their largest component first so the products neither overflow
+/// nor underflow. `None` for zero area.
+fn newell_normal(points: &[Vec3], center: Vec3) -> Option<Vec3> {
+    let m = points.iter().map(|&p| (p - center).abs().max_element()).fold(0.0, Real::max);
+    if !(m > 0.0 && m.is_finite()) {
+        return None;
+    }
     let n = points.len();
-    (0..n).map(|i| (points[i] - center).cross(points[(i + 1) % n] - center)).sum()
+    let area: Vec3 =
+        (0..n).map(|i| ((points[i] - center) / m).cross((points[(i + 1) % n] - center) / m)).sum();
+    normalize_robust(area)
 }
 
 #[cfg(test)]

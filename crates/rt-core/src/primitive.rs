@@ -18,9 +18,12 @@ pub enum GeometryError {
     /// A coordinate is NaN or infinite.
     #[error("{0} must be finite")]
     NotFinite(&'static str),
-    /// Radius ≤ 0, NaN or infinite.
-    #[error("sphere radius must be positive and finite, got {0}")]
+    /// Radius ≤ 0 or NaN.
+    #[error("sphere radius must be positive, got {0}")]
     SphereRadius(Real),
+    /// Radius whose square overflows or is subnormal.
+    #[error("sphere radius {0} is out of range: its square must be a normal, finite number")]
+    SphereRadiusRange(Real),
     /// A zero plane normal.
     #[error("plane normal must not be zero")]
     PlaneNormalZero,

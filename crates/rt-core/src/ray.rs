@@ -1,6 +1,6 @@
 //! Rays: `p(t) = origin + t·dir`, in world units.
 
-use crate::real::{Real, Vec3};
+use crate::real::{Real, Vec3, exponent_of, scale_pow2};
 
 /// A ray `p(t) = origin + t·dir`.
 ///
@@ -25,6 +25,29 @@ impl Ray {
     pub fn at(&self, t: Real) -> Vec3 {
         self.origin + t * self.dir
     }
+
+    /// The same ray with its direction multiplied by a power of two `2ᵏ` so
+    /// that its largest component lies in [1, 2) (up to rounding of the
+    /// exponent), and `k`. Scaling by a power of two is exact, so a hit at
+    /// `t'` on the rescaled ray is at exactly `t = t'·2ᵏ` on this one
+    /// ([`rescale_t`]). This keeps `|dir|²` and the intersection formulas
+    /// finite for directions like 10⁻³⁰ or 10²⁰. `None` for a zero or
+    /// non-finite direction or a non-finite origin.
+    pub fn rescaled(&self) -> Option<(Ray, i32)> {
+        let m = self.dir.abs().max_element();
+        if !(m > 0.0 && m.is_finite() && self.origin.is_finite()) {
+            return None;
+        }
+        let k = -exponent_of(m);
+        let dir = Vec3::new(scale_pow2(self.dir.x, k), scale_pow2(self.dir.y, k), scale_pow2(self.dir.z, k));
+        Some((Ray::new(self.origin, dir), k))
+    }
+}
+
+/// `t'·2ᵏ`: the parameter on the original ray of a hit at `t'` on the ray
+/// [`Ray::rescaled`] returned with `k`. `None` if it overflows.
+pub fn rescale_t(t: Real, k: i32) -> Option<Real> {
+    Some(scale_pow2(t, k)).filter(|t| t.is_finite())
 }
 
 /// The open interval of ray parameters `(min, max)` a query accepts.

@@ -47,15 +47,19 @@ pub fn magnitude_scale(p: Vec3) -> Real {
 /// `2⁻¹⁶ · s` with `s = max(1, largest |coordinate| of the origin)`.
 ///
 /// SPEC.md requires hits at distance ≤ 2⁻²⁰·s never to count and hits at
-/// distance ≥ 2⁻¹⁰·s always to count; 2⁻¹⁶ sits in the middle of that window
-/// on a log scale. In f32 a point on a surface at magnitude s is off the
-/// surface by a few ulps, about 2⁻²³·s each, so 2⁻¹⁶·s leaves a margin of
-/// 2⁷ = 128 ulps.
+/// distance ≥ 2⁻¹⁰·s always to count. 2⁻¹⁶ is 16× above the lower bound and
+/// 64× below the upper one, leaning towards keeping near hits. In f32 a point
+/// on a surface at magnitude s is off the surface by a few ulps, about 2⁻²³·s
+/// each, so 2⁻¹⁶·s leaves a margin of 2⁷ = 128 ulps.
+///
+/// For primary rays this acts like a near clipping distance of 2⁻¹⁶·s: for a
+/// camera 10⁵ units from the origin, 1.5 units (where f32 resolves 0.008).
 pub const CAST_MIN_DISTANCE_FACTOR: Real = 1.0 / 65536.0;
 
 /// The smallest ray parameter `t` that counts as a hit for a ray from `origin`
 /// along `dir`, by the rule of [`CAST_MIN_DISTANCE_FACTOR`]. Returns +∞ (nothing
-/// counts) for a zero or non-finite direction.
+/// counts) for a zero or non-finite direction. `dir` should have been rescaled
+/// ([`crate::ray::Ray::rescaled`]) so that `|dir|` cannot overflow or underflow.
 pub fn cast_min_t(origin: Vec3, dir: Vec3) -> Real {
     let len = dir.length();
     if len > 0.0 && len.is_finite() {
@@ -65,6 +69,34 @@ pub fn cast_min_t(origin: Vec3, dir: Vec3) -> Real {
     }
 }
 
+/// `v / |v|`, or `None` for a zero or non-finite `v`, for any finite `v`:
+/// `v` is first divided by its largest absolute component, so `|v|²` can
+/// neither overflow (components near 10³⁸ in f32) nor underflow (near 10⁻²⁰).
+pub fn normalize_robust(v: Vec3) -> Option<Vec3> {
+    let m = v.abs().max_element();
+    if !(m > 0.0 && m.is_finite()) {
+        return None;
+    }
+    (v / m).try_normalize()
+}
+
+/// `2ⁿ` for |n| ≤ 75, exactly (powers of two in that range are normal in f32).
+fn pow2_small(n: i32) -> Real {
+    (2.0 as Real).powi(n)
+}
+
+/// `x · 2ⁿ`, exact unless the result overflows or underflows; `n` may be
+/// as large as a subnormal's exponent (applied in two exact halves).
+pub fn scale_pow2(x: Real, n: i32) -> Real {
+    let half = n / 2;
+    x * pow2_small(half) * pow2_small(n - half)
+}
+
+/// The exponent `n` with `2ⁿ ≤ m < 2ⁿ⁺¹` (up to one off after rounding, which
+/// is harmless: callers only need some nearby power of two). `m` > 0, finite.
+pub fn exponent_of(m: Real) -> i32 {
+    m.log2().floor() as i32
+}
 /// The sign-exact 2D edge function `a·b − c·d`, as used by the watertight
 /// ray/triangle test.
 ///
@@ -116,6 +148,30 @@ mod tests {
         let (c, d): (Real, Real) = (1.0, 1.0);
         assert!(difference_of_products(a, b, c, d) > 0.0);
         assert!(difference_of_products(c, d, a, b) < 0.0);
+    }
+
+    #[test]
+    fn normalize_robust_works_across_the_whole_exponent_range() {
+        for scale in [1e-30 as Real, 1e-20, 1.0, 1e20, 1e30, Real::MAX / 4.0] {
+            let n = normalize_robust(Vec3::new(3.0, 0.0, 4.0) * scale).unwrap();
+            assert!((n - Vec3::new(0.6, 0.0, 0.8)).length() < 1e-6, "{scale}: {n}");
+        }
+        assert_eq!(normalize_robust(Vec3::ZERO), None);
+        assert_eq!(normalize_robust(Vec3::new(Real::NAN, 0.0, 1.0)), None);
+    }
+
+    #[test]
+    fn scaling_by_powers_of_two_is_exact_even_for_extreme_exponents() {
+        let x: Real = 1.2345678;
+        for n in [-140, -75, -1, 0, 1, 75, 120] {
+            let y = scale_pow2(x, n);
+            if y != 0.0 && y.is_finite() && y.is_normal() {
+                assert_eq!(scale_pow2(y, -n), x, "n = {n}");
+            }
+        }
+        assert_eq!(exponent_of(1.0), 0);
+        assert_eq!(exponent_of(0.75), -1);
+        assert_eq!(exponent_of(1024.5), 10);
     }
 
     #[test]

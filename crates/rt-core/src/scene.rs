@@ -5,8 +5,8 @@ use crate::camera::Camera;
 use crate::hit::Hit;
 use crate::material::{Color, Material};
 use crate::primitive::Primitive;
-use crate::ray::{Interval, Ray};
-use crate::real::{Real, cast_min_t};
+use crate::ray::{Interval, Ray, rescale_t};
+use crate::real::{Real, cast_min_t, scale_pow2};
 use crate::view_plane::{ViewPlane, ViewPlaneError};
 
 /// One entry of the scene file's object list.
@@ -43,11 +43,26 @@ pub struct Scene {
 impl Scene {
     /// The nearest hit over all objects with `t` in `range`; ties keep the
     /// object listed first. A ray with a zero or non-finite direction, or a
-    /// non-finite origin, hits nothing.
+    /// non-finite origin, hits nothing. The direction may have any magnitude:
+    /// it is rescaled by a power of two first ([`Ray::rescaled`]).
     pub fn closest_hit(&self, ray: &Ray, range: Interval) -> Option<Hit> {
-        if !(ray.origin.is_finite() && ray.dir.is_finite()) || ray.dir == crate::real::Vec3::ZERO {
-            return None;
-        }
+        let (unit, k) = ray.rescaled()?;
+        let range = Interval::new(scale_pow2(range.min, -k), scale_pow2(range.max, -k));
+        self.closest_hit_rescaled(&unit, range, k)
+    }
+
+    /// The nearest hit of a ray whose history is unknown (a `cast` query or a
+    /// primary ray): hits within `2⁻¹⁶·max(1, |origin|∞)` of the origin do not
+    /// count ([`crate::real::CAST_MIN_DISTANCE_FACTOR`]).
+    pub fn cast(&self, ray: &Ray) -> Option<Hit> {
+        let (unit, k) = ray.rescaled()?;
+        let min_t = cast_min_t(unit.origin, unit.dir);
+        self.closest_hit_rescaled(&unit, Interval::new(min_t, Real::INFINITY), k)
+    }
+
+    /// The closest hit of a ray already rescaled by `2ᵏ`, with `t` mapped
+    /// back to the original ray.
+    fn closest_hit_rescaled(&self, ray: &Ray, range: Interval, k: i32) -> Option<Hit> {
         let mut range = range;
         let mut closest = None;
         for (index, object) in self.objects.iter().enumerate() {
@@ -56,15 +71,9 @@ impl Scene {
                 closest = Some(Hit::new(index, hit));
             }
         }
-        closest
-    }
-
-    /// The nearest hit of a ray whose history is unknown (a `cast` query or a
-    /// primary ray): hits within `2⁻¹⁶·max(1, |origin|∞)` of the origin do not
-    /// count ([`crate::real::CAST_MIN_DISTANCE_FACTOR`]).
-    pub fn cast(&self, ray: &Ray) -> Option<Hit> {
-        let min_t = cast_min_t(ray.origin, ray.dir);
-        self.closest_hit(ray, Interval::new(min_t, Real::INFINITY))
+        let mut hit = closest?;
+        hit.t = rescale_t(hit.t, k)?;
+        Some(hit)
     }
 
     /// The colour a hit shows: its object's material colour.
@@ -166,6 +175,19 @@ mod tests {
             Object { primitive: sphere, material: 0 },
         ]);
         assert_eq!(s.cast(&Ray::new(Vec3::ZERO, Vec3::Z)).unwrap().object, 0);
+    }
+
+    #[test]
+    fn direction_magnitude_changes_t_but_not_the_hit() {
+        // Unit sphere at z = 5: from the origin along +z the hit is at distance 4.
+        let sphere = Primitive::Sphere(Sphere::new(Vec3::new(0.0, 0.0, 5.0), 1.0).unwrap());
+        let s = scene(vec![Object { primitive: sphere, material: 0 }]);
+        for scale in [1e-30 as Real, 1e-20, 1e-3, 1.0, 7.0, 1e15, 1e20, 1e30] {
+            let hit = s.cast(&Ray::new(Vec3::ZERO, Vec3::new(0.0, 0.0, scale)));
+            let hit = hit.unwrap_or_else(|| panic!("direction {scale}: miss"));
+            assert!((hit.t * scale - 4.0).abs() <= 4.0 * 4.0 * Real::EPSILON, "{scale}: t = {}", hit.t);
+            assert_eq!(hit.normal, -Vec3::Z);
+        }
     }
 
     #[test]

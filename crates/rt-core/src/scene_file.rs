@@ -196,8 +196,34 @@ struct SceneDesc {
     background: ColorDesc,
     #[serde(default)]
     samples_per_pixel: SamplesDesc,
+    #[serde(deserialize_with = "unique_materials")]
     materials: BTreeMap<String, MaterialDesc>,
     objects: Vec<ObjectEntry>,
+}
+
+/// The materials map, refusing a name defined twice (a plain map would keep
+/// the last one silently).
+fn unique_materials<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<BTreeMap<String, MaterialDesc>, D::Error> {
+    struct Unique;
+    impl<'de> serde::de::Visitor<'de> for Unique {
+        type Value = BTreeMap<String, MaterialDesc>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a map from material names to materials")
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+            let mut out = BTreeMap::new();
+            while let Some((name, material)) = map.next_entry::<String, MaterialDesc>()? {
+                if out.contains_key(&name) {
+                    return Err(serde::de::Error::custom(format!("material \"{name}\" is defined twice")));
+                }
+                out.insert(name, material);
+            }
+            Ok(out)
+        }
+    }
+    d.deserialize_map(Unique)
 }
 
 /// Samples per pixel, 1 to [`MAX_SAMPLES_PER_PIXEL`]; 1 when absent.
@@ -439,6 +465,12 @@ mod tests {
     }
 
     #[test]
+    fn a_material_defined_twice_is_refused_where_it_stands() {
+        let e = error_after("\"grey\": (color: (0.5, 0.5, 0.5))", "\"red\": (color: (0.5, 0.5, 0.5))");
+        assert!(e.starts_with("bad.ron:4:") && e.ends_with("material \"red\" is defined twice"), "{e}");
+    }
+
+    #[test]
     fn missing_material_names_the_object_and_the_choices() {
         let e = error_after("material: \"red\"", "material: \"blue\"");
         assert_eq!(e, "bad.ron: objects[0] (Sphere): unknown material \"blue\" (defined: grey, red)");
@@ -457,7 +489,7 @@ mod tests {
     #[test]
     fn negative_radius_is_refused_with_its_position() {
         let e = error_after("radius: 1", "radius: -1");
-        assert_eq!(e, "bad.ron:6:62: sphere radius must be positive and finite, got -1");
+        assert_eq!(e, "bad.ron:6:62: sphere radius must be positive, got -1");
     }
 
     #[test]

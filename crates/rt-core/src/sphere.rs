@@ -30,8 +30,12 @@ impl Sphere {
         if !center.is_finite() {
             return Err(GeometryError::NotFinite("sphere center"));
         }
-        if !(radius > 0.0 && radius.is_finite()) {
+        if radius.is_nan() || radius <= 0.0 {
             return Err(GeometryError::SphereRadius(radius));
+        }
+        // The intersection uses r²: it must be a normal number.
+        if !(radius * radius).is_normal() {
+            return Err(GeometryError::SphereRadiusRange(radius));
         }
         Ok(Self { center, radius })
     }
@@ -201,8 +205,13 @@ mod tests {
 
     #[test]
     fn radius_must_be_positive_and_finite() {
-        for r in [0.0, -1.0, Real::NAN, Real::INFINITY] {
+        for r in [0.0, -1.0, Real::NAN] {
             assert!(matches!(Sphere::new(Vec3::ZERO, r), Err(GeometryError::SphereRadius(_))));
+        }
+        let too_big = Real::MAX.sqrt() * 2.0;
+        let too_small = Real::MIN_POSITIVE.sqrt() / 2.0;
+        for r in [Real::INFINITY, too_big, too_small] {
+            assert!(matches!(Sphere::new(Vec3::ZERO, r), Err(GeometryError::SphereRadiusRange(_))), "{r}");
         }
     }
 

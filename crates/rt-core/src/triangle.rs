@@ -4,7 +4,7 @@ use crate::aabb::Aabb;
 use crate::hit::PrimitiveHit;
 use crate::primitive::GeometryError;
 use crate::ray::{Interval, Ray};
-use crate::real::{Real, Vec3, difference_of_products, gamma};
+use crate::real::{Real, Vec3, difference_of_products, normalize_robust};
 
 /// A hit on a triangle: the ray parameter and the barycentric weights of its
 /// corners `(a, b, c)`, which sum to 1; the hit point is `w_a·a + w_b·b + w_c·c`.
@@ -77,9 +77,16 @@ impl Triangle {
     }
 }
 
-/// `normalize((b−a)×(c−a))`, or `None` for a zero-area triangle.
+/// `normalize((b−a)×(c−a))`, or `None` for a zero-area triangle. The edges
+/// are divided by their largest component first, so the cross product neither
+/// overflows for huge triangles nor underflows for tiny ones.
 pub fn geometric_normal(a: Vec3, b: Vec3, c: Vec3) -> Option<Vec3> {
-    (b - a).cross(c - a).try_normalize()
+    let (e1, e2) = (b - a, c - a);
+    let m = e1.abs().max_element().max(e2.abs().max_element());
+    if !(m > 0.0 && m.is_finite()) {
+        return None;
+    }
+    normalize_robust((e1 / m).cross(e2 / m))
 }
 
 /// Watertight ray/triangle intersection: Woop, Benthin and Wald, "Watertight
@@ -95,8 +102,12 @@ pub fn geometric_normal(a: Vec3, b: Vec3, c: Vec3) -> Option<Vec3> {
 /// A zero-area triangle gives `det = 0` and is never hit. A ray with a zero
 /// direction must not be passed (the scene filters those).
 ///
-/// The final check, `t > δt`, makes `t` conservatively positive with pbrt's
-/// bound on its rounding error.
+/// The sign tests give `t > 0`; callers keep hits near the origin out with
+/// `range.min > 0`. pbrt's extra test `t > δt`, with its conservative bound
+/// δt on the rounding error of t, is deliberately left out: δt grows like
+/// distance² / triangle size, so it rejected every hit on triangles more than
+/// about 10⁵ of their own sizes away (1 mm at 300 m), which made holes in
+/// distant meshes.
 pub fn intersect_watertight(a: Vec3, b: Vec3, c: Vec3, ray: &Ray, range: Interval) -> Option<TriangleHit> {
     let kz = ray.dir.abs().max_position();
     let kx = (kz + 1) % 3;
@@ -132,18 +143,7 @@ pub fn intersect_watertight(a: Vec3, b: Vec3, c: Vec3, ray: &Ray, range: Interva
     }
     let inv_det = 1.0 / det;
     let t = t_scaled * inv_det;
-
-    // pbrt's conservative bound δt on the error of t.
-    let max_z = Vec3::new(z0, z1, z2).abs().max_element();
-    let max_x = Vec3::new(p0.x, p1.x, p2.x).abs().max_element();
-    let max_y = Vec3::new(p0.y, p1.y, p2.y).abs().max_element();
-    let delta_z = gamma(3) * max_z;
-    let delta_x = gamma(5) * (max_x + max_z);
-    let delta_y = gamma(5) * (max_y + max_z);
-    let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
-    let max_e = Vec3::new(e0, e1, e2).abs().max_element();
-    let delta_t = 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
-    if t <= delta_t || !range.contains(t) {
+    if !range.contains(t) {
         return None;
     }
     Some(TriangleHit { t, barycentric: [e0 * inv_det, e1 * inv_det, e2 * inv_det] })
@@ -198,6 +198,30 @@ mod tests {
         assert_eq!(t.intersect(&Ray::new(Vec3::new(0.2, 0.2, 0.0), -Vec3::Z), ALL), None);
         assert_eq!(t.intersect(&Ray::new(Vec3::new(-1.0, 0.2, 2.0), Vec3::X), ALL), None);
         assert_eq!(t.intersect(&Ray::new(Vec3::new(0.2, 0.2, 0.0), Vec3::Z), Interval::new(0.0, 1.5)), None);
+    }
+
+    #[test]
+    fn small_triangles_far_away_are_hit_straight_on_and_obliquely() {
+        // A 1 mm right triangle at z = 0; rays through the point (0.75, 0.25) mm
+        // from up to 10⁴ units away, along the axis and at an angle.
+        let t = Triangle::new(Vec3::ZERO, Vec3::new(0.001, 0.0, 0.0), Vec3::new(0.001, 0.001, 0.0)).unwrap();
+        let target = Vec3::new(0.00075, 0.00025, 0.0);
+        for distance in [1.0 as Real, 300.0, 1000.0, 1e4] {
+            for dir in [Vec3::Z, Vec3::new(0.3, -0.2, 1.0), Vec3::new(-1.0, 0.5, 0.8)] {
+                let origin = target - distance * dir.normalize();
+                let hit = t.intersect(&Ray::new(origin, target - origin), ALL);
+                let hit = hit.unwrap_or_else(|| panic!("missed from {distance} along {dir}"));
+                assert!((hit.t - 1.0).abs() < 1e-3, "t = {}", hit.t);
+            }
+        }
+    }
+
+    #[test]
+    fn huge_and_tiny_triangles_have_normals() {
+        for s in [1e-15 as Real, 1e10, 1e30] {
+            let t = Triangle::new(Vec3::ZERO, Vec3::new(0.0, s, 0.0), Vec3::new(s, 0.0, 0.0));
+            assert_eq!(t.map(|t| t.normal()), Ok(-Vec3::Z), "scale {s}");
+        }
     }
 
     #[test]

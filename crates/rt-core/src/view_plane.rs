@@ -38,25 +38,37 @@ pub enum ViewPlaneError {
         /// Height in pixels.
         height: u32,
     },
-    /// Pixels too small next to `near` for neighbouring pixels to get different
-    /// rays (or too large to represent).
+    /// Pixels too small for neighbouring pixels to get different rays.
     #[error(
-        "the view plane's pixels ({pixel_w} x {pixel_h} world units at near = {near}) are too small \
-         for neighbouring pixels to get different rays: widen camera.fov_y"
+        "the view plane's pixels ({pixel_w} x {pixel_h} world units) are smaller than {smallest}, \
+         too small for neighbouring pixels to get different rays: widen camera.fov_y{hint}"
     )]
-    PixelUnrepresentable {
+    PixelsTooSmall {
         /// Pixel width in world units.
         pixel_w: Real,
         /// Pixel height in world units.
         pixel_h: Real,
-        /// The camera's near distance.
-        near: Real,
+        /// The smallest pixel the camera can resolve.
+        smallest: Real,
+        /// Extra advice for orthographic cameras.
+        hint: &'static str,
+    },
+    /// The plane (or a pixel of it) is too large to represent.
+    #[error(
+        "the view plane ({plane_w} x {plane_h} world units) is too large to represent: reduce camera.near"
+    )]
+    PlaneTooLarge {
+        /// Plane width in world units.
+        plane_w: Real,
+        /// Plane height in world units.
+        plane_h: Real,
     },
 }
 
-/// A pixel must be at least this many ulps of `near` wide and high, so that
-/// the directions `near·cam_z + offset` of neighbouring pixels differ.
-const MIN_PIXEL_ULPS_OF_NEAR: Real = 16.0;
+/// A pixel must be at least this many ulps of the magnitudes its ray is built
+/// from (`near` for perspective directions, also `|C|∞` for orthographic
+/// origins), so that neighbouring pixels get different rays.
+const MIN_PIXEL_ULPS: Real = 16.0;
 
 /// Checks an image size against [`MAX_IMAGE_SIDE`] and [`MAX_PIXELS`].
 pub fn check_image_size(width: u32, height: u32) -> Result<(), ViewPlaneError> {
@@ -83,12 +95,24 @@ impl ViewPlane {
     pub fn new(camera: Camera, width: u32, height: u32) -> Result<Self, ViewPlaneError> {
         check_image_size(width, height)?;
         let plane_h = camera.view_plane_height();
-        let plane_w = plane_h * width as Real / height as Real;
+        let plane_w = plane_h * (width as Real / height as Real);
         let view = Self { camera, width, height, plane_w, plane_h };
         let (pixel_w, pixel_h) = view.pixel_size();
-        let smallest = MIN_PIXEL_ULPS_OF_NEAR * Real::EPSILON * camera.near();
-        if !(pixel_w.min(pixel_h) >= smallest && pixel_w.is_finite() && pixel_h.is_finite()) {
-            return Err(ViewPlaneError::PixelUnrepresentable { pixel_w, pixel_h, near: camera.near() });
+        if !(plane_w.is_finite() && plane_h.is_finite()) {
+            return Err(ViewPlaneError::PlaneTooLarge { plane_w, plane_h });
+        }
+        // Perspective rays differ in direction `near·cam_z + offset`; orthographic
+        // rays in origin `C + near·cam_z + offset`, resolved at C's magnitude too.
+        let (magnitude, hint) = match camera.projection() {
+            Projection::Perspective => (camera.near(), ""),
+            Projection::Orthographic => (
+                camera.near().max(camera.position().abs().max_element()),
+                " (an orthographic camera far from the origin needs a wider view)",
+            ),
+        };
+        let smallest = MIN_PIXEL_ULPS * Real::EPSILON * magnitude;
+        if pixel_w.is_nan() || pixel_h.is_nan() || pixel_w.min(pixel_h) < smallest {
+            return Err(ViewPlaneError::PixelsTooSmall { pixel_w, pixel_h, smallest, hint });
         }
         Ok(view)
     }
@@ -158,6 +182,7 @@ impl ViewPlane {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::real::scale_pow2;
 
     fn assert_close(a: Vec3, b: Vec3, tol: Real) {
         assert!((a - b).abs().max_element() <= tol, "{a} != {b}");
@@ -244,12 +269,41 @@ mod tests {
         // 1e-30° over 4000 pixels: each pixel is ~1e-36 of near, far below one ulp.
         let cam = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 1e-30, 1e-6, Projection::Perspective);
         match cam {
-            Ok(cam) => assert!(matches!(
-                ViewPlane::new(cam, 4000, 4000),
-                Err(ViewPlaneError::PixelUnrepresentable { .. })
-            )),
+            Ok(cam) => {
+                assert!(matches!(ViewPlane::new(cam, 4000, 4000), Err(ViewPlaneError::PixelsTooSmall { .. })))
+            }
             Err(e) => assert!(matches!(e, crate::camera::CameraError::ViewPlaneUnrepresentable { .. })),
         }
+    }
+
+    #[test]
+    fn huge_near_distances_work_until_the_plane_itself_overflows() {
+        // near = MAX/10: plane_h = 2·near·tan 20° ≈ 0.07·MAX, representable; rays finite.
+        let cam = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 40.0, Real::MAX / 10.0, Projection::Perspective)
+            .unwrap();
+        let v = ViewPlane::new(cam, 640, 480).unwrap();
+        assert!(v.center_ray(0, 0).dir.is_finite());
+        // near = MAX/3, fov 90°: plane_h ≈ 0.67·MAX fits, but a 2:1 plane is 1.33·MAX wide.
+        let cam = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 90.0, Real::MAX / 3.0, Projection::Perspective)
+            .unwrap();
+        assert!(matches!(ViewPlane::new(cam, 200, 100), Err(ViewPlaneError::PlaneTooLarge { .. })));
+    }
+
+    #[test]
+    fn an_orthographic_camera_far_away_must_resolve_its_pixel_origins() {
+        // 64 pixels across 0.1 units at x = 2²⁰ (f32; 2⁴⁹ in f64), where numbers
+        // are 0.0625 apart (0.125 in f64), so neighbouring origins would nearly
+        // coincide. Refused; a wider view is accepted.
+        let far = Vec3::new(scale_pow2(1.0, 20 + Real::MANTISSA_DIGITS as i32 - 24), 0.0, 0.0);
+        let narrow =
+            Camera::new(far, far + 100.0 * Vec3::Z, Vec3::Y, 5.7, 1.0, Projection::Orthographic).unwrap();
+        assert!(matches!(ViewPlane::new(narrow, 64, 64), Err(ViewPlaneError::PixelsTooSmall { .. })));
+        let wide =
+            Camera::new(far, far + 100.0 * Vec3::Z, Vec3::Y, 170.0, 10.0, Projection::Orthographic).unwrap();
+        let v = ViewPlane::new(wide, 64, 64).unwrap();
+        assert_ne!(v.center_ray(0, 0).origin, v.center_ray(1, 0).origin);
+        // The same narrow view in perspective is fine: rays differ in direction.
+        assert!(ViewPlane::new(narrow.with_projection(Projection::Perspective), 64, 64).is_ok());
     }
 
     #[test]

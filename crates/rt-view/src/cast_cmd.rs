@@ -4,33 +4,57 @@
 //! built before it is written, so a bad line produces an error and no output.
 
 use std::fmt::Write as _;
-use std::io::{Read, Write};
+use std::io::{Read, Write as _};
 use std::path::Path;
 
 use anyhow::Context;
 use rayon::prelude::*;
-use rt_core::{Hit, Ray, Real, Scene, Vec3};
+use rt_core::{Ray, Real, Scene, Vec3};
 
 use crate::cli::CastArgs;
 
 /// The CSV header of ray queries.
 pub const HEADER: &str = "ox,oy,oz,dx,dy,dz,hit,t,object,primitive,nx,ny,nz";
 
-/// Runs `cast`, writing the CSV to standard output.
+/// Rows cast and written per batch: bounds memory for `--pixels` of a large
+/// image while keeping all cores busy.
+const BATCH: usize = 1 << 14;
+
+/// Runs `cast`, writing the CSV to standard output. All input is read and
+/// validated first; after that nothing can fail but the write itself.
 pub fn run(args: &CastArgs) -> anyhow::Result<()> {
     let scene = rt_core::load_scene(&args.scene)?;
-    let csv = if args.pixels {
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    if args.pixels {
         let width = args.width.unwrap_or(scene.width);
         let height = args.height.unwrap_or(scene.height);
-        pixels_csv(&scene, width, height)
-            .with_context(|| format!("{}: cannot cast pixels", args.scene.display()))?
+        let view = scene
+            .view_plane(width, height)
+            .with_context(|| format!("{}: cannot cast pixels", args.scene.display()))?;
+        writeln!(out, "px,py,{HEADER}")?;
+        let pixels = width as usize * height as usize;
+        for start in (0..pixels).step_by(BATCH) {
+            let chunk: String = (start..(start + BATCH).min(pixels))
+                .into_par_iter()
+                .map(|i| {
+                    let (px, py) = ((i % width as usize) as u32, (i / width as usize) as u32);
+                    let ray = view.center_ray(px, py);
+                    let mut row = format!("{px},{py},");
+                    push_row(&mut row, &ray, scene.cast(&ray).as_ref());
+                    row
+                })
+                .collect();
+            out.write_all(chunk.as_bytes())?;
+        }
     } else {
         let (name, text) = read_rays_input(args.rays.as_deref())?;
         let rays = parse_rays(&text).map_err(|e| anyhow::anyhow!("{name}:{e}"))?;
-        rays_csv(&scene, &rays)
-    };
-    let mut out = std::io::stdout().lock();
-    out.write_all(csv.as_bytes()).and_then(|()| out.flush()).context("cannot write to standard output")
+        writeln!(out, "{HEADER}")?;
+        for chunk in rays.chunks(BATCH) {
+            out.write_all(rays_rows(&scene, chunk).as_bytes())?;
+        }
+    }
+    out.flush().context("cannot write to standard output")
 }
 
 /// Reads the ray file, or standard input for `None` or `-`; returns a name for
@@ -103,49 +127,26 @@ pub fn parse_ray_line(line: &str) -> Result<Option<Ray>, String> {
     }
     let dir = Vec3::new(v[3], v[4], v[5]);
     if dir == Vec3::ZERO {
-        return Err("the direction (dx,dy,dz) is zero".to_owned());
+        let precision = std::any::type_name::<Real>();
+        return Err(format!("the direction (dx,dy,dz) is zero (in {precision}, the geometry's precision)"));
     }
     Ok(Some(Ray::new(Vec3::new(v[0], v[1], v[2]), dir)))
 }
 
-/// The CSV for a list of rays, cast in parallel, rows in input order.
-pub fn rays_csv(scene: &Scene, rays: &[Ray]) -> String {
-    let hits: Vec<Option<Hit>> = rays.par_iter().map(|r| scene.cast(r)).collect();
-    let mut csv = String::with_capacity(64 * (rays.len() + 1));
-    csv.push_str(HEADER);
-    csv.push('\n');
-    for (ray, hit) in rays.iter().zip(&hits) {
-        push_row(&mut csv, ray, hit.as_ref());
-    }
-    csv
-}
-
-/// The CSV for the camera's primary ray through every pixel centre of a
-/// `width`×`height` image, rows prefixed with `px,py`.
-pub fn pixels_csv(
-    scene: &Scene,
-    width: u32,
-    height: u32,
-) -> Result<String, rt_core::view_plane::ViewPlaneError> {
-    let view = scene.view_plane(width, height)?;
-    let rows: Vec<String> = (0..height)
-        .into_par_iter()
-        .map(|py| {
-            let mut row = String::with_capacity(96 * width as usize);
-            for px in 0..width {
-                let ray = view.center_ray(px, py);
-                let _ = write!(row, "{px},{py},");
-                push_row(&mut row, &ray, scene.cast(&ray).as_ref());
-            }
+/// CSV rows (no header) for a list of rays, cast in parallel, in input order.
+pub fn rays_rows(scene: &Scene, rays: &[Ray]) -> String {
+    rays.par_iter()
+        .map(|ray| {
+            let mut row = String::with_capacity(96);
+            push_row(&mut row, ray, scene.cast(ray).as_ref());
             row
         })
-        .collect();
-    Ok(format!("px,py,{HEADER}\n{}", rows.concat()))
+        .collect()
 }
 
 /// Appends one CSV row (with newline). Rust's `{}` prints the shortest text
 /// that parses back to the same float, so every number round-trips.
-fn push_row(csv: &mut String, ray: &Ray, hit: Option<&Hit>) {
+fn push_row(csv: &mut String, ray: &Ray, hit: Option<&rt_core::Hit>) {
     let (o, d) = (ray.origin, ray.dir);
     let _ = write!(csv, "{},{},{},{},{},{},", o.x, o.y, o.z, d.x, d.y, d.z);
     let _ = match hit {

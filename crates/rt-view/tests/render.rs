@@ -171,3 +171,22 @@ fn out_of_range_sizes_and_sample_counts_are_refused() {
         assert!(!out.exists());
     }
 }
+
+#[test]
+fn a_render_killed_part_way_leaves_no_file_behind() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("big.png");
+    let scene = scenes_dir().join("showcase.ron");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_rt-view"))
+        .args(["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()])
+        .args(["--width", "4000", "--height", "3000", "--spp", "16"])
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    assert!(child.try_wait().unwrap().is_none(), "the render finished too fast to interrupt");
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}
