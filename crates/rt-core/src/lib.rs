@@ -25,6 +25,7 @@ pub mod plane;
 pub mod polygon;
 pub mod primitive;
 pub mod ray;
+pub mod ray_text;
 pub mod real;
 pub mod render;
 pub mod sampler;

@@ -12,6 +12,10 @@ use crate::triangle::{geometric_normal, intersect_watertight};
 
 /// Most triangles one mesh may have (after fanning faces): 2²⁶ ≈ 67 M.
 pub const MAX_MESH_TRIANGLES: usize = 1 << 26;
+/// Largest OBJ file read, checked before reading: 2 GiB, about what 2²⁶
+/// triangles take as text. tobj holds the parsed file in memory, so this
+/// bounds the memory a scene can make the loader allocate.
+pub const MAX_OBJ_BYTES: u64 = 1 << 31;
 
 /// Why an OBJ file cannot be used as a mesh.
 #[derive(Debug, Error)]
@@ -34,6 +38,16 @@ pub enum MeshError {
         path: PathBuf,
         /// 0-based vertex index in the file.
         index: usize,
+    },
+    /// The file is larger than [`MAX_OBJ_BYTES`].
+    #[error("OBJ file {path} is {bytes} bytes, more than the limit of {limit}")]
+    FileTooLarge {
+        /// The OBJ file.
+        path: PathBuf,
+        /// Its size.
+        bytes: u64,
+        /// The limit it exceeds.
+        limit: u64,
     },
     /// More than [`MAX_MESH_TRIANGLES`] triangles.
     #[error("OBJ file {path} has {count} triangles, more than the limit of {MAX_MESH_TRIANGLES}")]
@@ -82,6 +96,16 @@ impl Mesh {
     /// the origin and moves it by `translate` (`p' = scale·p + translate`).
     /// Points, lines, normals, texture coordinates and materials are ignored.
     pub fn load_obj(path: &Path, scale: Real, translate: Vec3) -> Result<Self, MeshError> {
+        Self::load_obj_limited(path, scale, translate, MAX_OBJ_BYTES)
+    }
+
+    fn load_obj_limited(path: &Path, scale: Real, translate: Vec3, limit: u64) -> Result<Self, MeshError> {
+        // A missing file falls through to tobj, which reports it.
+        if let Ok(meta) = std::fs::metadata(path)
+            && meta.len() > limit
+        {
+            return Err(MeshError::FileTooLarge { path: path.to_owned(), bytes: meta.len(), limit });
+        }
         let options = tobj::LoadOptions {
             triangulate: false, // We fan faces ourselves, in the order SPEC.md fixes.
             single_index: false,
@@ -233,6 +257,28 @@ mod tests {
         assert!(matches!(Mesh::load_obj(bad.path(), 1.0, Vec3::ZERO), Err(MeshError::Load { .. })));
         let zero = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
         assert!(matches!(Mesh::load_obj(zero.path(), 1.0, Vec3::ZERO), Err(MeshError::Load { .. })));
+    }
+
+    #[test]
+    fn files_over_the_size_limit_are_refused_before_reading() {
+        let f = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+        let e = Mesh::load_obj_limited(f.path(), 1.0, Vec3::ZERO, 10).unwrap_err();
+        assert!(matches!(e, MeshError::FileTooLarge { bytes: 32, limit: 10, .. }), "{e}");
+        assert!(Mesh::load_obj_limited(f.path(), 1.0, Vec3::ZERO, 32).is_ok());
+    }
+
+    #[test]
+    fn malformed_obj_text_is_an_error_not_a_panic() {
+        for text in [
+            "v 0 0 zero\nf 1 2 3\n",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 -9 3\n",
+            "f 1 2 3\n",
+            "v 1 2\n",
+            "\u{0}\u{1}garbage",
+        ] {
+            let f = obj(text);
+            assert!(Mesh::load_obj(f.path(), 1.0, Vec3::ZERO).is_err(), "{text:?} loaded");
+        }
     }
 
     #[test]

@@ -4,6 +4,8 @@
 //! [`Renderer::render`] fills all of them in parallel with rayon. The result
 //! does not depend on the number of threads or the order rows finish in.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -107,13 +109,21 @@ impl<'s> Renderer<'s> {
     /// Renders every row in parallel (rayon's global pool), calling
     /// `row_done` once after each row is finished, from the worker thread.
     pub fn render(&self, row_done: impl Fn(u32) + Sync) -> Frame {
+        self.render_until(row_done, &AtomicBool::new(false)).expect("never stopped")
+    }
+
+    /// Like [`Renderer::render`], but rows not yet started are skipped once
+    /// `stop` is set (Ctrl-C); returns `None` if any row was skipped.
+    pub fn render_until(&self, row_done: impl Fn(u32) + Sync, stop: &AtomicBool) -> Option<Frame> {
         let (width, height) = (self.view.width(), self.view.height());
         let mut pixels = vec![[0u8; 3]; width as usize * height as usize];
         pixels.par_chunks_mut(width as usize).enumerate().for_each(|(y, row)| {
-            self.render_row(y as u32, row);
-            row_done(y as u32);
+            if !stop.load(Ordering::Relaxed) {
+                self.render_row(y as u32, row);
+                row_done(y as u32);
+            }
         });
-        Frame { width, height, pixels }
+        (!stop.load(Ordering::Relaxed)).then_some(Frame { width, height, pixels })
     }
 }
 
@@ -174,6 +184,23 @@ mod tests {
             pool.install(|| r.render(|_| {}))
         };
         assert_eq!(run(1), run(2));
+    }
+
+    #[test]
+    fn a_stopped_render_returns_nothing() {
+        let s = scene();
+        let r = Renderer::new(&s, 32, 24, 1).unwrap();
+        let stop = AtomicBool::new(false);
+        let frame = r.render_until(
+            |y| {
+                if y == 3 {
+                    stop.store(true, Ordering::Relaxed)
+                }
+            },
+            &stop,
+        );
+        assert_eq!(frame, None);
+        assert!(r.render_until(|_| {}, &AtomicBool::new(false)).is_some());
     }
 
     #[test]

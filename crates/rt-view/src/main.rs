@@ -10,7 +10,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            if e.is::<rt_view::render_cmd::Interrupted>() { ExitCode::from(130) } else { ExitCode::FAILURE }
         }
     }
 }

@@ -1,5 +1,7 @@
 //! `rt-view render SCENE -o OUT.png`: a headless render with a progress bar.
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use anyhow::Context;
@@ -9,8 +11,15 @@ use rt_core::Renderer;
 use crate::cli::RenderArgs;
 use crate::png_out::PendingPng;
 
+/// The render was stopped by Ctrl-C (SIGINT); nothing was written. `main`
+/// exits with status 130, as shells expect after SIGINT.
+#[derive(Debug, thiserror::Error)]
+#[error("interrupted: nothing was written")]
+pub struct Interrupted;
+
 /// Loads the scene, renders it in parallel (one progress tick per finished
-/// row) and writes the PNG atomically. Nothing is written on any error.
+/// row) and writes the PNG atomically. Nothing is written on any error or on
+/// Ctrl-C, which stops the workers after their current row.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let output = PendingPng::create(&args.output)?;
     let scene = rt_core::load_scene(&args.scene)?;
@@ -20,6 +29,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let renderer = Renderer::new(&scene, width, height, spp)
         .with_context(|| format!("{}: cannot render", args.scene.display()))?;
 
+    let stop = Arc::new(AtomicBool::new(false));
+    let handler_stop = stop.clone();
+    // Only fails if a handler is already set (not in this program) or the OS refuses.
+    let _ = ctrlc::set_handler(move || handler_stop.store(true, Ordering::Relaxed));
+
     let bar = ProgressBar::new(height as u64).with_style(
         ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} rows, {elapsed} (ETA {eta})")
             .expect("valid template")
@@ -27,9 +41,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     );
     bar.set_message(format!("rendering {width}x{height}, {spp} spp"));
     let start = Instant::now();
-    let frame = renderer.render(|_| bar.inc(1));
+    let frame = renderer.render_until(|_| bar.inc(1), &stop);
     let elapsed = start.elapsed();
     bar.finish_and_clear();
+    let frame = frame.ok_or(Interrupted)?;
 
     output.write(&frame)?;
     eprintln!(

@@ -11,6 +11,7 @@
 //! workers after the row each is on; rows already in the channel keep their
 //! old generation, and [`crate::canvas::Canvas`] refuses them.
 
+use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::sync::mpsc::{self, Receiver, TryIter};
 use std::sync::{Arc, Mutex};
@@ -53,6 +54,16 @@ pub struct RenderJob {
     cancel: Arc<AtomicBool>,
     rows: Receiver<Row>,
     elapsed: Arc<Mutex<Option<Duration>>>,
+    failure: Arc<Mutex<Option<String>>>,
+}
+
+/// The text of a panic's payload (`panic!` gives a `&str` or a `String`).
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    match (payload.downcast_ref::<&str>(), payload.downcast_ref::<String>()) {
+        (Some(s), _) => (*s).to_owned(),
+        (_, Some(s)) => s.clone(),
+        _ => "a panic with no message".to_owned(),
+    }
 }
 
 impl RenderJob {
@@ -63,13 +74,27 @@ impl RenderJob {
         generation: u64,
         on_row: impl Fn() + Send + Sync + 'static,
     ) -> Result<Self, RenderError> {
+        Self::spawn(spec, generation, on_row, |renderer, y, rgb| renderer.render_row(y, rgb))
+    }
+
+    /// [`RenderJob::start`] with the row function as a parameter (tests use it
+    /// to make a row panic). A panic while rendering a row is caught: the job
+    /// stops, and [`RenderJob::failure`] reports the panic's message.
+    fn spawn(
+        spec: JobSpec,
+        generation: u64,
+        on_row: impl Fn() + Send + Sync + 'static,
+        render_row: impl Fn(&Renderer, u32, &mut [[u8; 3]]) + Send + Sync + 'static,
+    ) -> Result<Self, RenderError> {
         // Validate on the caller's thread, so errors are returned, not lost.
         Renderer::with_camera(&spec.scene, spec.camera, spec.width, spec.height, spec.spp)?;
         let cancel = Arc::new(AtomicBool::new(false));
         let elapsed = Arc::new(Mutex::new(None));
+        let failure = Arc::new(Mutex::new(None));
         let (tx, rows) = mpsc::channel();
         let worker_spec = spec.clone();
-        let (worker_cancel, worker_elapsed) = (cancel.clone(), elapsed.clone());
+        let (worker_cancel, worker_elapsed, worker_failure) =
+            (cancel.clone(), elapsed.clone(), failure.clone());
         std::thread::Builder::new()
             .name(format!("render-job-{generation}"))
             .spawn(move || {
@@ -85,7 +110,14 @@ impl RenderJob {
                         if y >= s.height {
                             break;
                         }
-                        renderer.render_row(y, &mut rgb);
+                        let rendered = catch_unwind(AssertUnwindSafe(|| render_row(&renderer, y, &mut rgb)));
+                        if let Err(payload) = rendered {
+                            let mut failure = worker_failure.lock().unwrap_or_else(|e| e.into_inner());
+                            failure.get_or_insert_with(|| format!("row {y}: {}", panic_message(&*payload)));
+                            worker_cancel.store(true, Ordering::Relaxed);
+                            on_row(); // Wake the UI so it shows the failure.
+                            break;
+                        }
                         let pixels = rgb.iter().map(|&[r, g, b]| Color32::from_rgb(r, g, b)).collect();
                         if worker_cancel.load(Ordering::Relaxed)
                             || tx.send(Row { generation, y, pixels }).is_err()
@@ -102,7 +134,12 @@ impl RenderJob {
                 }
             })
             .expect("the OS can start a thread");
-        Ok(Self { generation, spec, cancel, rows, elapsed })
+        Ok(Self { generation, spec, cancel, rows, elapsed, failure })
+    }
+
+    /// Why the job stopped on its own, if a row panicked: "row Y: message".
+    pub fn failure(&self) -> Option<String> {
+        self.failure.lock().unwrap_or_else(|e| e.into_inner()).clone()
     }
 
     /// This job's generation tag.
@@ -219,6 +256,36 @@ mod tests {
         }
         assert!(canvas.is_complete());
         assert!(stale < 300, "the old job was not cancelled");
+    }
+
+    #[test]
+    fn a_panic_in_a_row_stops_the_job_and_is_reported_not_propagated() {
+        let job = RenderJob::spawn(
+            spec(50, 40),
+            1,
+            || {},
+            |r, y, rgb| {
+                if y == 7 {
+                    panic!("boom at seven");
+                }
+                r.render_row(y, rgb)
+            },
+        )
+        .unwrap();
+        let mut delivered = 0;
+        while job.next_row_blocking().is_some() {
+            delivered += 1;
+        }
+        assert!(delivered < 40);
+        assert_eq!(job.failure().as_deref(), Some("row 7: boom at seven"));
+        assert_eq!(job.elapsed(), None);
+        // The pool survives: the next job renders every row.
+        let next = RenderJob::start(spec(50, 40), 2, || {}).unwrap();
+        let mut rows = 0;
+        while next.next_row_blocking().is_some() {
+            rows += 1;
+        }
+        assert_eq!((rows, next.failure()), (40, None));
     }
 
     #[test]

@@ -112,7 +112,10 @@ pub struct Viewer {
     refine_pending: bool,
     last_change: Instant,
     last_full: Option<FrameStats>,
+    /// Why the scene could not be (re)loaded; stays until a load succeeds.
     error: Option<String>,
+    /// Why the current render job stopped (a panic in a worker), if it did.
+    render_failure: Option<String>,
     notice: Option<String>,
     watcher: Option<SceneWatcher>,
     reload_at: Option<Instant>,
@@ -146,6 +149,7 @@ impl Viewer {
             last_change: Instant::now(),
             last_full: None,
             error: None,
+            render_failure: None,
             notice: None,
             watcher: None,
             reload_at: None,
@@ -209,6 +213,9 @@ impl Viewer {
         for row in job.try_rows() {
             canvas.apply(&row);
         }
+        // Keep what is on screen; the next change of view starts a new job.
+        self.render_failure =
+            job.failure().map(|f| format!("render failed at {f}; change the view to try again"));
         canvas.upload_pending(texture, texture_options(self.job_is_preview));
         if canvas.is_complete()
             && !self.job_is_preview
@@ -354,7 +361,7 @@ impl Viewer {
             }
         });
 
-        if let Some(e) = &self.error {
+        for e in [&self.error, &self.render_failure].into_iter().flatten() {
             ui.separator();
             ui.colored_label(Color32::from_rgb(220, 60, 50), e);
         }

@@ -190,3 +190,25 @@ fn a_render_killed_part_way_leaves_no_file_behind() {
     let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert!(left.is_empty(), "left behind: {left:?}");
 }
+
+#[test]
+fn ctrl_c_stops_a_render_cleanly_and_keeps_the_old_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("keep.png");
+    std::fs::write(&out, b"previous image").unwrap();
+    let scene = scenes_dir().join("showcase.ron");
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_rt-view"))
+        .args(["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()])
+        .args(["--width", "4000", "--height", "3000", "--spp", "16"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let kill = std::process::Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(kill.success());
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    assert!(stderr(&o).contains("error: interrupted: nothing was written"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&out).unwrap(), b"previous image");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "stray files");
+}
