@@ -11,7 +11,9 @@ use rt_core::{Ray, Renderer, Vec3};
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else { return };
     // OBJ paths resolve under a folder that does not exist: no file is read.
-    let Ok(scene) = rt_core::parse_scene(text, "fuzz.ron", Path::new("/nonexistent-fuzz-dir")) else { return };
+    let Ok(scene) = rt_core::parse_scene(text, "fuzz.ron", Path::new("/nonexistent-fuzz-dir")) else {
+        return;
+    };
     if let Ok(renderer) = Renderer::new(&scene, 8, 6, 1) {
         let frame = renderer.render(|_| {});
         assert_eq!(frame.pixels.len(), 48);

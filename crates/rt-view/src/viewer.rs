@@ -528,3 +528,53 @@ fn save_screenshot(path: &Path, image: &egui::ColorImage) -> anyhow::Result<()> 
     };
     PendingPng::create(path)?.write(&frame).context("screenshot")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Drives `viewer` until its full-resolution canvas is complete.
+    fn finish_render(viewer: &mut Viewer) {
+        let deadline = Instant::now() + Duration::from_secs(30);
+        while !viewer.canvas.as_ref().is_some_and(Canvas::is_complete) {
+            assert!(Instant::now() < deadline, "render did not complete");
+            viewer.apply_rows();
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    #[test]
+    fn a_reload_that_fails_shows_the_error_and_keeps_the_last_good_image() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("scene.ron");
+        let good =
+            std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/sphere.ron"))
+                .unwrap()
+                .replace("width: 320, height: 240", "width: 64, height: 48");
+        std::fs::write(&path, &good).unwrap();
+
+        let ctx = egui::Context::default();
+        let options = ViewerOptions { scene: Some(path.clone()), screenshot: None };
+        let mut viewer = Viewer::new(&ctx, load(Some(&path)).unwrap(), options, Arc::default());
+        finish_render(&mut viewer);
+        let image = viewer.canvas.as_ref().unwrap().pixels().to_vec();
+        assert!(image.contains(&Color32::from_rgb(230, 38, 26)), "the sphere is not in the image");
+
+        std::fs::write(&path, good.replace("radius: 1.2", "radius: -1.2")).unwrap();
+        viewer.reload(&ctx, false);
+        let error = viewer.error.clone().expect("the error is shown");
+        assert!(error.contains("scene.ron:") && error.contains("sphere radius must be positive"), "{error}");
+        viewer.apply_rows();
+        assert_eq!(viewer.canvas.as_ref().unwrap().pixels(), &image[..], "the last good image changed");
+
+        // Fixing the file clears the error and renders again.
+        std::fs::write(&path, good.replace("(0.9, 0.15, 0.1)", "(0.1, 0.9, 0.1)")).unwrap();
+        viewer.reload(&ctx, false);
+        assert_eq!(viewer.error, None);
+        finish_render(&mut viewer);
+        assert!(viewer.canvas.as_ref().unwrap().pixels().contains(&Color32::from_rgb(26, 230, 26)));
+
+        drop(viewer);
+        ctx.tex_manager().write().take_delta().clear();
+    }
+}
