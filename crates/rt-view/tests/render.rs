@@ -172,17 +172,21 @@ fn out_of_range_sizes_and_sample_counts_are_refused() {
     }
 }
 
+/// Starts a render of showcase.ron at 4000×3000, 16 spp (many seconds) to `out`.
+fn spawn_long_render(out: &std::path::Path) -> std::process::Child {
+    let scene = scenes_dir().join("showcase.ron");
+    std::process::Command::new(env!("CARGO_BIN_EXE_rt-view"))
+        .args(["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()])
+        .args(["--width", "4000", "--height", "3000", "--spp", "16"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
 #[test]
 fn a_render_killed_part_way_leaves_no_file_behind() {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("big.png");
-    let scene = scenes_dir().join("showcase.ron");
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_rt-view"))
-        .args(["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()])
-        .args(["--width", "4000", "--height", "3000", "--spp", "16"])
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
+    let mut child = spawn_long_render(&dir.path().join("big.png"));
     std::thread::sleep(std::time::Duration::from_millis(300));
     assert!(child.try_wait().unwrap().is_none(), "the render finished too fast to interrupt");
     child.kill().unwrap();
@@ -196,13 +200,7 @@ fn ctrl_c_stops_a_render_cleanly_and_keeps_the_old_output() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("keep.png");
     std::fs::write(&out, b"previous image").unwrap();
-    let scene = scenes_dir().join("showcase.ron");
-    let child = std::process::Command::new(env!("CARGO_BIN_EXE_rt-view"))
-        .args(["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()])
-        .args(["--width", "4000", "--height", "3000", "--spp", "16"])
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
+    let child = spawn_long_render(&out);
     std::thread::sleep(std::time::Duration::from_millis(500));
     let kill = std::process::Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
     assert!(kill.success());
