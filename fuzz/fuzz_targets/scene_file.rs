@@ -23,7 +23,7 @@ fuzz_target!(|data: &[u8]| {
         if let Some(hit) = scene.cast(&ray) {
             assert!(hit.t.is_finite() && hit.t > 0.0, "t = {}", hit.t);
             assert!((hit.normal.length() - 1.0).abs() < 1e-4, "normal {}", hit.normal);
-            assert!(hit.object < scene.objects.len());
+            assert!(hit.object < scene.objects().len());
         }
     }
 });

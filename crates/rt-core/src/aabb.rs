@@ -47,6 +47,17 @@ impl Aabb {
         })
     }
 
+    /// The smallest box holding both boxes.
+    pub fn union(self, other: Self) -> Self {
+        Self { min: self.min.min(other.min), max: self.max.max(other.max) }
+    }
+
+    /// `2·(xy + yz + zx)` of the side lengths: the box's surface area.
+    pub fn surface_area(&self) -> Real {
+        let s = self.size();
+        2.0 * (s.x * s.y + s.y * s.z + s.z * s.x)
+    }
+
     /// This box grown to hold `p`.
     pub fn union_point(self, p: Vec3) -> Self {
         Self { min: self.min.min(p), max: self.max.max(p) }

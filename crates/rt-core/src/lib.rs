@@ -8,7 +8,8 @@
 //!    3D point and its primary [`ray::Ray`].
 //! 4. [`primitive`] dispatches the ray to each object's geometry ([`sphere`],
 //!    [`plane`], [`aabb`], [`triangle`], [`polygon`], [`mesh`]); the closest
-//!    [`hit::Hit`] wins ([`scene::Scene::closest_hit`]).
+//!    [`hit::Hit`] wins ([`scene::Scene::closest_hit`]), found through a
+//!    [`bvh`] built once per scene.
 //! 5. [`render`] turns hits into colours ([`material`]), pixels into rows, and
 //!    rows into an image, in parallel with rayon; [`sampler`] places the
 //!    sub-pixel samples.
@@ -17,6 +18,7 @@
 //! with the `f64` feature); numerical tolerances live in [`real`].
 
 pub mod aabb;
+pub mod bvh;
 pub mod camera;
 pub mod hit;
 pub mod material;
@@ -34,6 +36,9 @@ pub mod scene_file;
 pub mod sphere;
 pub mod triangle;
 pub mod view_plane;
+
+#[cfg(test)]
+mod test_support;
 
 pub use camera::{Camera, CameraBasis, CameraError, Projection};
 pub use hit::Hit;

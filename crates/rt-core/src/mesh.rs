@@ -169,8 +169,20 @@ impl Mesh {
         self.bounds
     }
 
+    /// The hit on triangle `i` alone with `t` in `range` (the BVH tests
+    /// triangles one by one). Degenerate triangles are never hit.
+    pub fn intersect_triangle(&self, i: usize, ray: &Ray, range: Interval) -> Option<PrimitiveHit> {
+        let normal = self.normals[i];
+        if normal == Vec3::ZERO {
+            return None;
+        }
+        let [a, b, c] = self.triangle(i);
+        let hit = intersect_watertight(a, b, c, ray, range)?;
+        Some(PrimitiveHit { t: hit.t, primitive: i, normal })
+    }
+
     /// The nearest triangle hit with `t` in `range`, by testing every triangle
-    /// inside the mesh's bounding box (the BVH issue replaces this loop).
+    /// inside the mesh's bounding box: the reference the BVH is tested against.
     /// Ties keep the lower triangle index.
     pub fn intersect(&self, ray: &Ray, range: Interval) -> Option<PrimitiveHit> {
         if !self.bounds.overlaps(ray, range) {
@@ -178,14 +190,10 @@ impl Mesh {
         }
         let mut range = range;
         let mut closest = None;
-        for (i, normal) in self.normals.iter().enumerate() {
-            if *normal == Vec3::ZERO {
-                continue;
-            }
-            let [a, b, c] = self.triangle(i);
-            if let Some(hit) = intersect_watertight(a, b, c, ray, range) {
+        for i in 0..self.triangles.len() {
+            if let Some(hit) = self.intersect_triangle(i, ray, range) {
                 range.max = hit.t;
-                closest = Some(PrimitiveHit { t: hit.t, primitive: i, normal: *normal });
+                closest = Some(hit);
             }
         }
         closest

@@ -1,6 +1,7 @@
 //! A loaded, validated scene: camera, image size, background, materials and
 //! objects, and the closest-hit query over all of them.
 
+use crate::bvh::{Bvh, BvhStats};
 use crate::camera::Camera;
 use crate::hit::Hit;
 use crate::material::{Color, Material};
@@ -19,7 +20,8 @@ pub struct Object {
 }
 
 /// A scene ready to render. Built by [`crate::scene_file`] from a RON file;
-/// every field is already validated.
+/// every field is already validated. The objects sit behind a BVH built once
+/// here, so they can be read ([`Scene::objects`]) but not changed.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
     /// The camera.
@@ -36,44 +38,87 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Material names, parallel to `materials`.
     pub material_names: Vec<String>,
-    /// Objects in file order: a hit's `object` indexes this list.
-    pub objects: Vec<Object>,
+    objects: Vec<Object>,
+    bvh: Bvh,
 }
 
 impl Scene {
+    /// A scene from validated parts; builds the BVH over `objects`.
+    pub fn new(
+        camera: Camera,
+        (width, height): (u32, u32),
+        background: Color,
+        samples_per_pixel: u32,
+        materials: Vec<Material>,
+        material_names: Vec<String>,
+        objects: Vec<Object>,
+    ) -> Self {
+        let bvh = Bvh::build(&objects);
+        Self { camera, width, height, background, samples_per_pixel, materials, material_names, objects, bvh }
+    }
+
+    /// Objects in file order: a hit's `object` indexes this list.
+    pub fn objects(&self) -> &[Object] {
+        &self.objects
+    }
+
+    /// What building the BVH took and produced.
+    pub fn bvh_stats(&self) -> BvhStats {
+        self.bvh.stats()
+    }
+
     /// The nearest hit over all objects with `t` in `range`; ties keep the
-    /// object listed first. A ray with a zero or non-finite direction, or a
-    /// non-finite origin, hits nothing. The direction may have any magnitude:
-    /// it is rescaled by a power of two first ([`Ray::rescaled`]).
+    /// object listed first (and the lower triangle within a mesh). A ray with
+    /// a zero or non-finite direction, or a non-finite origin, hits nothing.
+    /// The direction may have any magnitude: it is rescaled by a power of two
+    /// first ([`Ray::rescaled`]).
     pub fn closest_hit(&self, ray: &Ray, range: Interval) -> Option<Hit> {
         let (unit, k) = ray.rescaled()?;
         let range = Interval::new(scale_pow2(range.min, -k), scale_pow2(range.max, -k));
-        self.closest_hit_rescaled(&unit, range, k)
+        let mut hit = self.bvh.closest_hit(&self.objects, &unit, range)?;
+        hit.t = rescale_t(hit.t, k)?;
+        Some(hit)
+    }
+
+    /// The same query by testing every object in order: the reference the
+    /// BVH is tested against.
+    pub fn closest_hit_brute_force(&self, ray: &Ray, range: Interval) -> Option<Hit> {
+        let (unit, k) = ray.rescaled()?;
+        let mut range = Interval::new(scale_pow2(range.min, -k), scale_pow2(range.max, -k));
+        let mut closest = None;
+        for (index, object) in self.objects.iter().enumerate() {
+            if let Some(hit) = object.primitive.intersect(&unit, range) {
+                range.max = hit.t;
+                closest = Some(Hit::new(index, hit));
+            }
+        }
+        let mut hit: Hit = closest?;
+        hit.t = rescale_t(hit.t, k)?;
+        Some(hit)
+    }
+
+    /// Whether anything is hit with `t` in `range` (for shadow rays).
+    pub fn any_hit(&self, ray: &Ray, range: Interval) -> bool {
+        let Some((unit, k)) = ray.rescaled() else { return false };
+        let range = Interval::new(scale_pow2(range.min, -k), scale_pow2(range.max, -k));
+        self.bvh.any_hit(&self.objects, &unit, range)
     }
 
     /// The nearest hit of a ray whose history is unknown (a `cast` query or a
     /// primary ray): hits within `2⁻¹⁶·max(1, |origin|∞)` of the origin do not
     /// count ([`crate::real::CAST_MIN_DISTANCE_FACTOR`]).
     pub fn cast(&self, ray: &Ray) -> Option<Hit> {
-        let (unit, k) = ray.rescaled()?;
-        let min_t = cast_min_t(unit.origin, unit.dir);
-        self.closest_hit_rescaled(&unit, Interval::new(min_t, Real::INFINITY), k)
+        self.closest_hit(ray, self.cast_range(ray))
     }
 
-    /// The closest hit of a ray already rescaled by `2ᵏ`, with `t` mapped
-    /// back to the original ray.
-    fn closest_hit_rescaled(&self, ray: &Ray, range: Interval, k: i32) -> Option<Hit> {
-        let mut range = range;
-        let mut closest = None;
-        for (index, object) in self.objects.iter().enumerate() {
-            if let Some(hit) = object.primitive.intersect(ray, range) {
-                range.max = hit.t;
-                closest = Some(Hit::new(index, hit));
+    /// The range of `t` the cast rule accepts for `ray`: `(min_t, ∞)`.
+    pub fn cast_range(&self, ray: &Ray) -> Interval {
+        match ray.rescaled() {
+            Some((unit, k)) => {
+                Interval::new(scale_pow2(cast_min_t(unit.origin, unit.dir), k), Real::INFINITY)
             }
+            None => Interval::new(Real::INFINITY, Real::INFINITY),
         }
-        let mut hit = closest?;
-        hit.t = rescale_t(hit.t, k)?;
-        Some(hit)
     }
 
     /// The colour a hit shows: its object's material colour.
@@ -90,44 +135,13 @@ impl Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::aabb::Aabb;
-    use crate::camera::Projection;
-    use crate::material::Material;
-    use crate::plane::Plane;
-    use crate::polygon::Polygon;
     use crate::real::Vec3;
     use crate::sphere::Sphere;
-    use crate::triangle::Triangle;
+    use crate::test_support::{primitives_of, random_parts, scene_of, v};
     use proptest::prelude::*;
 
-    fn v(a: [f32; 3]) -> Vec3 {
-        Vec3::new(a[0] as Real, a[1] as Real, a[2] as Real)
-    }
-
-    /// One random primitive of any bounded or unbounded kind built from 9
-    /// numbers; `None` where those numbers make an invalid one.
-    fn primitive(kind: u8, p: [f32; 3], q: [f32; 3], r: [f32; 3]) -> Option<Primitive> {
-        match kind % 5 {
-            0 => Sphere::new(v(p), q[0].abs() as Real).ok().map(Primitive::Sphere),
-            1 => Plane::new(v(q), p[0] as Real).ok().map(Primitive::Plane),
-            2 => Some(Primitive::Aabb(Aabb::from_corners(v(p), v(q)))),
-            3 => Triangle::new(v(p), v(q), v(r)).ok().map(Primitive::Triangle),
-            _ => Polygon::new(vec![v(p), v(q), v(q) + v(r) - v(p), v(r)]).ok().map(Primitive::Polygon),
-        }
-    }
-
     fn scene(objects: Vec<Object>) -> Scene {
-        let camera = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 60.0, 1.0, Projection::Perspective).unwrap();
-        Scene {
-            camera,
-            width: 8,
-            height: 8,
-            background: Color::ZERO,
-            samples_per_pixel: 1,
-            materials: vec![Material { color: Color::ONE }],
-            material_names: vec!["white".into()],
-            objects,
-        }
+        scene_of(objects.into_iter().map(|o| o.primitive).collect())
     }
 
     proptest! {
@@ -136,21 +150,13 @@ mod tests {
         /// unit normal, and a valid object index. No NaN reaches a `cast` row.
         #[test]
         fn random_scenes_never_give_nan_or_broken_hits(
-            parts in proptest::collection::vec(
-                (any::<u8>(), prop::array::uniform3(-50f32..50.0), prop::array::uniform3(-50f32..50.0), prop::array::uniform3(-50f32..50.0)),
-                1..8,
-            ),
+            parts in random_parts(50.0, 8),
             origin in prop::array::uniform3(-60f32..60.0),
             dir in prop::array::uniform3(-1f32..1.0),
             zero_mask in 0u8..8,
             negative_zero in any::<bool>(),
         ) {
-            let objects: Vec<Object> = parts
-                .into_iter()
-                .filter_map(|(k, p, q, r)| primitive(k, p, q, r))
-                .map(|primitive| Object { primitive, material: 0 })
-                .collect();
-            let s = scene(objects);
+            let s = scene_of(primitives_of(parts));
             let mut d = v(dir);
             for axis in 0..3 {
                 if zero_mask & (1 << axis) != 0 {
@@ -161,7 +167,7 @@ mod tests {
             if let Some(hit) = s.cast(&ray) {
                 prop_assert!(hit.t.is_finite() && hit.t > cast_min_t(ray.origin, ray.dir));
                 prop_assert!((hit.normal.length() - 1.0).abs() < 1e-5, "normal {}", hit.normal);
-                prop_assert!(hit.object < s.objects.len());
+                prop_assert!(hit.object < s.objects().len());
                 prop_assert!(ray.at(hit.t).is_finite());
             }
         }

@@ -127,16 +127,15 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<Scene, Sce
         })
         .collect::<Result<_, _>>()?;
 
-    Ok(Scene {
-        camera: desc.camera.0,
-        width: desc.image.width,
-        height: desc.image.height,
-        background: desc.background.0,
-        samples_per_pixel: desc.samples_per_pixel.0,
+    Ok(Scene::new(
+        desc.camera.0,
+        (desc.image.width, desc.image.height),
+        desc.background.0,
+        desc.samples_per_pixel.0,
         materials,
         material_names,
         objects,
-    })
+    ))
 }
 
 /// A number that must be finite (RON also reads `NaN` and `inf`).
@@ -438,8 +437,8 @@ mod tests {
         assert_eq!((s.width, s.height, s.samples_per_pixel), (32, 24, 1));
         assert_eq!(s.background, Color::ZERO);
         assert_eq!(s.material_names, ["grey", "red"]);
-        assert_eq!(s.objects.len(), 2);
-        assert_eq!(s.objects[0].material, 1);
+        assert_eq!(s.objects().len(), 2);
+        assert_eq!(s.objects()[0].material, 1);
         assert_eq!(s.camera.projection(), Projection::Perspective);
     }
 
@@ -565,7 +564,7 @@ mod tests {
         let path = dir.path().join("scene.ron");
         std::fs::write(&path, text).unwrap();
         let scene = load_scene(&path).unwrap();
-        assert!(matches!(&scene.objects[0].primitive, Primitive::Mesh(m) if m.triangle_count() == 1));
+        assert!(matches!(&scene.objects()[0].primitive, Primitive::Mesh(m) if m.triangle_count() == 1));
     }
 
     #[test]

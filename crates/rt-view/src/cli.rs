@@ -72,6 +72,10 @@ pub struct RenderArgs {
     /// Samples per pixel, for anti-aliasing (default: the scene's, else 1).
     #[arg(long, value_name = "N")]
     pub spp: Option<u32>,
+    /// Print timings to stderr: scene load, BVH build, tracing, and the
+    /// tracing throughput in Mrays/s.
+    #[arg(long)]
+    pub stats: bool,
 }
 
 /// `rt-view cast`.

@@ -22,7 +22,9 @@ pub struct Interrupted;
 /// Ctrl-C, which stops the workers after their current row.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let output = PendingPng::create(&args.output)?;
+    let load_start = Instant::now();
     let scene = rt_core::load_scene(&args.scene)?;
+    let load_time = load_start.elapsed();
     let width = args.width.unwrap_or(scene.width);
     let height = args.height.unwrap_or(scene.height);
     let spp = args.spp.unwrap_or(scene.samples_per_pixel);
@@ -52,5 +54,24 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         args.output.display(),
         elapsed.as_secs_f64()
     );
+    if args.stats {
+        let bvh = scene.bvh_stats();
+        let rays = width as f64 * height as f64 * spp as f64;
+        let build = bvh.build_time.as_secs_f64();
+        eprintln!("scene load: {:.3} s (of which BVH build {build:.3} s)", load_time.as_secs_f64());
+        eprintln!(
+            "BVH: {} primitives, {} nodes, {:.1} KiB ({:.1} bytes per primitive)",
+            bvh.primitives,
+            bvh.nodes,
+            bvh.bytes as f64 / 1024.0,
+            bvh.bytes as f64 / bvh.primitives.max(1) as f64
+        );
+        eprintln!(
+            "tracing: {:.3} s, {rays} primary rays, {:.3} Mrays/s on {} threads",
+            elapsed.as_secs_f64(),
+            rays / elapsed.as_secs_f64() / 1e6,
+            rayon::current_num_threads()
+        );
+    }
     Ok(())
 }

@@ -158,7 +158,7 @@ fn cast_pixels_works_on_every_scene_and_agrees_with_render() {
             let expected = if cols[8] == "1" {
                 hits += 1;
                 let object: usize = cols[10].parse().unwrap();
-                to_rgb8(scene.materials[scene.objects[object].material].color)
+                to_rgb8(scene.materials[scene.objects()[object].material].color)
             } else {
                 to_rgb8(scene.background)
             };

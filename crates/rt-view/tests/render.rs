@@ -210,3 +210,19 @@ fn ctrl_c_stops_a_render_cleanly_and_keeps_the_old_output() {
     assert_eq!(std::fs::read(&out).unwrap(), b"previous image");
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "stray files");
 }
+
+#[test]
+fn stats_report_load_bvh_and_tracing_separately() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("m.png");
+    let scene = scenes_dir().join("mesh.ron");
+    let o = rt_view(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--stats"], "");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    // mesh.ron: the icosphere (320 triangles) and the torus (288 quads → 576 triangles).
+    assert!(err.contains("BVH: 896 primitives,"), "{err}");
+    assert!(err.contains("scene load: ") && err.contains("(of which BVH build "), "{err}");
+    let mrays = err.lines().find_map(|l| l.strip_prefix("tracing: ")).expect("tracing line");
+    let value: f64 = mrays.split(" Mrays/s").next().unwrap().rsplit(' ').next().unwrap().parse().unwrap();
+    assert!(value > 0.0 && value.is_finite(), "{mrays}");
+}

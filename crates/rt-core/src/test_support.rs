@@ -1,0 +1,69 @@
+//! Helpers shared by the crate's tests: random primitives and small scenes.
+
+use crate::aabb::Aabb;
+use crate::camera::{Camera, Projection};
+use crate::material::{Color, Material};
+use crate::mesh::Mesh;
+use crate::plane::Plane;
+use crate::polygon::Polygon;
+use crate::primitive::Primitive;
+use crate::real::{Real, Vec3};
+use crate::scene::{Object, Scene};
+use crate::sphere::Sphere;
+use crate::triangle::Triangle;
+use proptest::prelude::*;
+
+/// An f32 triple as a [`Vec3`].
+pub fn v(a: [f32; 3]) -> Vec3 {
+    Vec3::new(a[0] as Real, a[1] as Real, a[2] as Real)
+}
+
+/// A primitive of kind `kind % 6` built from three points; `None` where they
+/// make an invalid one. Kind 5 is a mesh of ten triangles over twelve shared
+/// vertices spread across the triangle (p, q, r), so some triangles touch.
+pub fn random_primitive(kind: u8, p: [f32; 3], q: [f32; 3], r: [f32; 3]) -> Option<Primitive> {
+    match kind % 6 {
+        0 => Sphere::new(v(p), q[0].abs() as Real).ok().map(Primitive::Sphere),
+        1 => Plane::new(v(q), p[0] as Real).ok().map(Primitive::Plane),
+        2 => Some(Primitive::Aabb(Aabb::from_corners(v(p), v(q)))),
+        3 => Triangle::new(v(p), v(q), v(r)).ok().map(Primitive::Triangle),
+        4 => Polygon::new(vec![v(p), v(q), v(q) + v(r) - v(p), v(r)]).ok().map(Primitive::Polygon),
+        _ => {
+            let (a, b, c) = (v(p), v(q), v(r));
+            let spread = |k: usize, m: usize| (k * m % 12) as Real / 11.0;
+            let positions: Vec<Vec3> =
+                (0..12).map(|k| a + (b - a) * spread(k, 7) + (c - a) * spread(k, 5)).collect();
+            let triangles = (0..10u32).map(|k| [k, k + 1, (k + 2) % 12]).collect();
+            Mesh::new(positions, triangles).map(Primitive::Mesh)
+        }
+    }
+}
+
+/// A scene of `primitives`, one white material, camera at the origin looking along +z.
+pub fn scene_of(primitives: Vec<Primitive>) -> Scene {
+    let camera = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 60.0, 1.0, Projection::Perspective).unwrap();
+    let objects = primitives.into_iter().map(|primitive| Object { primitive, material: 0 }).collect();
+    Scene::new(
+        camera,
+        (8, 8),
+        Color::ZERO,
+        1,
+        vec![Material { color: Color::ONE }],
+        vec!["white".into()],
+        objects,
+    )
+}
+
+/// The parameters of one random primitive: kind and three points.
+pub type Parts = (u8, [f32; 3], [f32; 3], [f32; 3]);
+
+/// 1 to `max` random primitives' parameters, points within ±`extent`.
+pub fn random_parts(extent: f32, max: usize) -> impl Strategy<Value = Vec<Parts>> {
+    let point = move || prop::array::uniform3(-extent..extent);
+    prop::collection::vec((any::<u8>(), point(), point(), point()), 1..max)
+}
+
+/// The valid primitives among `parts`.
+pub fn primitives_of(parts: Vec<Parts>) -> Vec<Primitive> {
+    parts.into_iter().filter_map(|(k, p, q, r)| random_primitive(k, p, q, r)).collect()
+}
