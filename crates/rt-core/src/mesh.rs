@@ -152,6 +152,13 @@ impl Mesh {
         Self::new(positions, triangles).ok_or_else(|| MeshError::Empty(path.to_owned()))
     }
 
+    /// Bytes of vertex positions, index triples and per-triangle normals.
+    pub fn memory_bytes(&self) -> usize {
+        self.positions.len() * size_of::<Vec3>()
+            + self.triangles.len() * size_of::<[u32; 3]>()
+            + self.normals.len() * size_of::<Vec3>()
+    }
+
     /// Number of triangles, degenerate ones included.
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()

@@ -53,6 +53,34 @@ pub enum Command {
     /// geometric normal. Hits closer to the origin than 2^-16 * max(1, largest
     /// |origin coordinate|) are ignored (the ray is taken to leave that surface).
     Cast(CastArgs),
+    /// Benchmark the BVH on generated meshes of about 10k, 100k and 1M
+    /// triangles: build time, primary-ray throughput per thread count,
+    /// memory; and the full render time of the showcase scene.
+    ///
+    /// Writes each mesh as OBJ (with its camera as JSON) and the results as
+    /// bench.csv to --out, so `bench/embree_primary.py` can cast the same
+    /// rays with Embree.
+    Bench(BenchArgs),
+}
+
+/// `rt-view bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Folder for the generated OBJ files, cameras and bench.csv.
+    #[arg(long, default_value = "bench-out")]
+    pub out: PathBuf,
+    /// Timed runs per measurement; the median is reported.
+    #[arg(long, default_value_t = 5)]
+    pub runs: usize,
+    /// Thread counts to measure throughput with, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [1, 2])]
+    pub threads: Vec<usize>,
+    /// Only the 10k and 100k meshes (a quick run).
+    #[arg(long)]
+    pub quick: bool,
+    /// Scene whose full render is timed too.
+    #[arg(long, default_value = "scenes/showcase.ron")]
+    pub showcase: PathBuf,
 }
 
 /// `rt-view render`.
@@ -103,6 +131,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Some(Command::Render(args)) => crate::render_cmd::run(&args),
         Some(Command::Cast(args)) => crate::cast_cmd::run(&args),
+        Some(Command::Bench(args)) => crate::bench_cmd::run(&args),
         None => {
             crate::viewer::run(crate::viewer::ViewerOptions { scene: cli.scene, screenshot: cli.screenshot })
         }

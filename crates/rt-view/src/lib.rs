@@ -5,6 +5,7 @@
 //! [`render_job`] (background rows), [`canvas`] (rows → texture),
 //! [`camera_controls`] (sliders, orbit, pan, zoom) and [`scene_watch`].
 
+pub mod bench_cmd;
 pub mod camera_controls;
 pub mod canvas;
 pub mod cast_cmd;

@@ -226,3 +226,26 @@ fn stats_report_load_bvh_and_tracing_separately() {
     let value: f64 = mrays.split(" Mrays/s").next().unwrap().rsplit(' ').next().unwrap().parse().unwrap();
     assert!(value > 0.0 && value.is_finite(), "{mrays}");
 }
+
+#[test]
+fn bench_runs_and_writes_meshes_cameras_and_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bench-out");
+    let showcase = scenes_dir().join("showcase.ron");
+    let args = ["bench", "--quick", "--runs", "1", "--threads", "1", "--out", out.to_str().unwrap()];
+    let o = rt_view(&[&args[..], &["--showcase", showcase.to_str().unwrap()]].concat(), "");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(table.contains("Mrays/s") && table.contains("full render"), "{table}");
+    for file in ["terrain_10k.obj", "terrain_10k.json", "terrain_100k.obj", "bench.csv"] {
+        assert!(out.join(file).exists(), "{file} missing");
+    }
+    let csv = std::fs::read_to_string(out.join("bench.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().collect();
+    assert_eq!(
+        rows[0],
+        "mesh,triangles,bvh_build_s,bytes_per_triangle,threads,mrays_per_s,hits,peak_rss_mib"
+    );
+    assert_eq!(rows.len(), 3, "{csv}");
+    assert!(rows[1].starts_with("10k,10082,") && rows[2].starts_with("100k,100352,"), "{csv}");
+}
