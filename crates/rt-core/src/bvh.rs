@@ -15,7 +15,7 @@
 use std::time::{Duration, Instant};
 
 use crate::aabb::Aabb;
-use crate::hit::Hit;
+use crate::hit::{Hit, PrimitiveHit};
 use crate::primitive::Primitive;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, gamma};
@@ -199,14 +199,8 @@ impl Bvh {
         let mut best: Option<Hit> = None;
         let consider = |r: PrimRef, best: &mut Option<Hit>| {
             // Accept t equal to the best so far, so that ties can go to the lower index.
-            let max = best.map_or(range.max, |b| next_up(b.t));
-            let object = &objects[r.object as usize];
-            let hit = match &object.primitive {
-                Primitive::Mesh(m) => {
-                    m.intersect_triangle(r.primitive as usize, ray, Interval::new(range.min, max))
-                }
-                p => p.intersect(ray, Interval::new(range.min, max)),
-            };
+            let max = best.map_or(range.max, |b| b.t.next_up());
+            let hit = intersect_ref(objects, r, ray, Interval::new(range.min, max));
             if let Some(h) = hit {
                 let h = Hit::new(r.object as usize, h);
                 let better = best.is_none_or(|b| {
@@ -235,13 +229,7 @@ impl Bvh {
     /// Whether anything is hit with `t` in `range` (shadow rays): stops at
     /// the first hit found.
     pub fn any_hit(&self, objects: &[Object], ray: &Ray, range: Interval) -> bool {
-        let hits = |r: PrimRef| {
-            let object = &objects[r.object as usize];
-            match &object.primitive {
-                Primitive::Mesh(m) => m.intersect_triangle(r.primitive as usize, ray, range).is_some(),
-                p => p.intersect(ray, range).is_some(),
-            }
-        };
+        let hits = |r: PrimRef| intersect_ref(objects, r, ray, range).is_some();
         if self.unbounded.iter().any(|&o| hits(PrimRef { object: o, primitive: 0 })) {
             return true;
         }
@@ -382,9 +370,13 @@ impl Slabs {
     }
 }
 
-/// The next representable number above `t` (so `t` itself is inside `(min, next_up(t))`).
-fn next_up(t: Real) -> Real {
-    t.next_up()
+/// The hit on one referenced primitive: a single triangle of a mesh, or the
+/// whole primitive otherwise.
+fn intersect_ref(objects: &[Object], r: PrimRef, ray: &Ray, range: Interval) -> Option<PrimitiveHit> {
+    match &objects[r.object as usize].primitive {
+        Primitive::Mesh(m) => m.intersect_triangle(r.primitive as usize, ray, range),
+        p => p.intersect(ray, range),
+    }
 }
 
 fn union_opt(a: Option<Aabb>, b: Option<Aabb>) -> Option<Aabb> {

@@ -73,8 +73,7 @@ impl Scene {
     /// The direction may have any magnitude: it is rescaled by a power of two
     /// first ([`Ray::rescaled`]).
     pub fn closest_hit(&self, ray: &Ray, range: Interval) -> Option<Hit> {
-        let (unit, k) = ray.rescaled()?;
-        let range = Interval::new(scale_pow2(range.min, -k), scale_pow2(range.max, -k));
+        let (unit, range, k) = rescaled_query(ray, range)?;
         let mut hit = self.bvh.closest_hit(&self.objects, &unit, range)?;
         hit.t = rescale_t(hit.t, k)?;
         Some(hit)
@@ -83,8 +82,7 @@ impl Scene {
     /// The same query by testing every object in order: the reference the
     /// BVH is tested against.
     pub fn closest_hit_brute_force(&self, ray: &Ray, range: Interval) -> Option<Hit> {
-        let (unit, k) = ray.rescaled()?;
-        let mut range = Interval::new(scale_pow2(range.min, -k), scale_pow2(range.max, -k));
+        let (unit, mut range, k) = rescaled_query(ray, range)?;
         let mut closest = None;
         for (index, object) in self.objects.iter().enumerate() {
             if let Some(hit) = object.primitive.intersect(&unit, range) {
@@ -99,9 +97,8 @@ impl Scene {
 
     /// Whether anything is hit with `t` in `range` (for shadow rays).
     pub fn any_hit(&self, ray: &Ray, range: Interval) -> bool {
-        let Some((unit, k)) = ray.rescaled() else { return false };
-        let range = Interval::new(scale_pow2(range.min, -k), scale_pow2(range.max, -k));
-        self.bvh.any_hit(&self.objects, &unit, range)
+        rescaled_query(ray, range)
+            .is_some_and(|(unit, range, _)| self.bvh.any_hit(&self.objects, &unit, range))
     }
 
     /// The nearest hit of a ray whose history is unknown (a `cast` query or a
@@ -130,6 +127,13 @@ impl Scene {
     pub fn view_plane(&self, width: u32, height: u32) -> Result<ViewPlane, ViewPlaneError> {
         ViewPlane::new(self.camera, width, height)
     }
+}
+
+/// The ray rescaled by `2ᵏ` ([`Ray::rescaled`]), the range of `t` mapped to
+/// it, and `k`; `None` for a ray that can hit nothing.
+fn rescaled_query(ray: &Ray, range: Interval) -> Option<(Ray, Interval, i32)> {
+    let (unit, k) = ray.rescaled()?;
+    Some((unit, Interval::new(scale_pow2(range.min, -k), scale_pow2(range.max, -k)), k))
 }
 
 #[cfg(test)]
