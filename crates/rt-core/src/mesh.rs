@@ -329,6 +329,24 @@ mod tests {
     }
 
     #[test]
+    fn a_closed_mesh_far_from_the_origin_has_no_leaks_from_inside() {
+        // The radius-2 icosphere at (148376, 1234, −223423) (issue 6's case):
+        // 10 000 rays from its centre in directions spread over the sphere.
+        let obj_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/meshes/icosphere.obj");
+        let centre = Vec3::new(148376.0, 1234.0, -223423.0);
+        let m = Mesh::load_obj(&obj_path, 2.0, centre).unwrap();
+        let n = 100;
+        for i in 0..n {
+            for j in 0..n {
+                let (u, v) = ((i as Real + 0.37) / n as Real, (j as Real + 0.61) / n as Real);
+                let (theta, phi) = ((1.0 - 2.0 * u).acos(), 2.0 * std::f64::consts::PI as Real * v);
+                let d = Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+                assert!(m.intersect(&Ray::new(centre, d), ALL).is_some(), "leak along {d}");
+            }
+        }
+    }
+
+    #[test]
     fn a_fine_grid_far_away_has_no_holes() {
         // 100 × 100 quads of 0.01 units (20 000 triangles) seen from 5000 units:
         // 5·10⁵ triangle sizes away. Every ray aimed into the grid must hit it.

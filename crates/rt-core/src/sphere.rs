@@ -195,6 +195,27 @@ mod tests {
     }
 
     #[test]
+    fn radius_one_spheres_ten_thousand_to_ten_million_away_are_hit_at_the_exact_distance() {
+        // Along the unit direction (0.36, −0.48, 0.8): the near side is at D − 1,
+        // exactly representable in f32 for these D.
+        let dir = Vec3::new(0.36, -0.48, 0.8);
+        for d in [1e4 as Real, 1e5, 1e6, 1e7] {
+            let hit = unit_sphere_at(dir * d).intersect(&Ray::new(Vec3::ZERO, dir), ALL).unwrap();
+            assert_eq!(hit.t, d - 1.0, "D = {d}");
+        }
+    }
+
+    #[test]
+    fn a_huge_sphere_seen_from_just_above_is_hit_on_the_near_side() {
+        // r = 1e5 with the eye 0.5 above the top (64 f32 ulps at 1e5): t ≈ 0.5, not 2e5.
+        let r: Real = 1e5;
+        let s = Sphere::new(Vec3::new(0.0, -r, 0.0), r).unwrap();
+        let hit = s.intersect(&Ray::new(Vec3::new(0.0, 0.5, 0.0), -Vec3::Y), ALL).unwrap();
+        assert!((hit.t - 0.5).abs() < 0.01, "t = {}", hit.t);
+        assert_eq!(hit.normal, Vec3::Y);
+    }
+
+    #[test]
     fn classify_puts_points_inside_on_or_outside() {
         let s = Sphere::new(Vec3::new(1.0, 0.0, 0.0), 2.0).unwrap();
         assert_eq!(s.classify(Vec3::new(1.5, 0.0, 0.0), 1e-6), Containment::Inside);
