@@ -52,7 +52,7 @@ struct Node {
 }
 
 /// What a build produced, for `--stats` and benchmarks.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct BvhStats {
     /// Bounded primitives in the tree (mesh triangles counted one by one,
     /// degenerate ones left out).
@@ -107,7 +107,7 @@ impl Bvh {
         }
         let mut bvh = Self { nodes: Vec::new(), refs: Vec::new(), unbounded, stats: BvhStats::default() };
         if !items.is_empty() {
-            bvh.nodes.push(Node::leaf(&items, 0));
+            bvh.nodes.push(Node::PLACEHOLDER);
             bvh.build_node(&mut items, 0, 0, 0);
         }
         bvh.refs = items.iter().map(|i| i.r).collect();
@@ -185,8 +185,9 @@ impl Bvh {
             }
         };
         let children = self.nodes.len();
-        self.nodes.push(Node::leaf(&items[..mid], first));
-        self.nodes.push(Node::leaf(&items[mid..], first + mid));
+        // Filled in by the recursive calls below, which compute their bounds.
+        self.nodes.push(Node::PLACEHOLDER);
+        self.nodes.push(Node::PLACEHOLDER);
         self.nodes[node] = Node { count: 0, offset: children as u32, ..self.nodes[node] };
         let (left, right) = items.split_at_mut(mid);
         self.build_node(left, children, first, depth + 1);
@@ -317,6 +318,9 @@ impl Item {
 }
 
 impl Node {
+    /// A slot reserved for a node that `build_node` fills in.
+    const PLACEHOLDER: Node = Node { min: Vec3::ZERO, offset: 0, max: Vec3::ZERO, count: 0 };
+
     /// A leaf over `items`, which start at `first` in the final order.
     fn leaf(items: &[Item], first: usize) -> Self {
         let b = items.iter().map(|i| i.bounds).reduce(Aabb::union).expect("non-empty");
@@ -396,12 +400,6 @@ fn partition(items: &mut [Item], left: impl Fn(&Item) -> bool) -> usize {
         }
     }
     i
-}
-
-impl Default for BvhStats {
-    fn default() -> Self {
-        Self { primitives: 0, nodes: 0, bytes: 0, build_time: Duration::ZERO }
-    }
 }
 
 #[cfg(test)]

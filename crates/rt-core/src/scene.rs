@@ -74,7 +74,12 @@ impl Scene {
     /// first ([`Ray::rescaled`]).
     pub fn closest_hit(&self, ray: &Ray, range: Interval) -> Option<Hit> {
         let (unit, range, k) = rescaled_query(ray, range)?;
-        let mut hit = self.bvh.closest_hit(&self.objects, &unit, range)?;
+        self.closest_hit_rescaled(&unit, range, k)
+    }
+
+    /// The BVH query on a ray already rescaled by `2ᵏ`, with `t` mapped back.
+    fn closest_hit_rescaled(&self, unit: &Ray, range: Interval, k: i32) -> Option<Hit> {
+        let mut hit = self.bvh.closest_hit(&self.objects, unit, range)?;
         hit.t = rescale_t(hit.t, k)?;
         Some(hit)
     }
@@ -105,7 +110,9 @@ impl Scene {
     /// primary ray): hits within `2⁻¹⁶·max(1, |origin|∞)` of the origin do not
     /// count ([`crate::real::CAST_MIN_DISTANCE_FACTOR`]).
     pub fn cast(&self, ray: &Ray) -> Option<Hit> {
-        self.closest_hit(ray, self.cast_range(ray))
+        // Rescale once: the rule's minimum t is computed on the rescaled ray.
+        let (unit, k) = ray.rescaled()?;
+        self.closest_hit_rescaled(&unit, Interval::new(cast_min_t(unit.origin, unit.dir), Real::INFINITY), k)
     }
 
     /// The range of `t` the cast rule accepts for `ray`: `(min_t, ∞)`.

@@ -49,10 +49,6 @@ impl Canvas {
         Self::new(generation, width, height, placeholder)
     }
 
-    /// The generation whose rows this canvas accepts.
-    pub fn generation(&self) -> u64 {
-        self.generation
-    }
     /// `[width, height]` in pixels.
     pub fn size(&self) -> [usize; 2] {
         [self.width as usize, self.height as usize]

@@ -49,7 +49,6 @@ pub struct Row {
 
 /// A running (or finished, or cancelled) render.
 pub struct RenderJob {
-    generation: u64,
     spec: JobSpec,
     cancel: Arc<AtomicBool>,
     rows: Receiver<Row>,
@@ -134,17 +133,12 @@ impl RenderJob {
                 }
             })
             .expect("the OS can start a thread");
-        Ok(Self { generation, spec, cancel, rows, elapsed, failure })
+        Ok(Self { spec, cancel, rows, elapsed, failure })
     }
 
     /// Why the job stopped on its own, if a row panicked: "row Y: message".
     pub fn failure(&self) -> Option<String> {
         self.failure.lock().unwrap_or_else(|e| e.into_inner()).clone()
-    }
-
-    /// This job's generation tag.
-    pub fn generation(&self) -> u64 {
-        self.generation
     }
 
     /// What this job renders.
