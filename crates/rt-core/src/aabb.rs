@@ -3,7 +3,8 @@
 use crate::hit::PrimitiveHit;
 use crate::primitive::GeometryError;
 use crate::ray::{Interval, Ray};
-use crate::real::{Real, Vec3};
+use crate::real::{Real, Vec3, gamma};
+use crate::surface::SurfacePoint;
 
 /// A closed axis-aligned box. A side may have zero length (a flat box).
 /// Normals point outward, along the axis of the face that was hit.
@@ -86,6 +87,18 @@ impl Aabb {
     /// Whether `min ≤ p ≤ max` componentwise (the boundary is inside).
     pub fn contains(&self, p: Vec3) -> bool {
         p.cmpge(self.min).all() && p.cmple(self.max).all()
+    }
+
+    /// `p` (a hit on the face whose outward normal is `normal`) with its
+    /// coordinate across that face set to the face's exactly: the error
+    /// across the face is then zero, and along it `γ₂|p|` (from `o + t·d`).
+    pub fn surface_point(&self, p: Vec3, normal: Vec3) -> SurfacePoint {
+        let axis = normal.abs().max_position();
+        let mut snapped = p;
+        snapped[axis] = if normal[axis] > 0.0 { self.max[axis] } else { self.min[axis] };
+        let mut error = gamma(2) * p.abs();
+        error[axis] = 0.0;
+        SurfacePoint { p: snapped, error, normal }
     }
 
     /// The nearest face hit with `t` in `range`: the entry face from outside,

@@ -10,9 +10,13 @@
 //!    [`plane`], [`aabb`], [`triangle`], [`polygon`], [`mesh`]); the closest
 //!    [`hit::Hit`] wins ([`scene::Scene::closest_hit`]), found through a
 //!    [`bvh`] built once per scene.
-//! 5. [`render`] turns hits into colours ([`material`]), pixels into rows, and
-//!    rows into an image, in parallel with rayon; [`sampler`] places the
-//!    sub-pixel samples.
+//! 5. [`effects`] decides once which kinds of rays the scene needs; [`tracer`]
+//!    turns hits into colours: flat [`material`] colours without lights, else
+//!    [`light`]s, [`shading`] formulas, shadows, reflection, refraction and
+//!    ambient occlusion, with secondary rays leaving each surface safely
+//!    ([`surface`]).
+//! 6. [`render`] turns pixels into samples and rows into an image, in
+//!    parallel with rayon; [`sampler`] places the samples.
 //!
 //! All geometry is in world units with [`real::Real`] precision (f32, or f64
 //! with the `f64` feature); numerical tolerances live in [`real`].
@@ -20,7 +24,9 @@
 pub mod aabb;
 pub mod bvh;
 pub mod camera;
+pub mod effects;
 pub mod hit;
+pub mod light;
 pub mod material;
 pub mod mesh;
 pub mod plane;
@@ -33,7 +39,10 @@ pub mod render;
 pub mod sampler;
 pub mod scene;
 pub mod scene_file;
+pub mod shading;
 pub mod sphere;
+pub mod surface;
+pub mod tracer;
 pub mod triangle;
 pub mod view_plane;
 

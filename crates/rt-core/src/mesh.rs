@@ -8,7 +8,8 @@ use crate::aabb::Aabb;
 use crate::hit::PrimitiveHit;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3};
-use crate::triangle::{geometric_normal, intersect_watertight};
+use crate::surface::SurfacePoint;
+use crate::triangle::{geometric_normal, intersect_watertight, triangle_surface_point};
 
 /// Most triangles one mesh may have (after fanning faces): 2²⁶ ≈ 67 M.
 pub const MAX_MESH_TRIANGLES: usize = 1 << 26;
@@ -174,6 +175,12 @@ impl Mesh {
     /// The box around all triangles.
     pub fn bounds(&self) -> Aabb {
         self.bounds
+    }
+
+    /// `p` (a computed hit on triangle `i`) projected onto its plane:
+    /// see [`triangle_surface_point`].
+    pub fn surface_point(&self, i: usize, p: Vec3) -> SurfacePoint {
+        triangle_surface_point(self.triangle(i), self.normals[i], p)
     }
 
     /// The hit on triangle `i` alone with `t` in `range` (the BVH tests

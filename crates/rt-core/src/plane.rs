@@ -4,6 +4,7 @@ use crate::hit::PrimitiveHit;
 use crate::primitive::GeometryError;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3};
+use crate::surface::{SurfacePoint, project_onto_plane};
 
 /// Which side of a plane a point is on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -74,6 +75,13 @@ impl Plane {
     /// The point of the plane closest to `p`: `p − (p·n − d)·n`.
     pub fn closest_point(&self, p: Vec3) -> Vec3 {
         p - self.signed_distance(p) * self.normal
+    }
+
+    /// `p` (a computed hit) projected onto the plane, with its error bound
+    /// ([`project_onto_plane`]; `n` and `d` define the plane exactly).
+    pub fn surface_point(&self, p: Vec3) -> SurfacePoint {
+        let (p, error) = project_onto_plane(p, self.normal, self.d, 0.0);
+        SurfacePoint { p, error, normal: self.normal }
     }
 
     /// `t = (d − o·n) / (dir·n)` if the ray is not parallel to the plane and

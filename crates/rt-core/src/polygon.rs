@@ -5,6 +5,7 @@ use crate::hit::PrimitiveHit;
 use crate::primitive::GeometryError;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, magnitude_scale, normalize_robust};
+use crate::surface::{SurfacePoint, project_onto_plane};
 
 /// Relative planarity tolerance: a corner may be off the best-fit plane by
 /// this fraction of the polygon's diagonal (plus rounding at its magnitude).
@@ -82,6 +83,13 @@ impl Polygon {
             j = i;
         }
         inside
+    }
+
+    /// `p` (a computed hit) projected onto the polygon's plane `x·n = d`,
+    /// which is exactly the plane [`Polygon::intersect`] tests against.
+    pub fn surface_point(&self, p: Vec3) -> SurfacePoint {
+        let (p, error) = project_onto_plane(p, self.normal, self.d, 0.0);
+        SurfacePoint { p, error, normal: self.normal }
     }
 
     /// The hit with `t` in `range` from either side: the plane `p·n = d`,

@@ -8,8 +8,9 @@ use crate::mesh::Mesh;
 use crate::plane::Plane;
 use crate::polygon::Polygon;
 use crate::ray::{Interval, Ray};
-use crate::real::Real;
+use crate::real::{Real, Vec3};
 use crate::sphere::Sphere;
+use crate::surface::SurfacePoint;
 use crate::triangle::Triangle;
 
 /// Why a primitive cannot be built from its parameters.
@@ -82,6 +83,20 @@ impl Primitive {
             Self::Triangle(t) => t.intersect(ray, range),
             Self::Polygon(p) => p.intersect(ray, range),
             Self::Mesh(m) => m.intersect(ray, range),
+        }
+    }
+
+    /// The hit point `p = o + t·d` of a hit on `primitive` (the triangle
+    /// index in a mesh) with geometric `normal`, moved onto the surface and
+    /// given an error bound, so secondary rays can leave it safely.
+    pub fn surface_point(&self, primitive: usize, normal: Vec3, p: Vec3) -> SurfacePoint {
+        match self {
+            Self::Sphere(s) => s.surface_point(p, normal),
+            Self::Plane(pl) => pl.surface_point(p),
+            Self::Aabb(b) => b.surface_point(p, normal),
+            Self::Triangle(t) => t.surface_point(p),
+            Self::Polygon(pg) => pg.surface_point(p),
+            Self::Mesh(m) => m.surface_point(primitive, p),
         }
     }
 

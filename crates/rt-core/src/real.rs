@@ -80,6 +80,13 @@ pub fn normalize_robust(v: Vec3) -> Option<Vec3> {
     (v / m).try_normalize()
 }
 
+/// A geometric scalar as the `f32` that colours are computed in.
+#[allow(clippy::unnecessary_cast)] // `Real` is f64 with the `f64` feature.
+#[inline]
+pub fn to_f32(x: Real) -> f32 {
+    x as f32
+}
+
 /// `2ⁿ` for |n| ≤ 75, exactly (powers of two in that range are normal in f32).
 fn pow2_small(n: i32) -> Real {
     (2.0 as Real).powi(n)

@@ -1,20 +1,24 @@
-//! The render loop: pixels → primary rays → closest hits → colours → rows → image.
+//! The render loop: pixels → samples → primary rays → [`Tracer`] → colours → rows → image.
 //!
 //! Rows are independent: [`Renderer::render_row`] fills one, and
-//! [`Renderer::render`] fills all of them in parallel with rayon. The result
-//! does not depend on the number of threads or the order rows finish in.
+//! [`Renderer::render`] fills all of them in parallel with rayon. Every
+//! sample draws its random numbers from a stream seeded by (pixel, sample)
+//! ([`SampleRng`]), so the result does not depend on the number of threads or
+//! the order rows finish in, bit for bit.
 
+use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use rayon::prelude::*;
 use thiserror::Error;
 
 use crate::camera::Camera;
-use crate::material::Color;
-use crate::ray::Ray;
-use crate::sampler::subpixel_offset;
+use crate::effects::{EffectPlan, RayCounts};
+use crate::material::{Color, ColorSpace};
+use crate::sampler::{SampleRng, subpixel_offset};
 use crate::scene::Scene;
 use crate::scene_file::MAX_SAMPLES_PER_PIXEL;
+use crate::tracer::Tracer;
 use crate::view_plane::{ViewPlane, ViewPlaneError};
 
 /// An 8-bit RGB pixel.
@@ -31,28 +35,40 @@ pub enum RenderError {
     SamplesPerPixel(u32),
 }
 
-/// A finished image: `pixels[y * width + x]`, row 0 at the top.
-#[derive(Clone, Debug, PartialEq, Eq)]
+/// A finished image in linear colour: `pixels[y * width + x]`, row 0 at the top.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
     /// Width in pixels.
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// Row-major pixels, top row first.
-    pub pixels: Vec<Rgb8>,
+    /// Row-major linear colours (mean of each pixel's samples), top row first.
+    pub pixels: Vec<Color>,
+    /// How the pixels are to be encoded into 8 bits (the scene's choice).
+    pub color_space: ColorSpace,
+    /// The rays the render cast, by kind.
+    pub rays: RayCounts,
+}
+
+impl Frame {
+    /// The pixels encoded in the frame's colour space.
+    pub fn to_rgb8(&self) -> Vec<Rgb8> {
+        self.pixels.iter().map(|&c| self.color_space.encode(c)).collect()
+    }
 }
 
 /// Renders one scene at one image size and sample count.
 #[derive(Clone, Copy, Debug)]
 pub struct Renderer<'s> {
-    scene: &'s Scene,
+    tracer: Tracer<'s>,
     view: ViewPlane,
     spp: u32,
+    color_space: ColorSpace,
 }
 
 impl<'s> Renderer<'s> {
     /// A renderer for `scene` seen by its own camera at `width`×`height` with
-    /// `spp` samples per pixel.
+    /// `spp` samples per pixel, simulating the effects the scene asks for.
     pub fn new(scene: &'s Scene, width: u32, height: u32, spp: u32) -> Result<Self, RenderError> {
         Self::with_camera(scene, scene.camera, width, height, spp)
     }
@@ -65,10 +81,27 @@ impl<'s> Renderer<'s> {
         height: u32,
         spp: u32,
     ) -> Result<Self, RenderError> {
+        Self::with_plan(scene, camera, width, height, spp, EffectPlan::for_scene(scene))
+    }
+
+    /// A renderer that simulates what `plan` allows (the viewer's toggles).
+    pub fn with_plan(
+        scene: &'s Scene,
+        camera: Camera,
+        width: u32,
+        height: u32,
+        spp: u32,
+        plan: EffectPlan,
+    ) -> Result<Self, RenderError> {
         if !(1..=MAX_SAMPLES_PER_PIXEL).contains(&spp) {
             return Err(RenderError::SamplesPerPixel(spp));
         }
-        Ok(Self { scene, view: ViewPlane::new(camera, width, height)?, spp })
+        Ok(Self {
+            tracer: Tracer::new(scene, plan),
+            view: ViewPlane::new(camera, width, height)?,
+            spp,
+            color_space: scene.color_space,
+        })
     }
 
     /// The view plane rays are generated from.
@@ -76,37 +109,60 @@ impl<'s> Renderer<'s> {
         &self.view
     }
 
-    /// The colour seen along a primary ray: the closest hit's material
-    /// colour, or the background. Without lights this is all there is.
-    pub fn trace(&self, ray: &Ray) -> Color {
-        match self.scene.cast(ray) {
-            Some(hit) => self.scene.hit_color(&hit),
-            None => self.scene.background,
-        }
+    /// The effects this renderer simulates.
+    pub fn plan(&self) -> &EffectPlan {
+        self.tracer.plan()
     }
 
-    /// The average colour of pixel (x, y) over its samples.
-    pub fn pixel(&self, x: u32, y: u32) -> Color {
-        if self.spp == 1 {
-            return self.trace(&self.view.center_ray(x, y));
-        }
-        let sum: Color = (0..self.spp)
-            .map(|k| {
-                let (sx, sy) = subpixel_offset(x, y, k, self.spp);
-                self.trace(&self.view.primary_ray(x, y, sx, sy))
-            })
-            .sum();
+    /// Samples per pixel.
+    pub fn samples_per_pixel(&self) -> u32 {
+        self.spp
+    }
+
+    /// The colour space pixels are encoded in.
+    pub fn color_space(&self) -> ColorSpace {
+        self.color_space
+    }
+
+    /// Sample `k` of pixel (x, y): one primary ray through SPEC.md's
+    /// sub-pixel offset (the centre when spp = 1), traced.
+    pub fn sample(&self, x: u32, y: u32, k: u32, counts: &mut RayCounts) -> Color {
+        let (sx, sy) = subpixel_offset(x, y, k, self.spp);
+        let ray =
+            if self.spp == 1 { self.view.center_ray(x, y) } else { self.view.primary_ray(x, y, sx, sy) };
+        self.tracer.trace_primary(&ray, &mut SampleRng::new(x, y, k), counts)
+    }
+
+    /// The mean colour of pixel (x, y) over its samples, summed in order
+    /// 0, 1, … from zero (as [`Renderer::accumulate_row`] does).
+    pub fn pixel(&self, x: u32, y: u32, counts: &mut RayCounts) -> Color {
+        let sum = (0..self.spp).fold(Color::ZERO, |sum, k| sum + self.sample(x, y, k, counts));
         sum / self.spp as f32
     }
 
-    /// Fills `row` (one pixel per column) with row `y` of the image.
-    pub fn render_row(&self, y: u32, row: &mut [Rgb8]) {
-        for (x, out) in row.iter_mut().enumerate() {
-            *out = to_rgb8(self.pixel(x as u32, y));
+    /// Adds samples `samples` of each pixel of row `y` to `sums`, in order:
+    /// after adding `0..spp` in any number of steps, `sums[x] / spp` is
+    /// exactly [`Renderer::pixel`] (the viewer refines an image this way).
+    pub fn accumulate_row(&self, y: u32, samples: Range<u32>, sums: &mut [Color]) -> RayCounts {
+        let mut counts = RayCounts::default();
+        for (x, sum) in sums.iter_mut().enumerate() {
+            for k in samples.clone() {
+                *sum += self.sample(x as u32, y, k, &mut counts);
+            }
         }
+        counts
     }
 
-    /// Renders every row in parallel (rayon's global pool), calling
+    /// Fills `row` (one linear colour per column) with row `y` of the image.
+    pub fn render_row(&self, y: u32, row: &mut [Color]) -> RayCounts {
+        let mut counts = RayCounts::default();
+        for (x, out) in row.iter_mut().enumerate() {
+            *out = self.pixel(x as u32, y, &mut counts);
+        }
+        counts
+    }
+
+    /// Renders every row in parallel (rayon's current pool), calling
     /// `row_done` once after each row is finished, from the worker thread.
     pub fn render(&self, row_done: impl Fn(u32) + Sync) -> Frame {
         self.render_until(row_done, &AtomicBool::new(false)).expect("never stopped")
@@ -116,20 +172,33 @@ impl<'s> Renderer<'s> {
     /// `stop` is set (Ctrl-C); returns `None` if any row was skipped.
     pub fn render_until(&self, row_done: impl Fn(u32) + Sync, stop: &AtomicBool) -> Option<Frame> {
         let (width, height) = (self.view.width(), self.view.height());
-        let mut pixels = vec![[0u8; 3]; width as usize * height as usize];
-        pixels.par_chunks_mut(width as usize).enumerate().for_each(|(y, row)| {
-            if !stop.load(Ordering::Relaxed) {
-                self.render_row(y as u32, row);
+        let mut pixels = vec![Color::ZERO; width as usize * height as usize];
+        let rays = pixels
+            .par_chunks_mut(width as usize)
+            .enumerate()
+            .map(|(y, row)| {
+                if stop.load(Ordering::Relaxed) {
+                    return RayCounts::default();
+                }
+                let counts = self.render_row(y as u32, row);
                 row_done(y as u32);
-            }
-        });
-        (!stop.load(Ordering::Relaxed)).then_some(Frame { width, height, pixels })
+                counts
+            })
+            .sum();
+        (!stop.load(Ordering::Relaxed)).then_some(Frame {
+            width,
+            height,
+            pixels,
+            color_space: self.color_space,
+            rays,
+        })
     }
 }
 
-/// Clamps each component to [0, 1] and rounds it to 8 bits (NaN becomes 0).
+/// Clamps each component to [0, 1] and rounds it to 8 bits, with no transfer
+/// curve (NaN becomes 0): [`ColorSpace::Linear`], the flat-colour encoding.
 pub fn to_rgb8(c: Color) -> Rgb8 {
-    c.to_array().map(|v| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8)
+    ColorSpace::Linear.encode(c)
 }
 
 #[cfg(test)]
@@ -153,8 +222,8 @@ mod tests {
     fn centre_pixel_shows_the_sphere_and_the_corner_the_background() {
         let s = scene();
         let f = Renderer::new(&s, 32, 24, 1).unwrap().render(|_| {});
-        assert_eq!(f.pixels[12 * 32 + 16], [255, 0, 0]);
-        assert_eq!(f.pixels[0], [0, 0, 255]);
+        assert_eq!(f.to_rgb8()[12 * 32 + 16], [255, 0, 0]);
+        assert_eq!(f.to_rgb8()[0], [0, 0, 255]);
     }
 
     #[test]
@@ -169,10 +238,10 @@ mod tests {
     fn edge_pixels_blend_with_several_samples() {
         let s = scene();
         let r = Renderer::new(&s, 32, 24, 16).unwrap();
-        let f = r.render(|_| {});
-        let blended = f.pixels.iter().filter(|p| p[0] > 0 && p[2] > 0).count();
+        let f = r.render(|_| {}).to_rgb8();
+        let blended = f.iter().filter(|p| p[0] > 0 && p[2] > 0).count();
         assert!(blended > 0, "no anti-aliased edge pixels");
-        assert_eq!(f.pixels[12 * 32 + 16], [255, 0, 0]);
+        assert_eq!(f[12 * 32 + 16], [255, 0, 0]);
     }
 
     #[test]
@@ -210,8 +279,24 @@ mod tests {
     }
 
     #[test]
-    fn to_rgb8_clamps_and_rounds() {
-        assert_eq!(to_rgb8(Color::new(-1.0, 0.5, 2.0)), [0, 128, 255]);
-        assert_eq!(to_rgb8(Color::new(f32::NAN, 0.0, 1.0)), [0, 0, 255]);
+    fn a_scene_without_lights_casts_exactly_one_primary_ray_per_sample_and_nothing_else() {
+        let s = scene();
+        for spp in [1, 3, 16] {
+            let f = Renderer::new(&s, 32, 24, spp).unwrap().render(|_| {});
+            assert_eq!(f.rays, RayCounts { primary: 32 * 24 * spp as u64, ..RayCounts::default() });
+        }
+    }
+
+    #[test]
+    fn accumulating_samples_in_steps_gives_the_pixel_exactly() {
+        let s = scene();
+        let r = Renderer::new(&s, 32, 24, 7).unwrap();
+        let mut sums = vec![Color::ZERO; 32];
+        for range in [0..1, 1..4, 4..7] {
+            r.accumulate_row(11, range, &mut sums);
+        }
+        let mut row = vec![Color::ZERO; 32];
+        r.render_row(11, &mut row);
+        assert_eq!(sums.iter().map(|&c| c / 7.0).collect::<Vec<_>>(), row);
     }
 }

@@ -1,26 +1,82 @@
-//! Where in a pixel each sample goes: SPEC.md's sub-pixel offset (sx, sy) ∈ [0,1)².
+//! Where samples go: in the pixel, on area lights, over the hemisphere.
 //!
-//! One sample per pixel is the pixel centre (0.5, 0.5). For n > 1 samples the
-//! pixel is split into a grid of `cols × rows` cells (`cols = ⌈√n⌉`,
-//! `rows = ⌈n / cols⌉`), sample k goes to cell (k mod cols, k div cols), and
-//! is jittered inside its cell by a hash of (pixel, sample): stratified
-//! jitter that is the same for a pixel whatever thread or row order renders it.
+//! Every random number comes from a stream seeded by (pixel, sample) alone
+//! ([`SampleRng`]), never by thread or row, so an image is the same bit for
+//! bit whatever the thread count or the order rows finish in.
+//!
+//! SPEC.md's sub-pixel offset (sx, sy) ∈ [0,1)²: one sample per pixel is the
+//! pixel centre (0.5, 0.5). For n > 1 samples the pixel is split into a grid
+//! of `cols × rows` cells (`cols = ⌈√n⌉`, `rows = ⌈n / cols⌉`), sample k goes
+//! to cell (k mod cols, k div cols), and is jittered inside its cell: stratified
+//! jitter ([`stratified`]). Area-light and ambient-occlusion samples are
+//! stratified the same way.
 
-use crate::real::Real;
+use crate::real::{Real, Vec3};
 
 /// The sub-pixel offset of sample `sample` of `spp` at pixel (`x`, `y`).
 pub fn subpixel_offset(x: u32, y: u32, sample: u32, spp: u32) -> (Real, Real) {
     if spp <= 1 {
         return (0.5, 0.5);
     }
-    let cols = (spp as f64).sqrt().ceil() as u32;
-    let rows = spp.div_ceil(cols);
-    let (cx, cy) = (sample % cols, sample / cols);
     let h = hash(x, y, sample);
-    let (jx, jy) = (unit_float(h as u32), unit_float((h >> 32) as u32));
+    stratified(sample, spp, (unit_float(h as u32), unit_float((h >> 32) as u32)))
+}
+
+/// Point `k` of `n` stratified over [0,1)²: cell (k mod cols, k div cols) of a
+/// `cols × rows` grid (`cols = ⌈√n⌉`, `rows = ⌈n / cols⌉`), at `jitter` ∈
+/// [0,1)² inside the cell.
+pub fn stratified(k: u32, n: u32, jitter: (Real, Real)) -> (Real, Real) {
+    let cols = (n.max(1) as f64).sqrt().ceil() as u32;
+    let rows = n.max(1).div_ceil(cols);
+    let (cx, cy) = (k % cols, k / cols);
     // `(c + j) / n < 1` for j < 1 in exact arithmetic; `min` keeps it so after rounding.
     let below_one = 1.0 - Real::EPSILON / 2.0;
-    (((cx as Real + jx) / cols as Real).min(below_one), ((cy as Real + jy) / rows as Real).min(below_one))
+    (
+        ((cx as Real + jitter.0) / cols as Real).min(below_one),
+        ((cy as Real + jitter.1) / rows as Real).min(below_one),
+    )
+}
+
+/// Shirley and Chiu's concentric map ("A Low Distortion Map Between Disk and
+/// Square", 1997) from [0,1)² to the unit disk: strata stay compact, so
+/// stratified square samples are stratified on the disk.
+pub fn concentric_disk((u, v): (Real, Real)) -> (Real, Real) {
+    let (a, b) = (2.0 * u - 1.0, 2.0 * v - 1.0);
+    if a == 0.0 && b == 0.0 {
+        return (0.0, 0.0);
+    }
+    let quarter = std::f64::consts::FRAC_PI_4 as Real;
+    let (r, phi) =
+        if a.abs() > b.abs() { (a, quarter * (b / a)) } else { (b, 2.0 * quarter - quarter * (a / b)) };
+    (r * phi.cos(), r * phi.sin())
+}
+
+/// A direction about the unit normal `n` with density cos θ / π (Malley's
+/// method: a concentric disk point lifted onto the hemisphere).
+pub fn cosine_hemisphere(n: Vec3, square: (Real, Real)) -> Vec3 {
+    let (x, y) = concentric_disk(square);
+    let z = (1.0 - x * x - y * y).max(0.0).sqrt();
+    let (u, v) = n.any_orthonormal_pair();
+    (x * u + y * v + z * n).normalize_or(n)
+}
+
+/// The random numbers of one sample of one pixel: a SplitMix64 stream seeded
+/// by (x, y, sample). Draw order within a sample is fixed by the tracer.
+#[derive(Clone, Debug)]
+pub struct SampleRng(u64);
+
+impl SampleRng {
+    /// The stream of sample `sample` of pixel (`x`, `y`).
+    pub fn new(x: u32, y: u32, sample: u32) -> Self {
+        Self(hash(x, y, sample) ^ 0x5851_F42D_4C95_7F2D)
+    }
+
+    /// The next pair of numbers in [0, 1).
+    pub fn next_pair(&mut self) -> (Real, Real) {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let h = mix(self.0);
+        (unit_float(h as u32), unit_float((h >> 32) as u32))
+    }
 }
 
 /// A float in [0, 1) from the top 24 bits of `bits`.
@@ -31,8 +87,12 @@ fn unit_float(bits: u32) -> Real {
 /// SplitMix64 finaliser of the packed (x, y, sample): a well-mixed 64-bit hash
 /// (Steele, Lea, Flood, "Fast Splittable Pseudorandom Number Generators", 2014).
 fn hash(x: u32, y: u32, sample: u32) -> u64 {
-    let mut z = (x as u64) ^ ((y as u64) << 21) ^ ((sample as u64) << 42);
-    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let z = (x as u64) ^ ((y as u64) << 21) ^ ((sample as u64) << 42);
+    mix(z.wrapping_add(0x9E37_79B9_7F4A_7C15))
+}
+
+/// SplitMix64's output function.
+fn mix(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
@@ -63,6 +123,25 @@ mod tests {
                 assert!((0.0..1.0).contains(&sx) && (0.0..1.0).contains(&sy));
                 assert_eq!((sx, sy), subpixel_offset(1234, 567, k, spp));
             }
+        }
+    }
+
+    #[test]
+    fn the_concentric_map_stays_in_the_disk_and_keeps_quadrants() {
+        for (u, v) in [(0.0, 0.0), (0.99, 0.5), (0.5, 0.5), (0.25, 0.9), (0.999, 0.999)] {
+            let (x, y) = concentric_disk((u, v));
+            assert!(x * x + y * y <= 1.0 + 1e-6, "({u}, {v})");
+            assert!((x >= 0.0) == (u >= 0.5) || x.abs() < 1e-6, "({u}, {v}) → ({x}, {y})");
+        }
+    }
+
+    #[test]
+    fn cosine_directions_stay_above_the_surface() {
+        let n = Vec3::new(0.0, 0.6, 0.8);
+        let mut rng = SampleRng::new(3, 4, 5);
+        for k in 0..64 {
+            let d = cosine_hemisphere(n, stratified(k, 64, rng.next_pair()));
+            assert!(d.dot(n) >= 0.0 && (d.length() - 1.0).abs() < 1e-5);
         }
     }
 

@@ -3,8 +3,9 @@
 
 use crate::bvh::{Bvh, BvhStats};
 use crate::camera::Camera;
+use crate::effects::Lighting;
 use crate::hit::Hit;
-use crate::material::{Color, Material};
+use crate::material::{Color, ColorSpace, Material};
 use crate::primitive::Primitive;
 use crate::ray::{Interval, Ray, rescale_t};
 use crate::real::{Real, cast_min_t, scale_pow2};
@@ -38,6 +39,10 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Material names, parallel to `materials`.
     pub material_names: Vec<String>,
+    /// Lights and effect settings; none by default (pure ray casting).
+    pub lighting: Lighting,
+    /// How rendered colours are encoded into 8-bit pixels.
+    pub color_space: ColorSpace,
     objects: Vec<Object>,
     bvh: Bvh,
 }
@@ -54,7 +59,24 @@ impl Scene {
         objects: Vec<Object>,
     ) -> Self {
         let bvh = Bvh::build(&objects);
-        Self { camera, width, height, background, samples_per_pixel, materials, material_names, objects, bvh }
+        Self {
+            camera,
+            width,
+            height,
+            background,
+            samples_per_pixel,
+            materials,
+            material_names,
+            lighting: Lighting::default(),
+            color_space: ColorSpace::default(),
+            objects,
+            bvh,
+        }
+    }
+
+    /// The same scene lit by `lighting`.
+    pub fn with_lighting(self, lighting: Lighting) -> Self {
+        Self { lighting, ..self }
     }
 
     /// Objects in file order: a hit's `object` indexes this list.

@@ -15,12 +15,14 @@ use thiserror::Error;
 
 use crate::aabb::Aabb;
 use crate::camera::{Camera, CameraError, Projection};
-use crate::material::{Color, Material};
+use crate::effects::{AmbientOcclusion, Lighting, MAX_DEPTH};
+use crate::light::{Light, LightKind};
+use crate::material::{Color, ColorSpace, Material};
 use crate::mesh::{Mesh, MeshError};
 use crate::plane::Plane;
 use crate::polygon::Polygon;
 use crate::primitive::{GeometryError, Primitive};
-use crate::real::{Real, Vec3};
+use crate::real::{Real, Vec3, normalize_robust, to_f32};
 use crate::scene::{Object, Scene};
 use crate::sphere::Sphere;
 use crate::triangle::Triangle;
@@ -28,6 +30,9 @@ use crate::view_plane::{ViewPlaneError, check_image_size};
 
 /// Largest accepted samples-per-pixel count.
 pub const MAX_SAMPLES_PER_PIXEL: u32 = 1 << 16;
+
+/// Largest accepted sample count of an area light or of ambient occlusion.
+pub const MAX_EFFECT_SAMPLES: u32 = 4096;
 
 /// Why a scene file cannot be loaded. `file` is the path as given.
 #[derive(Debug, Error)]
@@ -100,7 +105,7 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<Scene, Sce
     })?;
 
     let material_names: Vec<String> = desc.materials.keys().cloned().collect();
-    let materials = desc.materials.values().map(|m| Material { color: m.color.0 }).collect();
+    let materials = desc.materials.values().map(|m| m.0).collect();
     let objects = desc
         .objects
         .into_iter()
@@ -127,7 +132,13 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<Scene, Sce
         })
         .collect::<Result<_, _>>()?;
 
-    Ok(Scene::new(
+    let lighting = Lighting {
+        lights: desc.lights.into_iter().map(|l| l.0).collect(),
+        ambient: desc.ambient.0,
+        max_depth: desc.effects.max_depth.0,
+        ambient_occlusion: desc.effects.ambient_occlusion,
+    };
+    let mut scene = Scene::new(
         desc.camera.0,
         (desc.image.width, desc.image.height),
         desc.background.0,
@@ -135,11 +146,14 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<Scene, Sce
         materials,
         material_names,
         objects,
-    ))
+    )
+    .with_lighting(lighting);
+    scene.color_space = desc.color_space;
+    Ok(scene)
 }
 
-/// A number that must be finite (RON also reads `NaN` and `inf`).
-#[derive(Clone, Copy, Debug)]
+/// A number that must be finite (RON also reads `NaN` and `inf`); 0 by default.
+#[derive(Clone, Copy, Debug, Default)]
 struct Finite(Real);
 
 impl<'de> Deserialize<'de> for Finite {
@@ -195,9 +209,17 @@ struct SceneDesc {
     background: ColorDesc,
     #[serde(default)]
     samples_per_pixel: SamplesDesc,
+    #[serde(default)]
+    color_space: ColorSpace,
     #[serde(deserialize_with = "unique_materials")]
     materials: BTreeMap<String, MaterialDesc>,
     objects: Vec<ObjectEntry>,
+    #[serde(default)]
+    lights: Vec<LightDesc>,
+    #[serde(default)]
+    ambient: ColorDesc,
+    #[serde(default)]
+    effects: EffectsDesc,
 }
 
 /// The materials map, refusing a name defined twice (a plain map would keep
@@ -300,10 +322,219 @@ impl TryFrom<ImageFields> for ImageDesc {
     }
 }
 
+/// A material as written: only `color` is required; the defaults make a
+/// plain diffuse surface ([`Material::flat`]).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields, rename = "Material")]
-struct MaterialDesc {
+struct MaterialFields {
     color: ColorDesc,
+    #[serde(default = "unit_scale")]
+    diffuse: Finite,
+    #[serde(default)]
+    specular: Finite,
+    #[serde(default = "default_shininess")]
+    shininess: Finite,
+    #[serde(default)]
+    reflectivity: Finite,
+    #[serde(default)]
+    transparency: Finite,
+    #[serde(default = "default_ior")]
+    ior: Finite,
+    #[serde(default)]
+    emission: ColorDesc,
+}
+
+#[derive(Deserialize)]
+#[serde(try_from = "MaterialFields")]
+struct MaterialDesc(Material);
+
+impl TryFrom<MaterialFields> for MaterialDesc {
+    type Error = String;
+    fn try_from(f: MaterialFields) -> Result<Self, String> {
+        let number = |Finite(v): Finite, name: &str, ok: fn(Real) -> bool, rule: &str| {
+            if ok(v) { Ok(to_f32(v)) } else { Err(format!("material {name} must be {rule}, got {v}")) }
+        };
+        let unit = |v: Real| (0.0..=1.0).contains(&v);
+        let m = Material {
+            color: f.color.0,
+            diffuse: number(f.diffuse, "diffuse", |v| v >= 0.0, "≥ 0")?,
+            specular: number(f.specular, "specular", |v| v >= 0.0, "≥ 0")?,
+            shininess: number(f.shininess, "shininess", |v| (0.0..=1e4).contains(&v), "0 to 10000")?,
+            reflectivity: number(f.reflectivity, "reflectivity", unit, "0 to 1")?,
+            transparency: number(f.transparency, "transparency", unit, "0 to 1")?,
+            ior: number(f.ior, "ior", |v| v > 0.0 && v <= 100.0, "above 0 and at most 100")?,
+            emission: f.emission.0,
+        };
+        if m.reflectivity + m.transparency > 1.0 {
+            return Err(format!(
+                "material reflectivity + transparency must not exceed 1, got {} + {}",
+                m.reflectivity, m.transparency
+            ));
+        }
+        Ok(Self(m))
+    }
+}
+
+/// The lights exactly as written in a scene file.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, rename = "Light")]
+enum LightFields {
+    Point {
+        position: V3,
+        #[serde(default = "white")]
+        color: ColorDesc,
+        #[serde(default = "unit_scale")]
+        intensity: Finite,
+        #[serde(default = "yes")]
+        shadows: bool,
+    },
+    Directional {
+        direction: V3,
+        #[serde(default = "white")]
+        color: ColorDesc,
+        #[serde(default = "unit_scale")]
+        intensity: Finite,
+        #[serde(default = "yes")]
+        shadows: bool,
+    },
+    Sphere {
+        center: V3,
+        radius: Finite,
+        #[serde(default = "white")]
+        color: ColorDesc,
+        #[serde(default = "unit_scale")]
+        intensity: Finite,
+        #[serde(default = "sixteen")]
+        samples: u32,
+        #[serde(default = "yes")]
+        shadows: bool,
+    },
+}
+
+fn default_shininess() -> Finite {
+    Finite(Material::flat(Color::ZERO).shininess as Real)
+}
+fn default_ior() -> Finite {
+    Finite(Material::flat(Color::ZERO).ior as Real)
+}
+fn white() -> ColorDesc {
+    ColorDesc(Color::ONE)
+}
+fn yes() -> bool {
+    true
+}
+fn sixteen() -> u32 {
+    16
+}
+
+#[derive(Deserialize)]
+#[serde(try_from = "LightFields")]
+struct LightDesc(Light);
+
+impl TryFrom<LightFields> for LightDesc {
+    type Error = String;
+    fn try_from(f: LightFields) -> Result<Self, String> {
+        let power = |color: ColorDesc, intensity: Finite| {
+            if intensity.0 >= 0.0 {
+                Ok(color.0 * to_f32(intensity.0))
+            } else {
+                Err(format!("light intensity must not be negative, got {}", intensity.0))
+            }
+        };
+        let light = match f {
+            LightFields::Point { position, color, intensity, shadows } => Light {
+                kind: LightKind::Point { position: position.into() },
+                power: power(color, intensity)?,
+                shadows,
+            },
+            LightFields::Directional { direction, color, intensity, shadows } => {
+                let direction = normalize_robust(direction.into())
+                    .ok_or("directional light direction must not be zero")?;
+                Light { kind: LightKind::Directional { direction }, power: power(color, intensity)?, shadows }
+            }
+            LightFields::Sphere { center, radius, color, intensity, samples, shadows } => {
+                if radius.0 <= 0.0 {
+                    return Err(format!("sphere light radius must be positive, got {}", radius.0));
+                }
+                check_samples("sphere light samples", samples)?;
+                Light {
+                    kind: LightKind::Sphere { center: center.into(), radius: radius.0, samples },
+                    power: power(color, intensity)?,
+                    shadows,
+                }
+            }
+        };
+        Ok(Self(light))
+    }
+}
+
+fn check_samples(what: &str, n: u32) -> Result<u32, String> {
+    if (1..=MAX_EFFECT_SAMPLES).contains(&n) {
+        Ok(n)
+    } else {
+        Err(format!("{what} must be 1 to {MAX_EFFECT_SAMPLES}, got {n}"))
+    }
+}
+
+/// `effects: (max_depth: 5, ambient_occlusion: (samples: 16, radius: 1.5))`;
+/// every field optional.
+#[derive(Default, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Effects")]
+struct EffectsDesc {
+    #[serde(default)]
+    max_depth: DepthDesc,
+    #[serde(default, deserialize_with = "present")]
+    ambient_occlusion: Option<AmbientOcclusion>,
+}
+
+/// A field that is `None` when absent and read as its plain value (no
+/// `Some(…)`) when present.
+fn present<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<AmbientOcclusion>, D::Error> {
+    AoDesc::deserialize(d).map(|a| Some(a.0))
+}
+
+/// Reflection/refraction recursion depth, 0 to [`MAX_DEPTH`]; 5 when absent.
+#[derive(Deserialize)]
+#[serde(try_from = "u32")]
+struct DepthDesc(u32);
+
+impl Default for DepthDesc {
+    fn default() -> Self {
+        Self(5)
+    }
+}
+
+impl TryFrom<u32> for DepthDesc {
+    type Error = String;
+    fn try_from(n: u32) -> Result<Self, String> {
+        if n <= MAX_DEPTH {
+            Ok(Self(n))
+        } else {
+            Err(format!("effects.max_depth must be 0 to {MAX_DEPTH}, got {n}"))
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, rename = "AmbientOcclusion")]
+struct AoFields {
+    samples: u32,
+    radius: Finite,
+}
+
+#[derive(Deserialize)]
+#[serde(try_from = "AoFields")]
+struct AoDesc(AmbientOcclusion);
+
+impl TryFrom<AoFields> for AoDesc {
+    type Error = String;
+    fn try_from(f: AoFields) -> Result<Self, String> {
+        let samples = check_samples("ambient_occlusion.samples", f.samples)?;
+        if f.radius.0 <= 0.0 {
+            return Err(format!("ambient_occlusion.radius must be positive, got {}", f.radius.0));
+        }
+        Ok(Self(AmbientOcclusion { samples, radius: f.radius.0 }))
+    }
 }
 
 /// The object variants exactly as written in a scene file.
@@ -538,6 +769,94 @@ mod tests {
         assert!(e.starts_with("bad.ron:3:"), "{e}");
         let e = error_after("image:", "samples_per_pixel: 0, image:");
         assert!(e.contains("samples_per_pixel must be 1 to"), "{e}");
+    }
+
+    #[test]
+    fn a_flat_scene_has_no_lights_and_plain_materials() {
+        let s = parse(GOOD).unwrap();
+        assert_eq!(s.lighting, Lighting { max_depth: 5, ..Lighting::default() });
+        assert_eq!(s.materials[1], Material::flat(Color::new(1.0, 0.0, 0.0)));
+        assert_eq!(s.color_space, ColorSpace::Linear);
+    }
+
+    #[test]
+    fn lights_materials_and_effects_are_read_with_their_defaults() {
+        let text = GOOD
+            .replace(
+                "\"grey\": (color: (0.5, 0.5, 0.5))",
+                "\"grey\": (color: (0.5, 0.5, 0.5), specular: 0.4, shininess: 64, transparency: 0.5, ior: 1.33)",
+            )
+            .replace(
+                "objects: [",
+                "color_space: Srgb, ambient: (0.1, 0.1, 0.1),
+                lights: [
+                    Point(position: (0, 5, 0)),
+                    Directional(direction: (0, -2, 0), color: (1, 0.5, 0), intensity: 2, shadows: false),
+                    Sphere(center: (1, 2, 3), radius: 0.5, samples: 9),
+                ],
+                effects: (max_depth: 3, ambient_occlusion: (samples: 8, radius: 2)),
+                objects: [",
+            );
+        let s = parse(&text).unwrap();
+        assert_eq!(s.color_space, ColorSpace::Srgb);
+        let grey = s.materials[0];
+        assert_eq!((grey.specular, grey.shininess, grey.transparency, grey.ior), (0.4, 64.0, 0.5, 1.33));
+        assert_eq!((grey.diffuse, grey.reflectivity, grey.emission), (1.0, 0.0, Color::ZERO));
+        let l = &s.lighting;
+        assert_eq!(l.ambient, Color::splat(0.1));
+        assert_eq!(
+            l.lights[0],
+            Light {
+                kind: LightKind::Point { position: Vec3::new(0.0, 5.0, 0.0) },
+                power: Color::ONE,
+                shadows: true
+            }
+        );
+        assert_eq!(l.lights[1].kind, LightKind::Directional { direction: -Vec3::Y });
+        assert_eq!((l.lights[1].power, l.lights[1].shadows), (Color::new(2.0, 1.0, 0.0), false));
+        assert_eq!(l.lights[2].sample_count(), 9);
+        assert_eq!(l.max_depth, 3);
+        assert_eq!(l.ambient_occlusion, Some(AmbientOcclusion { samples: 8, radius: 2.0 }));
+    }
+
+    #[test]
+    fn bad_materials_lights_and_effects_are_refused_where_they_stand() {
+        let grey = "\"grey\": (color: (0.5, 0.5, 0.5))";
+        let material =
+            |fields: &str| error_after(grey, &format!("\"grey\": (color: (0.5, 0.5, 0.5), {fields})"));
+        let e = material("reflectivity: 0.7, transparency: 0.6");
+        assert!(
+            e.starts_with("bad.ron:4:") && e.contains("reflectivity + transparency must not exceed 1"),
+            "{e}"
+        );
+        assert!(material("ior: 0").contains("material ior must be above 0"));
+        assert!(material("shininess: -1").contains("material shininess must be 0 to 10000, got -1"));
+        assert!(material("glow: 1").contains("Unexpected field named `glow`"));
+        let lights = |l: &str| error_after("objects: [", &format!("lights: [{l}], objects: ["));
+        let e = lights("Point(position: (0, 1, 0), intensity: -2)");
+        assert!(
+            e.starts_with("bad.ron:5:") && e.ends_with("light intensity must not be negative, got -2"),
+            "{e}"
+        );
+        assert!(lights("Directional(direction: (0, 0, 0))").contains("direction must not be zero"));
+        assert!(
+            lights("Sphere(center: (0, 0, 0), radius: 0)").contains("sphere light radius must be positive")
+        );
+        assert!(
+            lights("Sphere(center: (0, 0, 0), radius: 1, samples: 0)").contains("samples must be 1 to 4096")
+        );
+        assert!(lights("Spot(position: (0, 0, 0))").contains("Unexpected variant named `Spot`"));
+        let effects = |e: &str| error_after("objects: [", &format!("effects: ({e}), objects: ["));
+        let e = effects("max_depth: 100");
+        assert!(
+            e.starts_with("bad.ron:5:") && e.ends_with("effects.max_depth must be 0 to 64, got 100"),
+            "{e}"
+        );
+        assert!(effects("ambient_occlusion: (samples: 4, radius: -1)").contains("radius must be positive"));
+        assert!(
+            error_after("objects: [", "color_space: Gamma, objects: [")
+                .contains("Unexpected variant named `Gamma`")
+        );
     }
 
     #[test]

@@ -4,7 +4,8 @@ use crate::aabb::Aabb;
 use crate::hit::PrimitiveHit;
 use crate::primitive::GeometryError;
 use crate::ray::{Interval, Ray};
-use crate::real::{Real, Vec3};
+use crate::real::{Real, Vec3, gamma};
+use crate::surface::SurfacePoint;
 
 /// Where a point lies relative to a closed surface.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -64,6 +65,18 @@ impl Sphere {
     /// The box `center ± radius`.
     pub fn bounds(&self) -> Aabb {
         Aabb::from_corners(self.center - self.radius, self.center + self.radius)
+    }
+
+    /// `p` (a computed hit) moved onto the sphere along its radius,
+    /// `c + (p − c)·r/|p − c|`, with error `γ₆(|c| + |p − c|)` per component
+    /// (the scaling costs ≤ γ₅ relative, the sum one more rounding; pbrt-v4 §6.8.5).
+    pub fn surface_point(&self, p: Vec3, normal: Vec3) -> SurfacePoint {
+        let offset = match (p - self.center).try_normalize() {
+            Some(unit) => unit * self.radius,
+            None => normal * self.radius,
+        };
+        let p = self.center + offset;
+        SurfacePoint { p, error: gamma(6) * (self.center.abs() + offset.abs()), normal }
     }
 
     /// The nearest hit with `t` in `range`, from outside (near root) or from

@@ -48,7 +48,7 @@ pub fn scene_of(primitives: Vec<Primitive>) -> Scene {
         (8, 8),
         Color::ZERO,
         1,
-        vec![Material { color: Color::ONE }],
+        vec![Material::flat(Color::ONE)],
         vec!["white".into()],
         objects,
     )

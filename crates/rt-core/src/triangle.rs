@@ -4,7 +4,8 @@ use crate::aabb::Aabb;
 use crate::hit::PrimitiveHit;
 use crate::primitive::GeometryError;
 use crate::ray::{Interval, Ray};
-use crate::real::{Real, Vec3, difference_of_products, normalize_robust};
+use crate::real::{Real, Vec3, difference_of_products, gamma, normalize_robust};
+use crate::surface::{SurfacePoint, project_onto_plane};
 
 /// A hit on a triangle: the ray parameter and the barycentric weights of its
 /// corners `(a, b, c)`, which sum to 1; the hit point is `w_a·a + w_b·b + w_c·c`.
@@ -63,6 +64,12 @@ impl Triangle {
         [wa, wb, 1.0 - wa - wb]
     }
 
+    /// `p` (a computed hit) projected onto the triangle's plane, with its
+    /// error bound: see [`triangle_surface_point`].
+    pub fn surface_point(&self, p: Vec3) -> SurfacePoint {
+        triangle_surface_point(self.corners, self.normal, p)
+    }
+
     /// The hit with `t` in `range`, from either side.
     pub fn intersect(&self, ray: &Ray, range: Interval) -> Option<PrimitiveHit> {
         let [a, b, c] = self.corners;
@@ -75,6 +82,19 @@ impl Triangle {
         let [a, b, c] = self.corners;
         intersect_watertight(a, b, c, ray, range)
     }
+}
+
+/// `p` projected onto the plane of the triangle `corners` with unit normal
+/// `normal` ([`project_onto_plane`]). The plane itself is uncertain: the
+/// computed normal is off the exact one by an angle of about γ₈ (cross
+/// product and normalisation), which at `p` is `γ₈·|p − a|`, and `d = n·a`
+/// by `γ₃(|a|·|n|)`; both are added to the bound along the normal.
+pub fn triangle_surface_point(corners: [Vec3; 3], normal: Vec3, p: Vec3) -> SurfacePoint {
+    let [a, b, c] = corners;
+    let reach = (p - a).abs().max_element().max((b - a).abs().max_element()).max((c - a).abs().max_element());
+    let plane_error = gamma(8) * 3.0 * reach + gamma(3) * a.abs().dot(normal.abs());
+    let (p, error) = project_onto_plane(p, normal, normal.dot(a), plane_error);
+    SurfacePoint { p, error, normal }
 }
 
 /// `normalize((b−a)×(c−a))`, or `None` for a zero-area triangle. The edges

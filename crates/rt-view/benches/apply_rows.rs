@@ -25,6 +25,7 @@ fn apply_rows(c: &mut Criterion) {
             .map(|y| Row {
                 generation: 1,
                 y: y * 7 % HEIGHT,
+                samples: 1,
                 pixels: vec![Color32::from_rgb(200, 40, 30); WIDTH as usize],
             })
             .collect();

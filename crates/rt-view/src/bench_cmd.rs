@@ -29,6 +29,9 @@ struct MeshResult {
     mrays: Vec<(usize, f64)>,
     hits: usize,
     peak_rss_mib: Option<f64>,
+    /// Median time of the full render pipeline over median time of bare
+    /// `Scene::cast` calls for the same pixels, one thread each.
+    render_over_cast: f64,
 }
 
 /// Runs the benchmark and prints a table; writes meshes and bench.csv to `--out`.
@@ -49,7 +52,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         let mesh_bytes = mesh.memory_bytes();
         let scene_of = |mesh: Mesh| {
             let object = Object { primitive: Primitive::Mesh(mesh), material: 0 };
-            let material = Material { color: Color::new(0.4, 0.6, 0.3) };
+            let material = Material::flat(Color::new(0.4, 0.6, 0.3));
             Scene::new(
                 camera,
                 (WIDTH, HEIGHT),
@@ -80,6 +83,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                 .collect();
             mrays.push((threads, rays / median(times).as_secs_f64() / 1e6));
         }
+        let render_over_cast = render_over_cast(&scene, &renderer, runs)?;
         let hits = (0..HEIGHT)
             .flat_map(|y| (0..WIDTH).map(move |x| (x, y)))
             .filter(|&(x, y)| scene.cast(&renderer.view_plane().center_ray(x, y)).is_some())
@@ -92,10 +96,44 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             mrays,
             hits,
             peak_rss_mib: peak_rss_mib(),
+            render_over_cast,
         });
     }
     let showcase = time_scene(&args.showcase, runs)?;
     report(args, &results, showcase)
+}
+
+/// How much the renderer (effect plan, samples, ray counts, colours) costs
+/// over pure ray casting for a scene without lights: the median time of
+/// `Renderer::render` over the median time of a loop of `Scene::cast` calls
+/// through the same pixel centres that stores the same flat colours. Runs
+/// alternate, on one thread, so drift on a shared machine hits both alike.
+fn render_over_cast(scene: &Scene, renderer: &Renderer, runs: usize) -> anyhow::Result<f64> {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
+    let view = renderer.view_plane();
+    let cast_all = || {
+        let mut pixels = Vec::with_capacity((WIDTH * HEIGHT) as usize);
+        for y in 0..HEIGHT {
+            for x in 0..WIDTH {
+                pixels.push(match scene.cast(&view.center_ray(x, y)) {
+                    Some(hit) => scene.hit_color(&hit),
+                    None => scene.background,
+                });
+            }
+        }
+        pixels
+    };
+    let (mut rendered, mut cast) = (Vec::new(), Vec::new());
+    for _ in 0..runs {
+        let start = Instant::now();
+        let frame = pool.install(|| renderer.render(|_| {}));
+        rendered.push(start.elapsed());
+        let start = Instant::now();
+        let pixels = cast_all();
+        cast.push(start.elapsed());
+        anyhow::ensure!(frame.pixels == pixels, "the renderer and pure casting disagree");
+    }
+    Ok(median(rendered).as_secs_f64() / median(cast).as_secs_f64())
 }
 
 /// Median of the showcase's full render time (its own size and spp), if it exists.
@@ -162,6 +200,9 @@ fn report(
             a / b
         );
     }
+    let ratios: Vec<String> =
+        results.iter().map(|r| format!("{:.3}x ({})", r.render_over_cast, r.label)).collect();
+    println!("no-effects render / pure ray casting, 1 thread: {}", ratios.join(", "));
     if let Some((time, w, h)) = showcase {
         println!("{}: {w}x{h} full render {:.4} s", args.showcase.display(), time.as_secs_f64());
     }

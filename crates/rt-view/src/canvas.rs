@@ -126,12 +126,8 @@ impl Canvas {
     }
 
     /// The image as 8-bit RGB rows, for saving.
-    pub fn to_frame(&self) -> rt_core::Frame {
-        rt_core::Frame {
-            width: self.width,
-            height: self.height,
-            pixels: self.pixels.iter().map(|c| [c.r(), c.g(), c.b()]).collect(),
-        }
+    pub fn rgb8(&self) -> Vec<rt_core::render::Rgb8> {
+        self.pixels.iter().map(|c| [c.r(), c.g(), c.b()]).collect()
     }
 }
 
@@ -140,7 +136,7 @@ mod tests {
     use super::*;
 
     fn row(generation: u64, y: u32, width: usize, c: Color32) -> Row {
-        Row { generation, y, pixels: vec![c; width] }
+        Row { generation, y, samples: 1, pixels: vec![c; width] }
     }
 
     #[test]
@@ -173,7 +169,7 @@ mod tests {
     #[test]
     fn a_new_canvas_starts_from_the_previous_image_resampled() {
         let mut small = Canvas::replacing(None, 1, 2, 1);
-        small.apply(&Row { generation: 1, y: 0, pixels: vec![Color32::RED, Color32::BLUE] });
+        small.apply(&Row { generation: 1, y: 0, samples: 1, pixels: vec![Color32::RED, Color32::BLUE] });
         let big = Canvas::replacing(Some(&small), 2, 4, 2);
         let r = Color32::RED;
         let b = Color32::BLUE;

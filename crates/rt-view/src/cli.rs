@@ -37,10 +37,12 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Render a scene to a PNG file, with a progress bar on stderr.
+    /// Render a scene to a PNG (or linear OpenEXR) file, with a progress bar on stderr.
     ///
-    /// The PNG is written to a temporary file next to OUT and renamed over
-    /// OUT only when complete, so OUT is never left half-written.
+    /// The image is written to a temporary file next to OUT and renamed over
+    /// OUT only when complete, so OUT is never left half-written. A .png gets
+    /// 8-bit pixels in the scene's colour space (`color_space`: Linear or
+    /// Srgb); a .exr gets the linear colours as 32-bit floats, unclamped.
     Render(RenderArgs),
     /// Cast rays into a scene and print what each hits, as CSV on stdout.
     ///
@@ -88,7 +90,7 @@ pub struct BenchArgs {
 pub struct RenderArgs {
     /// The scene file (RON).
     pub scene: PathBuf,
-    /// Output PNG file.
+    /// Output file: .png, or .exr for linear HDR.
     #[arg(short, long, value_name = "OUT.png")]
     pub output: PathBuf,
     /// Image width in pixels (default: the scene's).
@@ -100,8 +102,9 @@ pub struct RenderArgs {
     /// Samples per pixel, for anti-aliasing (default: the scene's, else 1).
     #[arg(long, value_name = "N")]
     pub spp: Option<u32>,
-    /// Print timings to stderr: scene load, BVH build, tracing, and the
-    /// tracing throughput in Mrays/s.
+    /// Print to stderr: scene load and BVH build times, the effects
+    /// simulated, the rays cast by kind (primary, shadow, reflection,
+    /// refraction, ambient occlusion), tracing time and Mrays/s (all rays).
     #[arg(long)]
     pub stats: bool,
 }

@@ -1,6 +1,6 @@
 //! The `rt-view` binary's commands, as a library so they can be tested
 //! directly: [`cli`] parses the command line, [`render_cmd`] renders a scene
-//! to PNG, [`cast_cmd`] answers ray queries, [`png_out`] writes images
+//! to PNG, [`cast_cmd`] answers ray queries, [`image_out`] writes images
 //! atomically, and [`viewer`] is the interactive window, built from
 //! [`render_job`] (background rows), [`canvas`] (rows → texture),
 //! [`camera_controls`] (sliders, orbit, pan, zoom) and [`scene_watch`].
@@ -10,7 +10,7 @@ pub mod camera_controls;
 pub mod canvas;
 pub mod cast_cmd;
 pub mod cli;
-pub mod png_out;
+pub mod image_out;
 pub mod render_cmd;
 pub mod render_job;
 pub mod scene_watch;

@@ -1,4 +1,4 @@
-//! `rt-view render SCENE -o OUT.png`: a headless render with a progress bar.
+//! `rt-view render SCENE -o OUT.png|OUT.exr`: a headless render with a progress bar.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -7,9 +7,10 @@ use std::time::Instant;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use rt_core::Renderer;
+use rt_core::effects::{EffectPlan, RayCounts};
 
 use crate::cli::RenderArgs;
-use crate::png_out::PendingPng;
+use crate::image_out::PendingImage;
 
 /// The render was stopped by Ctrl-C (SIGINT); nothing was written. `main`
 /// exits with status 130, as shells expect after SIGINT.
@@ -18,10 +19,10 @@ use crate::png_out::PendingPng;
 pub struct Interrupted;
 
 /// Loads the scene, renders it in parallel (one progress tick per finished
-/// row) and writes the PNG atomically. Nothing is written on any error or on
+/// row) and writes the PNG (or linear EXR) atomically. Nothing is written on any error or on
 /// Ctrl-C, which stops the workers after their current row.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
-    let output = PendingPng::create(&args.output)?;
+    let output = PendingImage::create(&args.output)?;
     let load_start = Instant::now();
     let scene = rt_core::load_scene(&args.scene)?;
     let load_time = load_start.elapsed();
@@ -48,7 +49,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     bar.finish_and_clear();
     let frame = frame.ok_or(Interrupted)?;
 
-    output.write(&frame)?;
+    output.write_frame(&frame)?;
     eprintln!(
         "wrote {} ({width}x{height}, {spp} spp) in {:.3} s",
         args.output.display(),
@@ -56,7 +57,6 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     );
     if args.stats {
         let bvh = scene.bvh_stats();
-        let rays = width as f64 * height as f64 * spp as f64;
         let build = bvh.build_time.as_secs_f64();
         eprintln!("scene load: {:.3} s (of which BVH build {build:.3} s)", load_time.as_secs_f64());
         eprintln!(
@@ -66,12 +66,47 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             bvh.bytes as f64 / 1024.0,
             bvh.bytes as f64 / bvh.primitives.max(1) as f64
         );
+        eprintln!("effects: {}", describe_plan(renderer.plan()));
+        eprintln!("rays: {}", describe_counts(&frame.rays));
         eprintln!(
-            "tracing: {:.3} s, {rays} primary rays, {:.3} Mrays/s on {} threads",
+            "tracing: {:.3} s, {} rays, {:.3} Mrays/s on {} threads",
             elapsed.as_secs_f64(),
-            rays / elapsed.as_secs_f64() / 1e6,
+            frame.rays.total(),
+            frame.rays.total() as f64 / elapsed.as_secs_f64() / 1e6,
             rayon::current_num_threads()
         );
     }
     Ok(())
+}
+
+/// The plan in words: "shading, shadows, …" or "none (pure ray casting)".
+pub fn describe_plan(plan: &EffectPlan) -> String {
+    if !plan.shading {
+        return "none (no lights: pure ray casting, flat colours)".into();
+    }
+    let mut on = vec!["shading".to_owned()];
+    if plan.shadows {
+        on.push("shadows".into());
+    }
+    if plan.reflection {
+        on.push("reflection".into());
+    }
+    if plan.refraction {
+        on.push("refraction".into());
+    }
+    if plan.reflection || plan.refraction {
+        on.push(format!("max depth {}", plan.max_depth));
+    }
+    if let Some(ao) = plan.ambient_occlusion {
+        on.push(format!("ambient occlusion ({} samples, radius {})", ao.samples, ao.radius));
+    }
+    on.join(", ")
+}
+
+/// The ray counts by kind: "primary 345600, shadow 0, …".
+pub fn describe_counts(c: &RayCounts) -> String {
+    format!(
+        "primary {}, shadow {}, reflection {}, refraction {}, ambient occlusion {}",
+        c.primary, c.shadow, c.reflection, c.refraction, c.ambient_occlusion
+    )
 }

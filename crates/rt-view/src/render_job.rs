@@ -7,6 +7,13 @@
 //! roughly top to bottom, like the course's line-at-a-time renderer, while
 //! every rayon thread is busy.
 //!
+//! With several samples per pixel the image refines progressively: the job
+//! runs passes over the whole image with samples `0..1`, `1..4`, `4..16`, …
+//! up to spp ([`sample_passes`]), adding each pass to per-row sums and
+//! streaming each row again with the mean so far. The first pass is a full
+//! 1-spp image; the last equals the headless render bit for bit, because
+//! the samples are added in the same order.
+//!
 //! Cancelling (or dropping the job, or dropping its receiver) stops the
 //! workers after the row each is on; rows already in the channel keep their
 //! old generation, and [`crate::canvas::Canvas`] refuses them.
@@ -17,9 +24,38 @@ use std::sync::mpsc::{self, Receiver, TryIter};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+use std::ops::Range;
+use std::sync::atomic::AtomicU64;
+
 use egui::Color32;
+use rt_core::effects::{EffectPlan, RayCounts};
+use rt_core::material::Color;
 use rt_core::render::RenderError;
 use rt_core::{Camera, Renderer, Scene};
+
+/// The sample ranges of the progressive passes for `spp` samples per pixel:
+/// `0..1`, then ranges four times longer than all before them together
+/// (`1..4`, `4..16`, `16..64`, …), the last one cut at `spp`.
+pub fn sample_passes(spp: u32) -> Vec<Range<u32>> {
+    let mut passes = Vec::new();
+    passes.push(0..1.min(spp));
+    let mut start = 1;
+    while start < spp {
+        let end = start.saturating_mul(4).min(spp);
+        passes.push(start..end);
+        start = end;
+    }
+    passes
+}
+
+/// One row's running sums and how many samples they hold.
+struct RowSums {
+    samples: u32,
+    sums: Vec<Color>,
+}
+
+/// The row function: adds `samples` of row `y` to `sums` (tests replace it).
+type RowFn = dyn Fn(&Renderer, u32, Range<u32>, &mut [Color]) -> RayCounts + Send + Sync;
 
 /// What to render: a scene seen by a camera at a size and sample count.
 #[derive(Clone, Debug)]
@@ -34,6 +70,14 @@ pub struct JobSpec {
     pub height: u32,
     /// Samples per pixel.
     pub spp: u32,
+    /// The effects to simulate (the scene's, less the viewer's toggles).
+    pub plan: EffectPlan,
+}
+
+impl JobSpec {
+    fn renderer(&self) -> Result<Renderer<'_>, RenderError> {
+        Renderer::with_plan(&self.scene, self.camera, self.width, self.height, self.spp, self.plan)
+    }
 }
 
 /// One finished row.
@@ -43,6 +87,8 @@ pub struct Row {
     pub generation: u64,
     /// Row index, 0 at the top.
     pub y: u32,
+    /// Samples per pixel the row's colours are the mean of so far.
+    pub samples: u32,
     /// One colour per column.
     pub pixels: Vec<Color32>,
 }
@@ -54,6 +100,8 @@ pub struct RenderJob {
     rows: Receiver<Row>,
     elapsed: Arc<Mutex<Option<Duration>>>,
     failure: Arc<Mutex<Option<String>>>,
+    rays: Arc<AtomicU64>,
+    rows_rendered: Arc<AtomicU32>,
 }
 
 /// The text of a panic's payload (`panic!` gives a `&str` or a `String`).
@@ -73,7 +121,12 @@ impl RenderJob {
         generation: u64,
         on_row: impl Fn() + Send + Sync + 'static,
     ) -> Result<Self, RenderError> {
-        Self::spawn(spec, generation, on_row, |renderer, y, rgb| renderer.render_row(y, rgb))
+        Self::spawn(
+            spec,
+            generation,
+            on_row,
+            Box::new(|renderer, y, samples, sums| renderer.accumulate_row(y, samples, sums)),
+        )
     }
 
     /// [`RenderJob::start`] with the row function as a parameter (tests use it
@@ -83,44 +136,82 @@ impl RenderJob {
         spec: JobSpec,
         generation: u64,
         on_row: impl Fn() + Send + Sync + 'static,
-        render_row: impl Fn(&Renderer, u32, &mut [[u8; 3]]) + Send + Sync + 'static,
+        render_row: Box<RowFn>,
     ) -> Result<Self, RenderError> {
         // Validate on the caller's thread, so errors are returned, not lost.
-        Renderer::with_camera(&spec.scene, spec.camera, spec.width, spec.height, spec.spp)?;
+        spec.renderer()?;
         let cancel = Arc::new(AtomicBool::new(false));
         let elapsed = Arc::new(Mutex::new(None));
         let failure = Arc::new(Mutex::new(None));
+        let rays = Arc::new(AtomicU64::new(0));
+        let rows_rendered = Arc::new(AtomicU32::new(0));
         let (tx, rows) = mpsc::channel();
         let worker_spec = spec.clone();
-        let (worker_cancel, worker_elapsed, worker_failure) =
-            (cancel.clone(), elapsed.clone(), failure.clone());
+        let (worker_cancel, worker_elapsed, worker_failure, worker_rays, worker_rows) =
+            (cancel.clone(), elapsed.clone(), failure.clone(), rays.clone(), rows_rendered.clone());
         std::thread::Builder::new()
             .name(format!("render-job-{generation}"))
             .spawn(move || {
                 let s = worker_spec;
-                let renderer = Renderer::with_camera(&s.scene, s.camera, s.width, s.height, s.spp)
-                    .expect("validated before the thread started");
+                let renderer = s.renderer().expect("validated before the thread started");
+                let passes = sample_passes(s.spp);
+                let color_space = renderer.color_space();
+                let sums: Vec<Mutex<RowSums>> = (0..s.height)
+                    .map(|_| Mutex::new(RowSums { samples: 0, sums: vec![Color::ZERO; s.width as usize] }))
+                    .collect();
                 let start = Instant::now();
-                let next_row = AtomicU32::new(0);
+                let tasks = passes.len() as u64 * s.height as u64;
+                let next_task = AtomicU64::new(0);
                 rayon::broadcast(|_| {
-                    let mut rgb = vec![[0u8; 3]; s.width as usize];
                     while !worker_cancel.load(Ordering::Relaxed) {
-                        let y = next_row.fetch_add(1, Ordering::Relaxed);
-                        if y >= s.height {
+                        let task = next_task.fetch_add(1, Ordering::Relaxed);
+                        if task >= tasks {
                             break;
                         }
-                        let rendered = catch_unwind(AssertUnwindSafe(|| render_row(&renderer, y, &mut rgb)));
-                        if let Err(payload) = rendered {
-                            let mut failure = worker_failure.lock().unwrap_or_else(|e| e.into_inner());
-                            failure.get_or_insert_with(|| format!("row {y}: {}", panic_message(&*payload)));
-                            worker_cancel.store(true, Ordering::Relaxed);
-                            on_row(); // Wake the UI so it shows the failure.
-                            break;
+                        let (pass, y) = ((task / s.height as u64) as usize, (task % s.height as u64) as u32);
+                        let samples = passes[pass].clone();
+                        // This row's previous pass may still be running on another thread.
+                        let mut row = loop {
+                            let row = sums[y as usize].lock().unwrap_or_else(|e| e.into_inner());
+                            if row.samples == samples.start || worker_cancel.load(Ordering::Relaxed) {
+                                break row;
+                            }
+                            drop(row);
+                            std::thread::yield_now();
+                        };
+                        if row.samples != samples.start {
+                            break; // Cancelled while waiting.
                         }
-                        let pixels = rgb.iter().map(|&[r, g, b]| Color32::from_rgb(r, g, b)).collect();
-                        if worker_cancel.load(Ordering::Relaxed)
-                            || tx.send(Row { generation, y, pixels }).is_err()
-                        {
+                        let rendered = catch_unwind(AssertUnwindSafe(|| {
+                            render_row(&renderer, y, samples.clone(), &mut row.sums)
+                        }));
+                        let counts = match rendered {
+                            Ok(counts) => counts,
+                            Err(payload) => {
+                                let mut failure = worker_failure.lock().unwrap_or_else(|e| e.into_inner());
+                                failure
+                                    .get_or_insert_with(|| format!("row {y}: {}", panic_message(&*payload)));
+                                worker_cancel.store(true, Ordering::Relaxed);
+                                on_row(); // Wake the UI so it shows the failure.
+                                break;
+                            }
+                        };
+                        row.samples = samples.end;
+                        // The mean exactly as `Renderer::pixel` computes it.
+                        let count = samples.end as f32;
+                        let pixels = row
+                            .sums
+                            .iter()
+                            .map(|&sum| {
+                                let [r, g, b] = color_space.encode(sum / count);
+                                Color32::from_rgb(r, g, b)
+                            })
+                            .collect();
+                        drop(row);
+                        worker_rays.fetch_add(counts.total(), Ordering::Relaxed);
+                        worker_rows.fetch_add(1, Ordering::Relaxed);
+                        let row = Row { generation, y, samples: samples.end, pixels };
+                        if worker_cancel.load(Ordering::Relaxed) || tx.send(row).is_err() {
                             worker_cancel.store(true, Ordering::Relaxed);
                             break;
                         }
@@ -133,7 +224,22 @@ impl RenderJob {
                 }
             })
             .expect("the OS can start a thread");
-        Ok(Self { spec, cancel, rows, elapsed, failure })
+        Ok(Self { spec, cancel, rows, elapsed, failure, rays, rows_rendered })
+    }
+
+    /// Rays cast so far, all kinds together.
+    pub fn rays(&self) -> u64 {
+        self.rays.load(Ordering::Relaxed)
+    }
+
+    /// Samples per pixel of the pass in progress (the last one's when done),
+    /// and how many of its rows are finished.
+    pub fn progress(&self) -> (u32, u32) {
+        let passes = sample_passes(self.spec.spp);
+        let done = self.rows_rendered.load(Ordering::Relaxed);
+        let pass = ((done / self.spec.height) as usize).min(passes.len() - 1);
+        let rows = done - pass as u32 * self.spec.height;
+        (passes[pass].end, rows)
     }
 
     /// Why the job stopped on its own, if a row panicked: "row Y: message".
@@ -183,7 +289,8 @@ mod tests {
     fn spec(width: u32, height: u32) -> JobSpec {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/showcase.ron");
         let scene = Arc::new(rt_core::load_scene(&path).unwrap());
-        JobSpec { camera: scene.camera, scene, width, height, spp: 1 }
+        let plan = EffectPlan::for_scene(&scene);
+        JobSpec { camera: scene.camera, scene, width, height, spp: 1, plan }
     }
 
     #[test]
@@ -209,8 +316,37 @@ mod tests {
             image[y * 80..(y + 1) * 80].copy_from_slice(&row.pixels);
         }
         let expected: Vec<Color32> =
-            frame.pixels.iter().map(|&[r, g, b]| Color32::from_rgb(r, g, b)).collect();
+            frame.to_rgb8().iter().map(|&[r, g, b]| Color32::from_rgb(r, g, b)).collect();
         assert!(image == expected, "streamed image differs from `render`");
+    }
+
+    #[test]
+    fn passes_start_with_one_sample_and_end_at_spp() {
+        assert_eq!(sample_passes(1), vec![0..1]);
+        assert_eq!(sample_passes(2), vec![0..1, 1..2]);
+        assert_eq!(sample_passes(16), vec![0..1, 1..4, 4..16]);
+        assert_eq!(sample_passes(100), vec![0..1, 1..4, 4..16, 16..64, 64..100]);
+    }
+
+    #[test]
+    fn a_progressive_render_streams_every_pass_and_ends_equal_to_the_headless_render() {
+        let mut s = spec(48, 27);
+        s.spp = 9;
+        let frame = Renderer::with_camera(&s.scene, s.camera, 48, 27, 9).unwrap().render(|_| {});
+        let job = RenderJob::start(s, 1, || {}).unwrap();
+        let mut image = vec![Color32::BLACK; 48 * 27];
+        let mut seen = vec![Vec::new(); 27];
+        while let Some(row) = job.next_row_blocking() {
+            let y = row.y as usize;
+            seen[y].push(row.samples);
+            image[y * 48..(y + 1) * 48].copy_from_slice(&row.pixels);
+        }
+        assert!(seen.iter().all(|s| s == &[1, 4, 9]), "{seen:?}");
+        let expected: Vec<Color32> =
+            frame.to_rgb8().iter().map(|&[r, g, b]| Color32::from_rgb(r, g, b)).collect();
+        assert!(image == expected, "final pass differs from `render`");
+        assert_eq!(job.progress(), (9, 27));
+        assert_eq!(job.rays(), 48 * 27 * 9);
     }
 
     #[test]
@@ -258,12 +394,12 @@ mod tests {
             spec(50, 40),
             1,
             || {},
-            |r, y, rgb| {
+            Box::new(|r, y, samples, sums| {
                 if y == 7 {
                     panic!("boom at seven");
                 }
-                r.render_row(y, rgb)
-            },
+                r.accumulate_row(y, samples, sums)
+            }),
         )
         .unwrap();
         let mut delivered = 0;

@@ -14,11 +14,12 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context as _, anyhow};
 use egui::{Color32, PointerButton, Rect, Sense, TextureHandle, TextureOptions, Vec2, pos2};
+use rt_core::effects::{EffectPlan, EffectToggles};
 use rt_core::{Projection, Real, Scene};
 
 use crate::camera_controls::{CameraSettings, FOV_RANGE, NEAR_RANGE};
 use crate::canvas::Canvas;
-use crate::png_out::PendingPng;
+use crate::image_out::PendingImage;
 use crate::render_job::{JobSpec, RenderJob};
 use crate::scene_watch::SceneWatcher;
 
@@ -60,7 +61,7 @@ pub fn run(options: ViewerOptions) -> anyhow::Result<()> {
     let scene = load(options.scene.as_deref())?;
     if let Some(out) = &options.screenshot {
         // Check the output path now, not after the window has run.
-        drop(PendingPng::create(out)?);
+        drop(PendingImage::png(out)?);
     }
     let outcome = Arc::new(Mutex::new(None));
     let native = eframe::NativeOptions {
@@ -104,6 +105,10 @@ pub struct Viewer {
     file_camera: rt_core::Camera,
     settings: CameraSettings,
     resolution_scale: f32,
+    /// Samples per pixel of full renders (the scene's until the user changes it).
+    spp: u32,
+    /// Effects the user has switched off.
+    toggles: EffectToggles,
     job: Option<RenderJob>,
     job_is_preview: bool,
     canvas: Option<Canvas>,
@@ -133,6 +138,7 @@ impl Viewer {
         outcome: Arc<Mutex<Option<Result<(), String>>>>,
     ) -> Self {
         let settings = CameraSettings::from_camera(&scene.camera);
+        let settings_spp = scene.samples_per_pixel;
         let mut viewer = Self {
             open_path: options.scene.as_ref().map(|p| p.display().to_string()).unwrap_or_default(),
             scene_path: options.scene.clone(),
@@ -140,6 +146,8 @@ impl Viewer {
             scene: Arc::new(scene),
             settings,
             resolution_scale: 1.0,
+            spp: settings_spp,
+            toggles: EffectToggles::default(),
             job: None,
             job_is_preview: false,
             canvas: None,
@@ -182,10 +190,11 @@ impl Viewer {
             width = (width / PREVIEW_DIVISOR).max(1);
             height = (height / PREVIEW_DIVISOR).max(1);
         }
-        let spp = if preview { 1 } else { self.scene.samples_per_pixel };
+        let spp = if preview { 1 } else { self.spp };
         let generation = self.next_generation;
         self.next_generation += 1;
-        let spec = JobSpec { scene: self.scene.clone(), camera, width, height, spp };
+        let plan = EffectPlan::for_scene(&self.scene).restricted(self.toggles);
+        let spec = JobSpec { scene: self.scene.clone(), camera, width, height, spp, plan };
         let repaint = ctx.clone();
         match RenderJob::start(spec, generation, move || repaint.request_repaint()) {
             Ok(job) => {
@@ -221,8 +230,7 @@ impl Viewer {
             && !self.job_is_preview
             && let Some(elapsed) = job.elapsed()
         {
-            let spec = job.spec();
-            let rays = spec.width as f64 * spec.height as f64 * spec.spp as f64;
+            let rays = job.rays() as f64;
             let seconds = elapsed.as_secs_f64();
             self.last_full = Some(FrameStats { seconds, mrays_per_s: rays / seconds.max(1e-9) / 1e6 });
         }
@@ -265,6 +273,9 @@ impl Viewer {
                 if reset_camera || scene.camera != self.file_camera {
                     self.settings = CameraSettings::from_camera(&scene.camera);
                 }
+                if reset_camera || scene.samples_per_pixel != self.scene.samples_per_pixel {
+                    self.spp = scene.samples_per_pixel;
+                }
                 self.file_camera = scene.camera;
                 self.scene = Arc::new(scene);
                 self.error = None;
@@ -290,11 +301,13 @@ impl Viewer {
     }
 
     fn save(&mut self) {
-        let Some(canvas) = self.canvas.as_ref().filter(|c| c.is_complete() && !self.job_is_preview) else {
+        let Some(canvas) = self.canvas.as_ref().filter(|_| self.frame_is_final()) else {
             return;
         };
         let path = PathBuf::from(self.save_path.trim());
-        let saved = PendingPng::create(&path).and_then(|png| png.write(&canvas.to_frame()));
+        let [width, height] = canvas.size();
+        let saved = PendingImage::png(&path)
+            .and_then(|png| png.write_rgb8(width as u32, height as u32, &canvas.rgb8()));
         self.notice = Some(match saved {
             Ok(()) => format!("saved {}", path.display()),
             Err(e) => format!("not saved: {e:#}"),
@@ -352,10 +365,16 @@ impl Viewer {
         dragging |= r.dragged();
         changed_scale |= r.changed();
         let (w, h) = self.full_size();
-        ui.label(format!("{w} × {h} pixels, {} spp", self.scene.samples_per_pixel));
+        ui.label(format!("{w} × {h} pixels"));
+        let r = ui
+            .add(egui::Slider::new(&mut self.spp, 1..=1024).logarithmic(true).text("samples per pixel"))
+            .on_hover_text("Anti-aliasing and soft-shadow quality: shows 1 sample first, then refines");
+        dragging |= r.dragged();
+        changed_scale |= r.changed();
+        changed_scale |= self.effects_ui(ui);
         ui.horizontal(|ui| {
             ui.add(egui::TextEdit::singleline(&mut self.save_path).desired_width(150.0));
-            let ready = self.canvas.as_ref().is_some_and(Canvas::is_complete) && !self.job_is_preview;
+            let ready = self.frame_is_final();
             if ui.add_enabled(ready, egui::Button::new("Save PNG")).clicked() {
                 self.save();
             }
@@ -379,6 +398,33 @@ impl Viewer {
         }
         self.settings = accepted;
         (changed, dragging)
+    }
+
+    /// Checkboxes for the effects the scene asks for (the others are shown
+    /// disabled). Returns whether one changed.
+    fn effects_ui(&mut self, ui: &mut egui::Ui) -> bool {
+        let asked = EffectPlan::for_scene(&self.scene);
+        let before = self.toggles;
+        let t = &mut self.toggles;
+        ui.horizontal_wrapped(|ui| {
+            ui.add_enabled(asked.shadows, egui::Checkbox::new(&mut t.shadows, "shadows"));
+            ui.add_enabled(asked.reflection, egui::Checkbox::new(&mut t.reflection, "reflection"));
+            ui.add_enabled(asked.refraction, egui::Checkbox::new(&mut t.refraction, "refraction"));
+            ui.add_enabled(
+                asked.ambient_occlusion.is_some(),
+                egui::Checkbox::new(&mut t.ambient_occlusion, "ambient occlusion"),
+            );
+        });
+        if !asked.shading {
+            ui.small("No lights: flat colours (pure ray casting).");
+        }
+        self.toggles != before
+    }
+
+    /// Whether the full-resolution image has all its samples.
+    fn frame_is_final(&self) -> bool {
+        let complete = self.canvas.as_ref().is_some_and(Canvas::is_complete);
+        complete && !self.job_is_preview && self.job.as_ref().is_some_and(|j| j.elapsed().is_some())
     }
 
     /// The image, fitted to the panel, with mouse orbit, pan and zoom.
@@ -417,7 +463,13 @@ impl Viewer {
         if let Some(c) = &self.canvas {
             let [w, h] = c.size();
             let kind = if self.job_is_preview { "preview" } else { "full" };
-            parts.push(format!("rows {}/{h} ({kind} {w}×{h})", c.rows_done()));
+            match &self.job {
+                Some(job) if job.spec().spp > 1 => {
+                    let (samples, rows) = job.progress();
+                    parts.push(format!("{samples}/{} spp, rows {rows}/{h} ({kind} {w}×{h})", job.spec().spp));
+                }
+                _ => parts.push(format!("rows {}/{h} ({kind} {w}×{h})", c.rows_done())),
+            }
         }
         match self.last_full {
             Some(f) => {
@@ -431,7 +483,7 @@ impl Viewer {
     /// Screenshot mode: once a full frame has been on screen for two frames,
     /// ask for the window's pixels, save them and close.
     fn screenshot_step(&mut self, ctx: &egui::Context) {
-        let complete = self.canvas.as_ref().is_some_and(Canvas::is_complete) && !self.job_is_preview;
+        let complete = self.frame_is_final();
         let Some(Screenshot::Waiting { path, frames_since_complete, started }) = &mut self.screenshot else {
             return;
         };
@@ -521,12 +573,8 @@ fn texture_options(preview: bool) -> TextureOptions {
 /// Writes a window screenshot as an RGB PNG, atomically.
 fn save_screenshot(path: &Path, image: &egui::ColorImage) -> anyhow::Result<()> {
     let [width, height] = image.size;
-    let frame = rt_core::Frame {
-        width: width as u32,
-        height: height as u32,
-        pixels: image.pixels.iter().map(|c| [c.r(), c.g(), c.b()]).collect(),
-    };
-    PendingPng::create(path)?.write(&frame).context("screenshot")
+    let pixels: Vec<_> = image.pixels.iter().map(|c| [c.r(), c.g(), c.b()]).collect();
+    PendingImage::png(path)?.write_rgb8(width as u32, height as u32, &pixels).context("screenshot")
 }
 
 #[cfg(test)]

@@ -1,12 +1,14 @@
-//! The showcase scene rendered by the CLI, compared with committed references:
-//! a small golden image, and the README's picture at the scene's own size.
+//! Scenes rendered by the CLI, compared with committed references: small
+//! golden images of the showcase (flat colours) and of the every-effect
+//! scene, and the README's pictures at their scenes' own sizes.
 //!
 //! Tolerance: a pixel "differs" when any channel is off by more than 2/255; at
-//! most 0.5% of the pixels may differ. Flat colours make every difference an
-//! edge pixel that changed object, which is what a change in floating-point
-//! rounding (another compiler, CPU or the f64 build) can do, and nothing more.
+//! most 0.5% of the pixels may differ. With flat colours every difference is
+//! an edge pixel that changed object; with effects, also a shadow, AO or
+//! reflection ray whose hit flipped. That is what a change in floating-point
+//! rounding (another compiler, CPU or libm) can do, and nothing more.
 //!
-//! Regenerate both references after an intended change in the picture:
+//! Regenerate the references after an intended change in the pictures:
 //!
 //! ```text
 //! RT_BLESS=1 cargo test -p rt-view --test golden
@@ -24,7 +26,13 @@ const MAX_DIFFERING_FRACTION: f64 = 0.005;
 #[test]
 fn showcase_matches_the_reference_image() {
     let reference = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/showcase_240x135.png");
-    compare_showcase_render(&reference, &["--width", "240", "--height", "135"]);
+    compare_render("showcase", &reference, &["--width", "240", "--height", "135"]);
+}
+
+#[test]
+fn every_effect_scene_matches_the_reference_image() {
+    let reference = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/effects_160x90.png");
+    compare_render("effects", &reference, &["--width", "160", "--height", "90"]);
 }
 
 /// The README's picture is what the README's command renders (the scene's own
@@ -32,15 +40,27 @@ fn showcase_matches_the_reference_image() {
 #[test]
 fn readme_picture_is_the_current_showcase_render() {
     let picture = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/showcase.png");
-    compare_showcase_render(&picture, &[]);
+    compare_render("showcase", &picture, &[]);
 }
 
-/// Renders showcase.ron with `extra` arguments and compares the result with
-/// `reference`, or overwrites `reference` when `RT_BLESS` is set.
-fn compare_showcase_render(reference: &Path, extra: &[&str]) {
+/// Likewise for the README's effect pictures, docs/effects/SCENE.png, each
+/// rendered by `rt-view render scenes/SCENE.ron` at the scene's own settings
+/// (and the 1-spp anti-aliasing comparison with `--spp 1`).
+#[test]
+fn readme_effect_pictures_are_current_renders() {
+    let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/effects");
+    for scene in ["shadows", "soft_shadows", "mirrors", "glass", "ao", "antialiasing", "effects"] {
+        compare_render(scene, &docs.join(format!("{scene}.png")), &[]);
+    }
+    compare_render("antialiasing", &docs.join("antialiasing_1spp.png"), &["--spp", "1"]);
+}
+
+/// Renders scenes/`name`.ron with `extra` arguments and compares the result
+/// with `reference`, or overwrites `reference` when `RT_BLESS` is set.
+fn compare_render(name: &str, reference: &Path, extra: &[&str]) {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("showcase.png");
-    let scene = scenes_dir().join("showcase.ron");
+    let out = dir.path().join(format!("{name}.png"));
+    let scene = scenes_dir().join(format!("{name}.ron"));
     let mut args = vec!["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()];
     args.extend_from_slice(extra);
     let o = rt_view(&args, "");

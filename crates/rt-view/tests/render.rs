@@ -152,7 +152,7 @@ fn missing_scene_files_and_bad_outputs_are_reported() {
     let o =
         rt_view(&["render", scene.to_str().unwrap(), "-o", dir.path().join("x.jpg").to_str().unwrap()], "");
     assert_eq!(o.status.code(), Some(1));
-    assert!(stderr(&o).contains("output must be a .png file"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("output must be a .png or .exr file"), "{}", stderr(&o));
 }
 
 #[test]
@@ -222,9 +222,76 @@ fn stats_report_load_bvh_and_tracing_separately() {
     // mesh.ron: the icosphere (320 triangles) and the torus (288 quads → 576 triangles).
     assert!(err.contains("BVH: 896 primitives,"), "{err}");
     assert!(err.contains("scene load: ") && err.contains("(of which BVH build "), "{err}");
+    // No lights: pure ray casting, one primary ray per pixel (320×240) and nothing else.
+    assert!(err.contains("effects: none (no lights"), "{err}");
+    assert!(
+        err.contains("rays: primary 76800, shadow 0, reflection 0, refraction 0, ambient occlusion 0"),
+        "{err}"
+    );
     let mrays = err.lines().find_map(|l| l.strip_prefix("tracing: ")).expect("tracing line");
     let value: f64 = mrays.split(" Mrays/s").next().unwrap().rsplit(' ').next().unwrap().parse().unwrap();
     assert!(value > 0.0 && value.is_finite(), "{mrays}");
+}
+
+#[test]
+fn stats_count_every_kind_of_ray_a_lit_scene_asks_for() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("e.png");
+    let scene = scenes_dir().join("effects.ron");
+    let args =
+        ["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--width", "64", "--height", "36"];
+    let o = rt_view(&[&args[..], &["--spp", "2", "--stats"]].concat(), "");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("effects: shading, shadows, reflection, refraction, max depth 5, ambient occlusion (4 samples, radius 1)"),
+        "{err}"
+    );
+    let counts = err.lines().find_map(|l| l.strip_prefix("rays: ")).expect("rays line");
+    let count = |kind: &str| -> u64 {
+        counts.split(", ").find_map(|c| c.strip_prefix(kind)).unwrap().trim().parse().unwrap()
+    };
+    assert_eq!(count("primary "), 64 * 36 * 2);
+    for kind in ["shadow ", "reflection ", "refraction ", "ambient occlusion "] {
+        assert!(count(kind) > 0, "{kind}: {counts}");
+    }
+}
+
+#[test]
+fn an_exr_output_holds_the_linear_colours_unclamped() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scenes_dir().join("shadows.ron");
+    let (png, exr) = (dir.path().join("s.png"), dir.path().join("s.exr"));
+    for out in [&png, &exr] {
+        let o = rt_view(
+            &[
+                "render",
+                scene.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+                "--width",
+                "80",
+                "--height",
+                "45",
+            ],
+            "",
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let linear = image::open(&exr).unwrap().to_rgb32f();
+    let encoded = read_png(&png);
+    assert_eq!(linear.dimensions(), (80, 45));
+    // The PNG is the EXR's linear values clamped and sRGB-encoded.
+    let srgb = |v: f32| {
+        let v = v.clamp(0.0, 1.0);
+        let e = if v <= 0.0031308 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
+        (e * 255.0 + 0.5) as u8
+    };
+    for (l, e) in linear.pixels().zip(encoded.pixels()) {
+        assert_eq!(l.0.map(srgb), e.0);
+    }
+    // The lit floor near the point light is brighter than 1: HDR survives.
+    assert!(linear.pixels().any(|p| p.0[0] > 1.0), "no value above 1");
 }
 
 #[test]

@@ -1,0 +1,161 @@
+//! What a scene asks for ([`Lighting`]) and what the renderer will simulate
+//! ([`EffectPlan`]), decided once per render: a kind of ray that no effect
+//! needs is never cast, and [`RayCounts`] proves it.
+
+use std::ops::{Add, AddAssign};
+
+use crate::light::Light;
+use crate::material::Color;
+use crate::real::Real;
+use crate::scene::Scene;
+
+/// Deepest reflection/refraction recursion a scene may ask for.
+pub const MAX_DEPTH: u32 = 64;
+
+/// The scene file's lighting: lights, ambient light and effect settings.
+/// The default (no lights) is pure ray casting.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Lighting {
+    /// The lights; none means flat colours (SPEC.md).
+    pub lights: Vec<Light>,
+    /// Light reaching every point from everywhere, times the diffuse albedo.
+    pub ambient: Color,
+    /// How many reflection/refraction bounces follow a primary ray, 0 to
+    /// [`MAX_DEPTH`]; 0 turns both off.
+    pub max_depth: u32,
+    /// Ambient occlusion, if asked for: darkens the ambient term by how much
+    /// of the hemisphere is blocked within a radius.
+    pub ambient_occlusion: Option<AmbientOcclusion>,
+}
+
+/// Ambient-occlusion settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AmbientOcclusion {
+    /// Rays per shaded point, ≥ 1.
+    pub samples: u32,
+    /// How far an occluder counts, world units, > 0.
+    pub radius: Real,
+}
+
+/// Which kinds of rays a render casts. Each flag is on only when the scene
+/// has something for that kind of ray to find.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EffectPlan {
+    /// Lights exist: hits are shaded. Off: flat colours, primary rays only.
+    pub shading: bool,
+    /// Some light casts shadows: shadow rays.
+    pub shadows: bool,
+    /// Some material reflects (mirror or Fresnel reflection of glass) and
+    /// `max_depth > 0`: reflection rays.
+    pub reflection: bool,
+    /// Some material is transparent and `max_depth > 0`: refraction rays.
+    pub refraction: bool,
+    /// Ambient occlusion was asked for and there is ambient light for it to
+    /// darken: AO rays.
+    pub ambient_occlusion: Option<AmbientOcclusion>,
+    /// Recursion limit for reflection and refraction rays.
+    pub max_depth: u32,
+}
+
+/// Effects a user can switch off in the viewer; a plan never turns on what
+/// the scene does not ask for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EffectToggles {
+    /// Keep shadow rays.
+    pub shadows: bool,
+    /// Keep reflection rays.
+    pub reflection: bool,
+    /// Keep refraction rays.
+    pub refraction: bool,
+    /// Keep ambient-occlusion rays.
+    pub ambient_occlusion: bool,
+}
+
+impl Default for EffectToggles {
+    fn default() -> Self {
+        Self { shadows: true, reflection: true, refraction: true, ambient_occlusion: true }
+    }
+}
+
+impl EffectPlan {
+    /// The effects `scene` asks for.
+    pub fn for_scene(scene: &Scene) -> Self {
+        let lighting = &scene.lighting;
+        let shading = !lighting.lights.is_empty();
+        let used = scene.objects().iter().map(|o| &scene.materials[o.material]);
+        let (mut reflects, mut refracts) = (false, false);
+        for m in used {
+            reflects |= m.reflectivity > 0.0 || m.transparency > 0.0;
+            refracts |= m.transparency > 0.0;
+        }
+        let recursion = shading && lighting.max_depth > 0;
+        Self {
+            shading,
+            shadows: shading && lighting.lights.iter().any(|l| l.shadows),
+            reflection: recursion && reflects,
+            refraction: recursion && refracts,
+            ambient_occlusion: lighting
+                .ambient_occlusion
+                .filter(|_| shading && lighting.ambient != Color::ZERO),
+            max_depth: if recursion { lighting.max_depth } else { 0 },
+        }
+    }
+
+    /// This plan without the effects `toggles` switches off.
+    pub fn restricted(self, toggles: EffectToggles) -> Self {
+        Self {
+            shadows: self.shadows && toggles.shadows,
+            reflection: self.reflection && toggles.reflection,
+            refraction: self.refraction && toggles.refraction,
+            ambient_occlusion: self.ambient_occlusion.filter(|_| toggles.ambient_occlusion),
+            ..self
+        }
+    }
+}
+
+/// How many rays of each kind a render cast.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayCounts {
+    /// Camera rays: width × height × samples per pixel.
+    pub primary: u64,
+    /// Rays towards light samples.
+    pub shadow: u64,
+    /// Mirror and Fresnel reflection rays.
+    pub reflection: u64,
+    /// Rays refracted into or out of transparent objects.
+    pub refraction: u64,
+    /// Ambient-occlusion rays.
+    pub ambient_occlusion: u64,
+}
+
+impl RayCounts {
+    /// All rays together.
+    pub fn total(&self) -> u64 {
+        self.primary + self.shadow + self.reflection + self.refraction + self.ambient_occlusion
+    }
+}
+
+impl Add for RayCounts {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        Self {
+            primary: self.primary + o.primary,
+            shadow: self.shadow + o.shadow,
+            reflection: self.reflection + o.reflection,
+            refraction: self.refraction + o.refraction,
+            ambient_occlusion: self.ambient_occlusion + o.ambient_occlusion,
+        }
+    }
+}
+
+impl AddAssign for RayCounts {
+    fn add_assign(&mut self, o: Self) {
+        *self = *self + o;
+    }
+}
+
+impl std::iter::Sum for RayCounts {
+    fn sum<I: Iterator<Item = Self>>(iter: I) -> Self {
+        iter.fold(Self::default(), Add::add)
+    }
+}

@@ -1,0 +1,447 @@
+//! Hits → colours: a Whitted-style recursive ray tracer (Whitted, "An
+//! Improved Illumination Model for Shaded Display", 1980), with area lights
+//! and ambient occlusion, that casts only the rays its [`EffectPlan`] allows.
+//!
+//! Without lights the colour of a primary ray is its hit's flat material
+//! colour, exactly as in pure ray casting. With lights a hit with material
+//! `m` at point p, unit normal n facing the incoming ray and direction v
+//! back to the viewer gets (see [`crate::material::Material`]):
+//!
+//! - `m.emission`;
+//! - diffuse: `(1 − kr − kt)·kd·color·(ambient·ao + Σ vis·E·max(0, n·l))`,
+//!   summed over every light sample, `vis` 0 or 1 from a shadow ray;
+//! - specular: `ks·Σ vis·E·(n·h)^shininess` (Blinn–Phong);
+//! - reflection: `(kr + kt·F)·trace(reflected ray)`;
+//! - refraction: `kt·(1 − F)·color·trace(refracted ray)`, nothing on total
+//!   internal reflection (F = 1 then).
+//!
+//! A reflected or refracted ray is cast only while the recursion depth is
+//! below `max_depth` and its weight in the pixel (the product of the
+//! reflection and transmission factors along its path, largest channel) is at
+//! least [`MIN_WEIGHT`]: adaptive depth control (Hall and Greenberg, "A
+//! Testbed for Realistic Image Synthesis", 1983). Without it two glass
+//! objects would branch into 2^max_depth rays; with it a path dies after a
+//! few weak Fresnel reflections, and a mirror with kr = 1 still bounces up to
+//! `max_depth` times.
+//!
+//! F is the exact dielectric Fresnel reflectance; a ray arriving on the side
+//! the geometric normal points to enters a medium of index `m.ior`, one
+//! arriving from behind leaves it for air (index 1). Shadow rays treat every
+//! object as opaque, glass too. Secondary rays start at the hit point pushed
+//! off the surface by its error bound ([`crate::surface`]).
+
+use crate::effects::{EffectPlan, RayCounts};
+use crate::hit::Hit;
+use crate::material::Color;
+use crate::ray::{Interval, Ray};
+use crate::real::{Real, Vec3, normalize_robust, to_f32};
+use crate::sampler::{SampleRng, cosine_hemisphere, stratified};
+use crate::scene::Scene;
+use crate::shading::{blinn_phong, fresnel_dielectric, lambert, reflect, refract};
+use crate::surface::SurfacePoint;
+
+/// Smallest weight a secondary ray may have in its pixel: under half an
+/// 8-bit step of a full-intensity colour.
+pub const MIN_WEIGHT: f32 = 1.0 / 512.0;
+
+/// Traces rays through one scene under one effect plan.
+#[derive(Clone, Copy, Debug)]
+pub struct Tracer<'s> {
+    scene: &'s Scene,
+    plan: EffectPlan,
+}
+
+impl<'s> Tracer<'s> {
+    /// A tracer for `scene` that simulates what `plan` allows.
+    pub fn new(scene: &'s Scene, plan: EffectPlan) -> Self {
+        Self { scene, plan }
+    }
+
+    /// The plan in force.
+    pub fn plan(&self) -> &EffectPlan {
+        &self.plan
+    }
+
+    /// The colour seen along a camera ray (the `cast` rule decides what
+    /// counts as a hit); `rng` is this pixel sample's random stream.
+    pub fn trace_primary(&self, ray: &Ray, rng: &mut SampleRng, counts: &mut RayCounts) -> Color {
+        counts.primary += 1;
+        let Some(hit) = self.scene.cast(ray) else {
+            return self.scene.background;
+        };
+        if !self.plan.shading {
+            return self.scene.hit_color(&hit);
+        }
+        self.shade(ray, &hit, Path { depth: 0, weight: 1.0 }, rng, counts)
+    }
+
+    /// The colour seen along a reflected or refracted ray.
+    fn trace_secondary(&self, ray: &Ray, path: Path, rng: &mut SampleRng, counts: &mut RayCounts) -> Color {
+        match self.scene.closest_hit(ray, Interval::new(0.0, Real::INFINITY)) {
+            Some(hit) => self.shade(ray, &hit, path, rng, counts),
+            None => self.scene.background,
+        }
+    }
+
+    fn shade(&self, ray: &Ray, hit: &Hit, path: Path, rng: &mut SampleRng, counts: &mut RayCounts) -> Color {
+        let object = &self.scene.objects()[hit.object];
+        let m = &self.scene.materials[object.material];
+        let Some(d) = normalize_robust(ray.dir) else {
+            return self.scene.background;
+        };
+        let sp = object.primitive.surface_point(hit.primitive, hit.normal, ray.at(hit.t));
+        let front = d.dot(sp.normal) < 0.0;
+        let n = if front { sp.normal } else { -sp.normal };
+        let lighting = &self.scene.lighting;
+
+        let mut color = m.emission;
+        let diffuse = (1.0 - m.reflectivity - m.transparency).max(0.0) * m.diffuse;
+        if diffuse > 0.0 && lighting.ambient != Color::ZERO {
+            let ao = self.ambient_occlusion(&sp, n, rng, counts);
+            color += lighting.ambient * m.color * (diffuse * ao);
+        }
+        if diffuse > 0.0 || m.specular > 0.0 {
+            for light in &lighting.lights {
+                let samples = light.sample_count();
+                for k in 0..samples {
+                    let jitter = if samples > 1 { rng.next_pair() } else { (0.5, 0.5) };
+                    let Some(s) = light.sample(sp.p, k, jitter) else { continue };
+                    let cos = lambert(n, s.to_light);
+                    if cos <= 0.0 {
+                        continue;
+                    }
+                    if self.plan.shadows && light.shadows {
+                        counts.shadow += 1;
+                        let shadow = Ray::new(sp.spawn_origin(s.to_light), s.to_light);
+                        if self.scene.any_hit(&shadow, Interval::new(0.0, s.distance)) {
+                            continue;
+                        }
+                    }
+                    let specular = blinn_phong(n, s.to_light, -d, m.shininess as Real);
+                    color +=
+                        s.irradiance * (m.color * (diffuse * to_f32(cos)) + m.specular * to_f32(specular));
+                }
+            }
+        }
+
+        if path.depth < self.plan.max_depth && (self.plan.reflection || self.plan.refraction) {
+            let (eta_i, eta_t) = if front { (1.0, m.ior as Real) } else { (m.ior as Real, 1.0) };
+            let fresnel =
+                if m.transparency > 0.0 { to_f32(fresnel_dielectric(-d.dot(n), eta_i, eta_t)) } else { 0.0 };
+            let reflected = m.reflectivity + m.transparency * fresnel;
+            let next = path.then(reflected);
+            if self.plan.reflection && next.weight >= MIN_WEIGHT {
+                counts.reflection += 1;
+                let r = reflect(d, n);
+                let ray = Ray::new(sp.spawn_origin(r), r);
+                color += reflected * self.trace_secondary(&ray, next, rng, counts);
+            }
+            let transmitted = m.color * (m.transparency * (1.0 - fresnel));
+            let next = path.then(transmitted.max_element());
+            if self.plan.refraction
+                && next.weight >= MIN_WEIGHT
+                && let Some(t) = refract(d, n, eta_i, eta_t)
+            {
+                counts.refraction += 1;
+                let ray = Ray::new(sp.spawn_origin(t), t);
+                color += transmitted * self.trace_secondary(&ray, next, rng, counts);
+            }
+        }
+        color
+    }
+
+    /// The unblocked fraction of the hemisphere about `n` within the AO
+    /// radius, from cosine-distributed, stratified rays; 1 without AO.
+    fn ambient_occlusion(
+        &self,
+        sp: &SurfacePoint,
+        n: Vec3,
+        rng: &mut SampleRng,
+        counts: &mut RayCounts,
+    ) -> f32 {
+        let Some(ao) = self.plan.ambient_occlusion else {
+            return 1.0;
+        };
+        let mut open = 0u32;
+        for k in 0..ao.samples {
+            let dir = cosine_hemisphere(n, stratified(k, ao.samples, rng.next_pair()));
+            let ray = Ray::new(sp.spawn_origin(dir), dir);
+            counts.ambient_occlusion += 1;
+            if !self.scene.any_hit(&ray, Interval::new(0.0, ao.radius)) {
+                open += 1;
+            }
+        }
+        open as f32 / ao.samples as f32
+    }
+}
+
+/// Where a secondary ray is in its tree: bounces so far, and its weight in
+/// the pixel (largest channel).
+#[derive(Clone, Copy, Debug)]
+struct Path {
+    depth: u32,
+    weight: f32,
+}
+
+impl Path {
+    /// The path one bounce further, through a surface passing `factor`.
+    fn then(self, factor: f32) -> Self {
+        Self { depth: self.depth + 1, weight: self.weight * factor }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::Renderer;
+    use std::path::Path;
+
+    /// A scene from RON text.
+    fn scene(text: &str) -> Scene {
+        crate::parse_scene(text, "test.ron", Path::new(".")).unwrap()
+    }
+
+    /// A camera at (0, 0, −5) looking at a grey wall z = 0 that fills the view,
+    /// lit by `lights`, plus `extra` objects and `effects`.
+    fn wall(materials: &str, objects: &str, lights: &str, effects: &str) -> Scene {
+        scene(&format!(
+            r#"(
+            camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1),
+            image: (width: 16, height: 12),
+            materials: {{ "grey": (color: (0.5, 0.5, 0.5)), {materials} }},
+            objects: [ Plane(normal: (0, 0, -1), d: 0, material: "grey"), {objects} ],
+            lights: [ {lights} ],
+            {effects}
+        )"#
+        ))
+    }
+
+    fn render(s: &Scene, spp: u32) -> crate::render::Frame {
+        Renderer::new(s, s.width, s.height, spp).unwrap().render(|_| {})
+    }
+
+    #[test]
+    fn a_lit_wall_follows_lamberts_cosine_law() {
+        for degrees in [0.0 as Real, 30.0, 60.0, 85.0] {
+            let a = degrees.to_radians();
+            // Light travelling into the wall (+z) tilted by `a`.
+            let light = format!("Directional(direction: ({}, 0, {}), intensity: 2)", a.sin(), a.cos());
+            let f = render(&wall("", "", &light, ""), 1);
+            let expected = 0.5 * 2.0 * to_f32(a.cos());
+            for c in &f.pixels {
+                assert!((c.x - expected).abs() < 1e-5, "{degrees}°: {c} vs {expected}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_wall_lit_from_behind_gets_only_ambient_light() {
+        let f = render(&wall("", "", "Directional(direction: (0, 0, -1))", "ambient: (0.2, 0.2, 0.2),"), 1);
+        assert!(f.pixels.iter().all(|c| (c.x - 0.1).abs() < 1e-6), "{}", f.pixels[0]);
+    }
+
+    #[test]
+    fn a_point_light_falls_off_with_the_square_of_the_distance() {
+        let at = |z: Real| {
+            let light = format!("Point(position: (0, 0, {z}), intensity: 4, shadows: false)");
+            let s = wall("", "", &light, "");
+            // In a 15×11 image pixel (7, 5) is centred on the axis: the light is straight ahead.
+            let r = Renderer::new(&s, 15, 11, 1).unwrap();
+            r.pixel(7, 5, &mut RayCounts::default()).x
+        };
+        assert_eq!((at(-1.0), at(-2.0)), (0.5 * 4.0, 0.5 * 4.0 / 4.0));
+    }
+
+    #[test]
+    fn each_kind_of_ray_is_cast_only_when_the_scene_asks_for_it() {
+        let sphere = r#"Sphere(center: (0, 0, -1), radius: 0.5, material: "shiny")"#;
+        let shiny = r#""shiny": (color: (1, 1, 1), reflectivity: 0.5)"#;
+        let glass = r#""shiny": (color: (1, 1, 1), transparency: 0.9)"#;
+        let point = "Point(position: (0, 3, -3), intensity: 9)";
+        let no_shadow = "Point(position: (0, 3, -3), intensity: 9, shadows: false)";
+        let ao = "ambient: (0.2, 0.2, 0.2), effects: (ambient_occlusion: (samples: 3, radius: 1)),";
+        let counts = |s: Scene| render(&s, 1).rays;
+        let none = counts(wall(shiny, sphere, "", ao));
+        assert_eq!(none, RayCounts { primary: 192, ..RayCounts::default() }, "no lights: casting only");
+        let lit = counts(wall(shiny, sphere, no_shadow, ""));
+        assert_eq!((lit.shadow, lit.refraction, lit.ambient_occlusion), (0, 0, 0));
+        assert!(lit.reflection > 0);
+        let shadows = counts(wall(shiny, sphere, point, ""));
+        assert!(shadows.shadow > 0 && shadows.refraction == 0);
+        let flat = counts(wall(r#""shiny": (color: (1, 1, 1))"#, sphere, point, ""));
+        assert_eq!((flat.reflection, flat.refraction), (0, 0), "nothing reflects");
+        let glassy = counts(wall(glass, sphere, point, ""));
+        assert!(glassy.refraction > 0 && glassy.reflection > 0, "glass refracts and reflects");
+        let shallow = counts(wall(glass, sphere, point, "effects: (max_depth: 0),"));
+        assert_eq!((shallow.reflection, shallow.refraction), (0, 0), "max_depth 0");
+        let occluded = counts(wall(shiny, sphere, point, ao));
+        assert!(occluded.ambient_occlusion > 0);
+        let dark =
+            counts(wall(shiny, sphere, point, "effects: (ambient_occlusion: (samples: 3, radius: 1)),"));
+        assert_eq!(dark.ambient_occlusion, 0, "AO without ambient light has nothing to darken");
+    }
+
+    #[test]
+    fn ray_counts_are_exact_for_simple_scenes() {
+        // Every pixel sees the wall, which faces the light: one shadow ray and
+        // three AO rays per sample, W×H×spp primary rays.
+        let s = wall(
+            "",
+            "",
+            "Point(position: (0, 0, -3), intensity: 9)",
+            "ambient: (0.1, 0.1, 0.1), effects: (ambient_occlusion: (samples: 3, radius: 1)),",
+        );
+        let f = render(&s, 4);
+        let n = 16 * 12 * 4;
+        assert_eq!(
+            f.rays,
+            RayCounts { primary: n, shadow: n, ambient_occlusion: 3 * n, ..RayCounts::default() }
+        );
+        // A sphere light of 5 samples: 5 shadow rays per sample.
+        let s = wall("", "", "Sphere(center: (0, 0, -3), radius: 0.5, intensity: 9, samples: 5)", "");
+        assert_eq!(render(&s, 1).rays, RayCounts { primary: 192, shadow: 5 * 192, ..RayCounts::default() });
+    }
+
+    #[test]
+    fn many_glass_spheres_at_the_deepest_recursion_stay_cheap() {
+        // Without adaptive depth, 2^64 rays per pixel.
+        let spheres: Vec<String> = (0..12)
+            .map(|i| {
+                format!(
+                    r#"Sphere(center: ({}, {}, -1), radius: 0.45, material: "glass")"#,
+                    i % 4 - 2,
+                    i / 4 - 1
+                )
+            })
+            .collect();
+        let s = wall(
+            r#""glass": (color: (1, 1, 1), transparency: 1, ior: 1.5)"#,
+            &spheres.join(", "),
+            "Point(position: (0, 3, -3), intensity: 9)",
+            "effects: (max_depth: 64),",
+        );
+        let rays = render(&s, 1).rays;
+        assert!(rays.total() < 192 * 200, "{rays:?}");
+    }
+
+    #[test]
+    fn two_facing_mirrors_recurse_exactly_max_depth_times() {
+        // The camera looks through a hole-free view at a mirror wall with a
+        // mirror behind the camera: every bounce hits a mirror again.
+        for depth in [1, 3, 7] {
+            let s = scene(&format!(
+                r#"(
+                camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 10, near: 1),
+                image: (width: 4, height: 4),
+                materials: {{ "mirror": (color: (1, 1, 1), reflectivity: 1) }},
+                objects: [
+                    Plane(normal: (0, 0, -1), d: 0, material: "mirror"),
+                    Plane(normal: (0, 0, 1), d: -10, material: "mirror"),
+                ],
+                lights: [ Directional(direction: (0, -1, 0), shadows: false) ],
+                effects: (max_depth: {depth}),
+            )"#
+            ));
+            assert_eq!(render(&s, 1).rays.reflection, 16 * depth as u64, "depth {depth}");
+        }
+    }
+
+    #[test]
+    fn a_ray_through_a_glass_sphere_centre_goes_straight_through() {
+        // Clear glass, no reflection: the pixel behind the sphere's centre
+        // shows the lit wall dimmed by the two surfaces' Fresnel losses.
+        let s = wall(
+            r#""glass": (color: (1, 1, 1), transparency: 1, ior: 1.5)"#,
+            r#"Sphere(center: (0, 0, -2), radius: 1, material: "glass")"#,
+            "Directional(direction: (0, 0, 1), shadows: false)",
+            "",
+        );
+        let r = Renderer::new(&s, 15, 15, 1).unwrap();
+        let mut counts = RayCounts::default();
+        let through = r.pixel(7, 7, &mut counts);
+        // Refracted in at the front (4 % reflects off it); out at the back,
+        // where 4 % reflects inside; that leaves through the front, where
+        // its own 4 % would weigh 0.0015 < MIN_WEIGHT: the path ends there
+        // although max_depth (5) would allow more.
+        assert_eq!((counts.refraction, counts.reflection), (3, 2));
+        let transmitted = (1.0 - 0.04) * (1.0 - 0.04);
+        // The wall's colour 0.5 is reached through the sphere, plus a little
+        // reflected background (black here).
+        assert!((through.x - 0.5 * transmitted).abs() < 1e-3, "{through}");
+    }
+
+    #[test]
+    fn the_image_is_identical_for_one_and_for_two_threads_with_every_effect() {
+        let s = wall(
+            r#""glass": (color: (0.9, 1, 0.9), transparency: 0.8, specular: 0.5), "mirror": (color: (1, 1, 1), reflectivity: 0.6)"#,
+            r#"Sphere(center: (-0.6, 0, -1), radius: 0.5, material: "glass"), Sphere(center: (0.7, 0.2, -1), radius: 0.4, material: "mirror")"#,
+            "Sphere(center: (1, 3, -3), radius: 0.7, intensity: 12, samples: 4), Point(position: (-2, 1, -4), intensity: 5)",
+            "ambient: (0.2, 0.2, 0.2), effects: (ambient_occlusion: (samples: 4, radius: 1)),",
+        );
+        let r = Renderer::new(&s, 48, 36, 4).unwrap();
+        let run = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| r.render(|_| {}))
+        };
+        let one = run(1);
+        assert_eq!(one, run(2));
+        let c = one.rays;
+        assert!(c.shadow > 0 && c.reflection > 0 && c.refraction > 0 && c.ambient_occlusion > 0, "{c:?}");
+    }
+
+    /// Renders a plane and a sphere `distance` units from the origin, lit by a
+    /// directional light with shadows, and counts pixels darker than the
+    /// analytic shading allows: shadow acne shows up as such speckles.
+    fn acne_pixels(distance: Real) -> usize {
+        let o = Vec3::new(distance, distance * 0.5, distance);
+        let p = |v: Vec3| format!("({}, {}, {})", v.x, v.y, v.z);
+        let s = scene(&format!(
+            r#"(
+            camera: (position: {cam}, center_of_interest: {target}, up: (0, 1, 0), fov_y: 50, near: 1),
+            image: (width: 64, height: 48),
+            materials: {{ "m": (color: (1, 1, 1)) }},
+            objects: [
+                Plane(normal: (0, 1, 0), d: {floor}, material: "m"),
+                Sphere(center: {centre}, radius: 2, material: "m"),
+            ],
+            lights: [ Directional(direction: (0.3, -1, 0.2)) ],
+        )"#,
+            cam = p(o + Vec3::new(0.0, 4.0, -12.0)),
+            target = p(o),
+            floor = o.y - 2.0,
+            centre = p(o),
+        ));
+        let light = -Vec3::new(0.3, -1.0, 0.2).normalize();
+        let r = Renderer::new(&s, 64, 48, 1).unwrap();
+        let mut dark = 0;
+        for y in 0..48 {
+            for x in 0..64 {
+                let ray = r.view_plane().center_ray(x, y);
+                let Some(hit) = s.cast(&ray) else { continue };
+                let n = if hit.object == 1 { hit.normal } else { Vec3::Y };
+                let cos = n.dot(light);
+                // The floor under the sphere is legitimately in shadow: skip
+                // floor points whose way to the light passes near the sphere.
+                let point = ray.at(hit.t);
+                let to_centre = o - point;
+                let closest = to_centre - light * to_centre.dot(light);
+                let shadowed = hit.object == 0 && to_centre.dot(light) > 0.0 && closest.length() < 2.2;
+                if cos < 0.05 || shadowed {
+                    continue;
+                }
+                let shade = r.pixel(x, y, &mut RayCounts::default()).x;
+                if shade < to_f32(cos) - 0.02 {
+                    dark += 1;
+                }
+            }
+        }
+        dark
+    }
+
+    #[test]
+    fn no_shadow_acne_far_from_the_origin() {
+        for distance in [0.0, 1e4, 1e5] {
+            assert_eq!(acne_pixels(distance), 0, "at {distance}");
+        }
+    }
+}
