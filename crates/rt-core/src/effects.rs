@@ -159,3 +159,82 @@ impl std::iter::Sum for RayCounts {
         iter.fold(Self::default(), Add::add)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn plan(lights: &str, materials: &str, extra: &str) -> EffectPlan {
+        let text = format!(
+            r#"(
+            camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1),
+            image: (width: 4, height: 4),
+            materials: {{ "m": (color: (1, 1, 1), {materials}) }},
+            objects: [ Sphere(center: (0, 0, 0), radius: 1, material: "m") ],
+            lights: [ {lights} ],
+            {extra}
+        )"#
+        );
+        EffectPlan::for_scene(&crate::parse_scene(&text, "t.ron", Path::new(".")).unwrap())
+    }
+
+    #[test]
+    fn a_scene_without_lights_plans_pure_ray_casting_whatever_its_materials() {
+        let p = plan(
+            "",
+            "reflectivity: 0.5, transparency: 0.5",
+            "ambient: (1, 1, 1), effects: (ambient_occlusion: (samples: 4, radius: 1)),",
+        );
+        assert_eq!(
+            p,
+            EffectPlan {
+                shading: false,
+                shadows: false,
+                reflection: false,
+                refraction: false,
+                ambient_occlusion: None,
+                max_depth: 0
+            }
+        );
+    }
+
+    #[test]
+    fn each_effect_is_planned_only_with_what_it_needs() {
+        let light = "Point(position: (0, 5, 0))";
+        let p = plan(light, "", "");
+        assert!(p.shading && p.shadows && !p.reflection && !p.refraction && p.ambient_occlusion.is_none());
+        assert!(!plan("Point(position: (0, 5, 0), shadows: false)", "", "").shadows);
+        let glass = plan(light, "transparency: 0.9", "");
+        assert!(
+            glass.reflection && glass.refraction && glass.max_depth == 5,
+            "glass also reflects (Fresnel)"
+        );
+        assert!(!plan(light, "reflectivity: 0.9", "effects: (max_depth: 0),").reflection);
+        let ao = "effects: (ambient_occlusion: (samples: 4, radius: 1)),";
+        assert!(plan(light, "", ao).ambient_occlusion.is_none(), "no ambient light to darken");
+        assert!(plan(light, "", &format!("ambient: (0.1, 0.1, 0.1), {ao}")).ambient_occlusion.is_some());
+    }
+
+    #[test]
+    fn toggles_switch_effects_off_but_never_on() {
+        let all = plan(
+            "Point(position: (0, 5, 0))",
+            "transparency: 0.9",
+            "ambient: (0.1, 0.1, 0.1), effects: (ambient_occlusion: (samples: 4, radius: 1)),",
+        );
+        let none =
+            EffectToggles { shadows: false, reflection: false, refraction: false, ambient_occlusion: false };
+        let off = all.restricted(none);
+        assert!(
+            off.shading
+                && !off.shadows
+                && !off.reflection
+                && !off.refraction
+                && off.ambient_occlusion.is_none()
+        );
+        assert_eq!(all.restricted(EffectToggles::default()), all);
+        let flat = plan("Point(position: (0, 5, 0), shadows: false)", "", "");
+        assert_eq!(flat.restricted(EffectToggles::default()), flat, "nothing is added");
+    }
+}
