@@ -86,11 +86,13 @@ impl Light {
             }
             LightKind::Sphere { center, radius, samples } => {
                 let axis = center - p;
+                let distance = axis.length();
                 let share = 1.0 / samples as f32;
                 // From inside the light (or at its centre) it is a point light.
-                let Some(w) = axis.try_normalize().filter(|_| axis.length() > radius) else {
+                if !(distance > radius && distance.is_finite()) {
                     return towards(center, share);
-                };
+                }
+                let w = axis * distance.recip(); // As `normalize` computes it.
                 // The disk through the centre facing p (Shirley & Chiu's
                 // concentric map keeps the strata compact).
                 let (u, v) = w.any_orthonormal_pair();

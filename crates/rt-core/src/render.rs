@@ -127,9 +127,12 @@ impl<'s> Renderer<'s> {
     /// Sample `k` of pixel (x, y): one primary ray through SPEC.md's
     /// sub-pixel offset (the centre when spp = 1), traced.
     pub fn sample(&self, x: u32, y: u32, k: u32, counts: &mut RayCounts) -> Color {
-        let (sx, sy) = subpixel_offset(x, y, k, self.spp);
-        let ray =
-            if self.spp == 1 { self.view.center_ray(x, y) } else { self.view.primary_ray(x, y, sx, sy) };
+        let ray = if self.spp == 1 {
+            self.view.center_ray(x, y)
+        } else {
+            let (sx, sy) = subpixel_offset(x, y, k, self.spp);
+            self.view.primary_ray(x, y, sx, sy)
+        };
         self.tracer.trace_primary(&ray, &mut SampleRng::new(x, y, k), counts)
     }
 

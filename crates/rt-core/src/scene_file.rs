@@ -261,11 +261,7 @@ impl Default for SamplesDesc {
 impl TryFrom<u32> for SamplesDesc {
     type Error = String;
     fn try_from(n: u32) -> Result<Self, String> {
-        if (1..=MAX_SAMPLES_PER_PIXEL).contains(&n) {
-            Ok(Self(n))
-        } else {
-            Err(format!("samples_per_pixel must be 1 to {MAX_SAMPLES_PER_PIXEL}, got {n}"))
-        }
+        check_count("samples_per_pixel", 1..=MAX_SAMPLES_PER_PIXEL, n).map(Self)
     }
 }
 
@@ -456,7 +452,7 @@ impl TryFrom<LightFields> for LightDesc {
                 if radius.0 <= 0.0 {
                     return Err(format!("sphere light radius must be positive, got {}", radius.0));
                 }
-                check_samples("sphere light samples", samples)?;
+                check_count("sphere light samples", 1..=MAX_EFFECT_SAMPLES, samples)?;
                 Light {
                     kind: LightKind::Sphere { center: center.into(), radius: radius.0, samples },
                     power: power(color, intensity)?,
@@ -468,11 +464,12 @@ impl TryFrom<LightFields> for LightDesc {
     }
 }
 
-fn check_samples(what: &str, n: u32) -> Result<u32, String> {
-    if (1..=MAX_EFFECT_SAMPLES).contains(&n) {
+/// `n` if it is in `range`, else "`what` must be LO to HI, got N".
+fn check_count(what: &str, range: std::ops::RangeInclusive<u32>, n: u32) -> Result<u32, String> {
+    if range.contains(&n) {
         Ok(n)
     } else {
-        Err(format!("{what} must be 1 to {MAX_EFFECT_SAMPLES}, got {n}"))
+        Err(format!("{what} must be {} to {}, got {n}", range.start(), range.end()))
     }
 }
 
@@ -507,11 +504,7 @@ impl Default for DepthDesc {
 impl TryFrom<u32> for DepthDesc {
     type Error = String;
     fn try_from(n: u32) -> Result<Self, String> {
-        if n <= MAX_DEPTH {
-            Ok(Self(n))
-        } else {
-            Err(format!("effects.max_depth must be 0 to {MAX_DEPTH}, got {n}"))
-        }
+        check_count("effects.max_depth", 0..=MAX_DEPTH, n).map(Self)
     }
 }
 
@@ -529,7 +522,7 @@ struct AoDesc(AmbientOcclusion);
 impl TryFrom<AoFields> for AoDesc {
     type Error = String;
     fn try_from(f: AoFields) -> Result<Self, String> {
-        let samples = check_samples("ambient_occlusion.samples", f.samples)?;
+        let samples = check_count("ambient_occlusion.samples", 1..=MAX_EFFECT_SAMPLES, f.samples)?;
         if f.radius.0 <= 0.0 {
             return Err(format!("ambient_occlusion.radius must be positive, got {}", f.radius.0));
         }
