@@ -118,6 +118,38 @@ impl Aabb {
         Some(PrimitiveHit { t, primitive: 0, normal })
     }
 
+    /// The course's six-plane test: for each face, `t = (face − oᵢ) / dᵢ`
+    /// on its axis `i`, then the point `o + t·d` counts if its other two
+    /// coordinates lie within the box's bounds; the nearest such `t` in
+    /// `range` wins, with the face's outward normal.
+    ///
+    /// It breaks where the slab test ([`Aabb::intersect`]) does not: a ray
+    /// aimed at an edge or corner computes a point that rounding may put just
+    /// outside both faces' bounds (a leak), and for `dᵢ = ±0` with the origin
+    /// on that face `0/0` gives NaN, which it must (and does) skip.
+    pub fn intersect_six_plane(&self, ray: &Ray, range: Interval) -> Option<PrimitiveHit> {
+        let mut best: Option<PrimitiveHit> = None;
+        for axis in 0..3 {
+            for (face, outward) in [(self.min[axis], -1.0), (self.max[axis], 1.0)] {
+                let t = (face - ray.origin[axis]) / ray.dir[axis];
+                if !range.contains(t) || best.is_some_and(|b| b.t <= t) {
+                    continue;
+                }
+                let p = ray.at(t);
+                let inside = (1..3).all(|k| {
+                    let other = (axis + k) % 3;
+                    self.min[other] <= p[other] && p[other] <= self.max[other]
+                });
+                if inside {
+                    let mut normal = Vec3::ZERO;
+                    normal[axis] = outward;
+                    best = Some(PrimitiveHit { t, primitive: 0, normal });
+                }
+            }
+        }
+        best
+    }
+
     /// Whether the ray's segment `range` overlaps the box at all (used to skip
     /// whole meshes).
     pub fn overlaps(&self, ray: &Ray, range: Interval) -> bool {

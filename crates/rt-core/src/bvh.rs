@@ -16,6 +16,7 @@ use std::time::{Duration, Instant};
 
 use crate::aabb::Aabb;
 use crate::hit::{Hit, PrimitiveHit};
+use crate::method::Methods;
 use crate::primitive::Primitive;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, gamma};
@@ -196,12 +197,18 @@ impl Bvh {
 
     /// The closest hit with `t` in `range`, exactly as the in-order loop over
     /// all objects finds it.
-    pub fn closest_hit(&self, objects: &[Object], ray: &Ray, range: Interval) -> Option<Hit> {
+    pub fn closest_hit(
+        &self,
+        objects: &[Object],
+        ray: &Ray,
+        range: Interval,
+        methods: Methods,
+    ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         let consider = |r: PrimRef, best: &mut Option<Hit>| {
             // Accept t equal to the best so far, so that ties can go to the lower index.
             let max = best.map_or(range.max, |b| b.t.next_up());
-            let hit = intersect_ref(objects, r, ray, Interval::new(range.min, max));
+            let hit = intersect_ref(objects, r, ray, Interval::new(range.min, max), methods);
             if let Some(h) = hit {
                 let h = Hit::new(r.object as usize, h);
                 let better = best.is_none_or(|b| {
@@ -229,8 +236,8 @@ impl Bvh {
 
     /// Whether anything is hit with `t` in `range` (shadow rays): stops at
     /// the first hit found.
-    pub fn any_hit(&self, objects: &[Object], ray: &Ray, range: Interval) -> bool {
-        let hits = |r: PrimRef| intersect_ref(objects, r, ray, range).is_some();
+    pub fn any_hit(&self, objects: &[Object], ray: &Ray, range: Interval, methods: Methods) -> bool {
+        let hits = |r: PrimRef| intersect_ref(objects, r, ray, range, methods).is_some();
         if self.unbounded.iter().any(|&o| hits(PrimRef { object: o, primitive: 0 })) {
             return true;
         }
@@ -376,10 +383,17 @@ impl Slabs {
 
 /// The hit on one referenced primitive: a single triangle of a mesh, or the
 /// whole primitive otherwise.
-fn intersect_ref(objects: &[Object], r: PrimRef, ray: &Ray, range: Interval) -> Option<PrimitiveHit> {
+#[inline]
+fn intersect_ref(
+    objects: &[Object],
+    r: PrimRef,
+    ray: &Ray,
+    range: Interval,
+    methods: Methods,
+) -> Option<PrimitiveHit> {
     match &objects[r.object as usize].primitive {
-        Primitive::Mesh(m) => m.intersect_triangle(r.primitive as usize, ray, range),
-        p => p.intersect(ray, range),
+        Primitive::Mesh(m) => m.intersect_triangle(r.primitive as usize, ray, range, methods.triangle),
+        p => p.intersect_with(ray, range, methods),
     }
 }
 

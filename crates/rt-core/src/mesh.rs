@@ -6,10 +6,11 @@ use thiserror::Error;
 
 use crate::aabb::Aabb;
 use crate::hit::PrimitiveHit;
+use crate::method::TriangleMethod;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3};
 use crate::surface::SurfacePoint;
-use crate::triangle::{geometric_normal, intersect_watertight, triangle_surface_point};
+use crate::triangle::{geometric_normal, intersect_by, triangle_surface_point};
 
 /// Most triangles one mesh may have (after fanning faces): 2²⁶ ≈ 67 M.
 pub const MAX_MESH_TRIANGLES: usize = 1 << 26;
@@ -185,13 +186,19 @@ impl Mesh {
 
     /// The hit on triangle `i` alone with `t` in `range` (the BVH tests
     /// triangles one by one). Degenerate triangles are never hit.
-    pub fn intersect_triangle(&self, i: usize, ray: &Ray, range: Interval) -> Option<PrimitiveHit> {
+    pub fn intersect_triangle(
+        &self,
+        i: usize,
+        ray: &Ray,
+        range: Interval,
+        method: TriangleMethod,
+    ) -> Option<PrimitiveHit> {
         let normal = self.normals[i];
         if normal == Vec3::ZERO {
             return None;
         }
         let [a, b, c] = self.triangle(i);
-        let hit = intersect_watertight(a, b, c, ray, range)?;
+        let hit = intersect_by(method, a, b, c, ray, range)?;
         Some(PrimitiveHit { t: hit.t, primitive: i, normal })
     }
 
@@ -199,13 +206,18 @@ impl Mesh {
     /// inside the mesh's bounding box: the reference the BVH is tested against.
     /// Ties keep the lower triangle index.
     pub fn intersect(&self, ray: &Ray, range: Interval) -> Option<PrimitiveHit> {
+        self.intersect_with(ray, range, TriangleMethod::Watertight)
+    }
+
+    /// [`Mesh::intersect`] with the chosen triangle test.
+    pub fn intersect_with(&self, ray: &Ray, range: Interval, method: TriangleMethod) -> Option<PrimitiveHit> {
         if !self.bounds.overlaps(ray, range) {
             return None;
         }
         let mut range = range;
         let mut closest = None;
         for i in 0..self.triangles.len() {
-            if let Some(hit) = self.intersect_triangle(i, ray, range) {
+            if let Some(hit) = self.intersect_triangle(i, ray, range, method) {
                 range.max = hit.t;
                 closest = Some(hit);
             }

@@ -5,6 +5,7 @@ use thiserror::Error;
 use crate::aabb::Aabb;
 use crate::hit::PrimitiveHit;
 use crate::mesh::Mesh;
+use crate::method::{BoxMethod, Methods, SphereMethod};
 use crate::plane::Plane;
 use crate::polygon::Polygon;
 use crate::ray::{Interval, Ray};
@@ -73,16 +74,28 @@ pub enum Primitive {
 }
 
 impl Primitive {
-    /// The nearest hit with `t` in `range`.
+    /// The nearest hit with `t` in `range`, by the default (careful) routines.
     #[inline]
     pub fn intersect(&self, ray: &Ray, range: Interval) -> Option<PrimitiveHit> {
+        self.intersect_with(ray, range, Methods::default())
+    }
+
+    /// The nearest hit with `t` in `range`, by the routines `methods` chooses.
+    #[inline]
+    pub fn intersect_with(&self, ray: &Ray, range: Interval, methods: Methods) -> Option<PrimitiveHit> {
         match self {
-            Self::Sphere(s) => s.intersect(ray, range),
+            Self::Sphere(s) => match methods.sphere {
+                SphereMethod::Careful => s.intersect(ray, range),
+                SphereMethod::Textbook => s.intersect_textbook(ray, range),
+            },
             Self::Plane(p) => p.intersect(ray, range),
-            Self::Aabb(b) => b.intersect(ray, range),
-            Self::Triangle(t) => t.intersect(ray, range),
+            Self::Aabb(b) => match methods.aabb {
+                BoxMethod::Slab => b.intersect(ray, range),
+                BoxMethod::SixPlane => b.intersect_six_plane(ray, range),
+            },
+            Self::Triangle(t) => t.intersect_with(ray, range, methods.triangle),
             Self::Polygon(p) => p.intersect(ray, range),
-            Self::Mesh(m) => m.intersect(ray, range),
+            Self::Mesh(m) => m.intersect_with(ray, range, methods.triangle),
         }
     }
 

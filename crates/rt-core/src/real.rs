@@ -87,6 +87,18 @@ pub fn to_f32(x: Real) -> f32 {
     x as f32
 }
 
+/// A geometric vector widened to f64 (exactly).
+#[allow(clippy::unnecessary_cast)] // `Real` is f64 with the `f64` feature.
+pub fn widen(v: Vec3) -> glam::DVec3 {
+    glam::DVec3::new(v.x as f64, v.y as f64, v.z as f64)
+}
+
+/// An f64 vector rounded to the nearest [`Vec3`].
+#[allow(clippy::unnecessary_cast)] // `Real` is f64 with the `f64` feature.
+pub fn narrow(v: glam::DVec3) -> Vec3 {
+    Vec3::new(v.x as Real, v.y as Real, v.z as Real)
+}
+
 /// `2ⁿ` for |n| ≤ 75, exactly (powers of two in that range are normal in f32).
 fn pow2_small(n: i32) -> Real {
     (2.0 as Real).powi(n)

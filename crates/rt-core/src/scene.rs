@@ -6,6 +6,7 @@ use crate::camera::Camera;
 use crate::effects::Lighting;
 use crate::hit::Hit;
 use crate::material::{Color, ColorSpace, Material};
+use crate::method::Methods;
 use crate::primitive::Primitive;
 use crate::ray::{Interval, Ray, rescale_t};
 use crate::real::{Real, cast_min_t, scale_pow2};
@@ -43,6 +44,8 @@ pub struct Scene {
     pub lighting: Lighting,
     /// How rendered colours are encoded into 8-bit pixels.
     pub color_space: ColorSpace,
+    /// The intersection routines (the careful ones by default).
+    pub methods: Methods,
     objects: Vec<Object>,
     bvh: Bvh,
 }
@@ -69,6 +72,7 @@ impl Scene {
             material_names,
             lighting: Lighting::default(),
             color_space: ColorSpace::default(),
+            methods: Methods::default(),
             objects,
             bvh,
         }
@@ -77,6 +81,11 @@ impl Scene {
     /// The same scene lit by `lighting`.
     pub fn with_lighting(self, lighting: Lighting) -> Self {
         Self { lighting, ..self }
+    }
+
+    /// The same scene traced with the intersection routines `methods`.
+    pub fn with_methods(self, methods: Methods) -> Self {
+        Self { methods, ..self }
     }
 
     /// Objects in file order: a hit's `object` indexes this list.
@@ -101,7 +110,7 @@ impl Scene {
 
     /// The BVH query on a ray already rescaled by `2ᵏ`, with `t` mapped back.
     fn closest_hit_rescaled(&self, unit: &Ray, range: Interval, k: i32) -> Option<Hit> {
-        let mut hit = self.bvh.closest_hit(&self.objects, unit, range)?;
+        let mut hit = self.bvh.closest_hit(&self.objects, unit, range, self.methods)?;
         hit.t = rescale_t(hit.t, k)?;
         Some(hit)
     }
@@ -112,7 +121,7 @@ impl Scene {
         let (unit, mut range, k) = rescaled_query(ray, range)?;
         let mut closest = None;
         for (index, object) in self.objects.iter().enumerate() {
-            if let Some(hit) = object.primitive.intersect(&unit, range) {
+            if let Some(hit) = object.primitive.intersect_with(&unit, range, self.methods) {
                 range.max = hit.t;
                 closest = Some(Hit::new(index, hit));
             }
@@ -125,7 +134,7 @@ impl Scene {
     /// Whether anything is hit with `t` in `range` (for shadow rays).
     pub fn any_hit(&self, ray: &Ray, range: Interval) -> bool {
         rescaled_query(ray, range)
-            .is_some_and(|(unit, range, _)| self.bvh.any_hit(&self.objects, &unit, range))
+            .is_some_and(|(unit, range, _)| self.bvh.any_hit(&self.objects, &unit, range, self.methods))
     }
 
     /// The nearest hit of a ray whose history is unknown (a `cast` query or a

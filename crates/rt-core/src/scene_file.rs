@@ -19,6 +19,7 @@ use crate::effects::{AmbientOcclusion, Lighting, MAX_DEPTH};
 use crate::light::{Light, LightKind};
 use crate::material::{Color, ColorSpace, Material};
 use crate::mesh::{Mesh, MeshError};
+use crate::method::Methods;
 use crate::plane::Plane;
 use crate::polygon::Polygon;
 use crate::primitive::{GeometryError, Primitive};
@@ -147,7 +148,8 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<Scene, Sce
         material_names,
         objects,
     )
-    .with_lighting(lighting);
+    .with_lighting(lighting)
+    .with_methods(desc.methods);
     scene.color_space = desc.color_space;
     Ok(scene)
 }
@@ -220,6 +222,8 @@ struct SceneDesc {
     ambient: ColorDesc,
     #[serde(default)]
     effects: EffectsDesc,
+    #[serde(default)]
+    methods: Methods,
 }
 
 /// The materials map, refusing a name defined twice (a plain map would keep
@@ -634,6 +638,7 @@ impl TryFrom<ObjectDesc> for ObjectEntry {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::method::{BoxMethod, SphereMethod, TriangleMethod};
 
     const GOOD: &str = r#"Scene(
     camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1),
@@ -664,6 +669,23 @@ mod tests {
         assert_eq!(s.objects().len(), 2);
         assert_eq!(s.objects()[0].material, 1);
         assert_eq!(s.camera.projection(), Projection::Perspective);
+    }
+
+    #[test]
+    fn intersection_methods_default_to_the_careful_ones_and_can_be_chosen() {
+        assert!(parse(GOOD).unwrap().methods.is_default());
+        let chosen = GOOD.replace("image:", "methods: (triangle: AreaRatio, box: SixPlane),\n    image:");
+        let methods = parse(&chosen).unwrap().methods;
+        assert_eq!(
+            methods,
+            Methods {
+                triangle: TriangleMethod::AreaRatio,
+                sphere: SphereMethod::Careful,
+                aabb: BoxMethod::SixPlane
+            }
+        );
+        let e = error_after("image:", "methods: (sphere: Exact),\n    image:");
+        assert!(e.starts_with("bad.ron:3:") && e.contains("Unexpected variant named `Exact`"), "{e}");
     }
 
     #[test]

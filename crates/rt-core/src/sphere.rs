@@ -124,6 +124,31 @@ impl Sphere {
             to_hit.try_normalize().unwrap_or_else(|| (ray.at(t) - self.center).normalize_or(Vec3::X));
         Some(PrimitiveHit { t, primitive: 0, normal })
     }
+
+    /// The textbook quadratic: with `f = o − c`, `t = (−b ± √(b² − 4ac)) / 2a`
+    /// for `a = d·d`, `b = 2 f·d`, `c = f·f − r²`; the nearer root in `range`,
+    /// normal `(o + t·d − c) / r`.
+    ///
+    /// Two cancellations make it fail where [`Sphere::intersect`] does not:
+    /// `c = f·f − r²` loses all of `r²` once `|f|² ≫ r²` (a small sphere far
+    /// away: in f32 a radius-1 sphere 10⁴ units off is missed or hit with a
+    /// wrong `t`), and `−b + √Δ` cancels for the root near the origin.
+    pub fn intersect_textbook(&self, ray: &Ray, range: Interval) -> Option<PrimitiveHit> {
+        let f = ray.origin - self.center;
+        let d = ray.dir;
+        let a = d.dot(d);
+        let b = 2.0 * f.dot(d);
+        let c = f.dot(f) - self.radius * self.radius;
+        let discriminant = b * b - 4.0 * a * c;
+        if discriminant.is_nan() || discriminant < 0.0 {
+            return None;
+        }
+        let root = discriminant.sqrt();
+        let (near, far) = ((-b - root) / (2.0 * a), (-b + root) / (2.0 * a));
+        let t = [near, far].into_iter().find(|&t| range.contains(t))?;
+        let normal = ((ray.at(t) - self.center) / self.radius).normalize_or(Vec3::X);
+        Some(PrimitiveHit { t, primitive: 0, normal })
+    }
 }
 
 #[cfg(test)]

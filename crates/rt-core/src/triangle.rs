@@ -1,7 +1,9 @@
-//! Triangles: barycentric coordinates and the watertight ray/triangle test.
+//! Triangles: barycentric coordinates and three ray/triangle tests: the
+//! watertight one (the default), Möller–Trumbore, and the course's area ratios.
 
 use crate::aabb::Aabb;
 use crate::hit::PrimitiveHit;
+use crate::method::TriangleMethod;
 use crate::primitive::GeometryError;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, difference_of_products, gamma, normalize_robust};
@@ -70,10 +72,15 @@ impl Triangle {
         triangle_surface_point(self.corners, self.normal, p)
     }
 
-    /// The hit with `t` in `range`, from either side.
+    /// The hit with `t` in `range`, from either side (watertight test).
     pub fn intersect(&self, ray: &Ray, range: Interval) -> Option<PrimitiveHit> {
+        self.intersect_with(ray, range, TriangleMethod::Watertight)
+    }
+
+    /// The hit with `t` in `range` by the chosen `method`.
+    pub fn intersect_with(&self, ray: &Ray, range: Interval, method: TriangleMethod) -> Option<PrimitiveHit> {
         let [a, b, c] = self.corners;
-        let hit = intersect_watertight(a, b, c, ray, range)?;
+        let hit = intersect_by(method, a, b, c, ray, range)?;
         Some(PrimitiveHit { t: hit.t, primitive: 0, normal: self.normal })
     }
 
@@ -167,6 +174,93 @@ pub fn intersect_watertight(a: Vec3, b: Vec3, c: Vec3, ray: &Ray, range: Interva
         return None;
     }
     Some(TriangleHit { t, barycentric: [e0 * inv_det, e1 * inv_det, e2 * inv_det] })
+}
+
+/// The ray/triangle test `method` on corners `a, b, c`.
+#[inline]
+pub fn intersect_by(
+    method: TriangleMethod,
+    a: Vec3,
+    b: Vec3,
+    c: Vec3,
+    ray: &Ray,
+    range: Interval,
+) -> Option<TriangleHit> {
+    match method {
+        TriangleMethod::Watertight => intersect_watertight(a, b, c, ray, range),
+        TriangleMethod::MollerTrumbore => intersect_moller_trumbore(a, b, c, ray, range),
+        TriangleMethod::AreaRatio => intersect_area_ratio(a, b, c, ray, range),
+    }
+}
+
+/// Möller and Trumbore, "Fast, Minimum Storage Ray/Triangle Intersection",
+/// *JGT* 2(1), 1997. With `e₁ = b − a`, `e₂ = c − a`, `s = o − a`,
+/// `p = d × e₂`, `q = s × e₁` and `det = e₁·p`: `u = s·p/det`,
+/// `v = d·q/det`, `t = e₂·q/det`; a hit when `u ≥ 0`, `v ≥ 0`, `u + v ≤ 1`.
+///
+/// Only `det = 0` is rejected (the paper's `|det| < 10⁻⁶` would also reject
+/// small or distant triangles). Each triangle computes its own `u` and `v`
+/// from its own edge vectors, so the two triangles sharing an edge round
+/// differently there: a ray through the edge can miss both (a leak).
+pub fn intersect_moller_trumbore(
+    a: Vec3,
+    b: Vec3,
+    c: Vec3,
+    ray: &Ray,
+    range: Interval,
+) -> Option<TriangleHit> {
+    let (e1, e2) = (b - a, c - a);
+    let p = ray.dir.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    let s = ray.origin - a;
+    let u = s.dot(p) * inv_det;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = s.cross(e1);
+    let v = ray.dir.dot(q) * inv_det;
+    if !(v >= 0.0 && u + v <= 1.0) {
+        return None;
+    }
+    let t = e2.dot(q) * inv_det;
+    range.contains(t).then_some(TriangleHit { t, barycentric: [1.0 - u - v, u, v] })
+}
+
+/// The area-ratio test's tolerance: a point counts as inside when the three
+/// sub-triangle areas sum to at most `(1 + ε)` times the triangle's area.
+/// Just outside an edge the excess is about twice the point's distance from
+/// the edge over the triangle's height there, so points up to `ε/2` heights
+/// outside are (wrongly) hit.
+pub const AREA_RATIO_EPSILON: Real = 1e-4;
+
+/// The course's test: intersect the triangle's plane `n·p = n·a` (with
+/// `n = (b−a)×(c−a)`) at `t = n·(a − o) / n·d`, form `p = o + t·d`, and take
+/// the unsigned area ratios `w_a = |(b−p)×(c−p)| / |n|` (and cyclically); `p`
+/// is inside when `w_a + w_b + w_c ≤ 1 + ε` ([`AREA_RATIO_EPSILON`]).
+///
+/// Its accuracy is that of `p`, whose rounding error grows with the distance
+/// travelled and the coordinates' magnitude, and of the cross products of
+/// vectors from `p`, which cancel when `p` lies near a corner.
+pub fn intersect_area_ratio(a: Vec3, b: Vec3, c: Vec3, ray: &Ray, range: Interval) -> Option<TriangleHit> {
+    let n = (b - a).cross(c - a);
+    let denom = n.dot(ray.dir);
+    if denom == 0.0 {
+        return None;
+    }
+    let t = n.dot(a - ray.origin) / denom;
+    if !range.contains(t) {
+        return None;
+    }
+    let p = ray.at(t);
+    let area = n.length();
+    let wa = (b - p).cross(c - p).length() / area;
+    let wb = (c - p).cross(a - p).length() / area;
+    let wc = (a - p).cross(b - p).length() / area;
+    (wa + wb + wc <= 1.0 + AREA_RATIO_EPSILON).then_some(TriangleHit { t, barycentric: [wa, wb, wc] })
 }
 
 #[cfg(test)]

@@ -63,6 +63,39 @@ pub enum Command {
     /// bench.csv to --out, so `bench/embree_primary.py` can cast the same
     /// rays with Embree.
     Bench(BenchArgs),
+    /// Measure what each step of accuracy costs in time: samples per pixel,
+    /// recursion depth and intersection methods on rendered scenes (error
+    /// against a converged reference), and every intersection method on fixed
+    /// ray sets of hard cases (wrong hits or misses, error of t, ns per ray).
+    ///
+    /// Writes accuracy.csv, accuracy.md (tables) and accuracy.png (error
+    /// against time) to --out. With --with-f64, an f64 build's geometry rows
+    /// are measured in the same run.
+    Accuracy(AccuracyArgs),
+}
+
+/// `rt-view accuracy`.
+#[derive(Debug, Args)]
+pub struct AccuracyArgs {
+    /// Folder for accuracy.csv, accuracy.md and accuracy.png.
+    #[arg(long, default_value = "accuracy-out")]
+    pub out: PathBuf,
+    /// Timed runs per measurement; the median is reported.
+    #[arg(long, default_value_t = 3)]
+    pub runs: usize,
+    /// Smaller images and fewer samples (a quick run).
+    #[arg(long)]
+    pub quick: bool,
+    /// An rt-view built with `--features f64`, whose geometry rows are added.
+    #[arg(long, value_name = "RT_VIEW_F64")]
+    pub with_f64: Option<PathBuf>,
+    /// Only the geometry part, written as accuracy-f32.csv or accuracy-f64.csv
+    /// (what --with-f64 runs in the other build).
+    #[arg(long)]
+    pub geometry_only: bool,
+    /// Folder of the measured scene files.
+    #[arg(long, default_value = "scenes")]
+    pub scenes: PathBuf,
 }
 
 /// `rt-view bench`.
@@ -135,6 +168,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Render(args)) => crate::render_cmd::run(&args),
         Some(Command::Cast(args)) => crate::cast_cmd::run(&args),
         Some(Command::Bench(args)) => crate::bench_cmd::run(&args),
+        Some(Command::Accuracy(args)) => crate::accuracy_cmd::run(&args),
         None => {
             crate::viewer::run(crate::viewer::ViewerOptions { scene: cli.scene, screenshot: cli.screenshot })
         }
