@@ -53,46 +53,9 @@ fn dot(a: V, b: V) -> f64 {
 
 /// Icosahedron on the unit sphere, each triangle split into four `levels` times.
 fn icosphere(levels: u32) -> (Vec<V>, Vec<Vec<usize>>) {
-    let p = (1.0 + 5f64.sqrt()) / 2.0;
-    let mut verts: Vec<V> = [
-        [-1.0, p, 0.0],
-        [1.0, p, 0.0],
-        [-1.0, -p, 0.0],
-        [1.0, -p, 0.0],
-        [0.0, -1.0, p],
-        [0.0, 1.0, p],
-        [0.0, -1.0, -p],
-        [0.0, 1.0, -p],
-        [p, 0.0, -1.0],
-        [p, 0.0, 1.0],
-        [-p, 0.0, -1.0],
-        [-p, 0.0, 1.0],
-    ]
-    .into_iter()
-    .map(normalize)
-    .collect();
-    let mut faces: Vec<[usize; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
+    let (corners, faces) = rt_core::mesh::icosahedron();
+    let mut verts: Vec<V> = corners.into_iter().map(normalize).collect();
+    let mut faces: Vec<[usize; 3]> = faces.iter().map(|f| f.map(|i| i as usize)).collect();
     for _ in 0..levels {
         let mut midpoints: HashMap<(usize, usize), usize> = HashMap::new();
         let mut mid = |a: usize, b: usize, verts: &mut Vec<V>| {

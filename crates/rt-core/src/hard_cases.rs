@@ -16,11 +16,11 @@ use std::f64::consts::PI;
 use glam::DVec3;
 
 use crate::aabb::Aabb;
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, icosahedron};
 use crate::method::Methods;
 use crate::primitive::Primitive;
 use crate::ray::{Interval, Ray};
-use crate::real::{Real, narrow, widen};
+use crate::real::{Real, narrow, to_f64, widen};
 use crate::sampler::SampleRng;
 use crate::sphere::Sphere;
 use crate::triangle::Triangle;
@@ -106,7 +106,7 @@ impl HardCase {
                 (Expect::Hit(t_ref), Some(h)) if h.t.is_finite() => {
                     let (o, d) = (widen(q.ray.origin), widen(q.ray.dir).length());
                     let scale = o.abs().max_element().max(1.0).max(t_ref * d);
-                    let error = (widen_t(h.t) - t_ref).abs() * d / scale;
+                    let error = (to_f64(h.t) - t_ref).abs() * d / scale;
                     score.max_t_error = score.max_t_error.max(error);
                 }
                 (Expect::Miss, None) | (Expect::Either, _) => {}
@@ -147,15 +147,9 @@ pub fn all_cases() -> Vec<HardCase> {
 }
 
 /// Two uniform numbers in [0, 1) for ray `i` of case `case`.
-#[allow(clippy::unnecessary_cast)] // `Real` is f64 with the `f64` feature.
 fn uniform(case: u32, i: u32, draw: u32) -> (f64, f64) {
     let (u, v) = SampleRng::new(case, i, draw).next_pair();
-    (u as f64, v as f64)
-}
-
-#[allow(clippy::unnecessary_cast)] // `Real` is f64 with the `f64` feature.
-fn widen_t(t: Real) -> f64 {
-    t as f64
+    (to_f64(u), to_f64(v))
 }
 
 /// A uniformly distributed unit vector.
@@ -177,7 +171,7 @@ fn ray_towards(origin: DVec3, target: DVec3) -> Ray {
 /// on the (already rounded) inputs; the nearest root with `t > 0`.
 fn reference_sphere(ray: &Ray, sphere: &Sphere) -> Expect {
     let (o, d, c) = (widen(ray.origin), widen(ray.dir), widen(sphere.center()));
-    let r = widen_t(sphere.radius());
+    let r = to_f64(sphere.radius());
     let f = o - c;
     let a = d.dot(d);
     let b = -f.dot(d);
@@ -254,50 +248,6 @@ fn sphere_from_inside(case: u32) -> HardCase {
     }
 }
 
-/// The regular icosahedron's corners (on a sphere of radius √(1 + φ²)) and
-/// its 20 faces, each wound so that `(b−a)×(c−a)` points outward.
-fn icosahedron() -> ([DVec3; 12], [[u32; 3]; 20]) {
-    let p = (1.0 + 5f64.sqrt()) / 2.0;
-    let corners = [
-        [-1.0, p, 0.0],
-        [1.0, p, 0.0],
-        [-1.0, -p, 0.0],
-        [1.0, -p, 0.0],
-        [0.0, -1.0, p],
-        [0.0, 1.0, p],
-        [0.0, -1.0, -p],
-        [0.0, 1.0, -p],
-        [p, 0.0, -1.0],
-        [p, 0.0, 1.0],
-        [-p, 0.0, -1.0],
-        [-p, 0.0, 1.0],
-    ]
-    .map(DVec3::from_array);
-    let faces = [
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    (corners, faces)
-}
-
 /// An icosahedron of circumradius 2 around `centre`, hit from its centre:
 /// a third of the rays aimed at its corners, a third at random points of its
 /// edges, a third in random directions. Every ray must hit (a miss is a
@@ -305,6 +255,7 @@ fn icosahedron() -> ([DVec3; 12], [[u32; 3]; 20]) {
 /// `min (n·(a − o)) / (n·d)` over the faces with `n·d > 0`, in f64.
 fn closed_mesh_from_inside(name: &'static str, centre: DVec3, case: u32) -> HardCase {
     let (corners, faces) = icosahedron();
+    let corners = corners.map(DVec3::from_array);
     let scale = 2.0 / corners[0].length();
     let positions: Vec<_> = corners.iter().map(|&c| narrow(centre + c * scale)).collect();
     let mesh = Mesh::new(positions.clone(), faces.to_vec()).expect("valid mesh");

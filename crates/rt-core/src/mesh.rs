@@ -226,6 +226,52 @@ impl Mesh {
     }
 }
 
+/// The regular icosahedron centred at the origin: its 12 corners, the cyclic
+/// permutations of `(0, ±1, ±φ)` with φ the golden ratio (circumradius
+/// √(1 + φ²)), and its 20 faces as corner indices, each wound so that
+/// `(b−a)×(c−a)` points outward. The seed of the icosphere of
+/// `examples/gen_meshes.rs` and a closed mesh of [`crate::hard_cases`].
+pub fn icosahedron() -> ([[f64; 3]; 12], [[u32; 3]; 20]) {
+    let p = (1.0 + 5f64.sqrt()) / 2.0;
+    let corners = [
+        [-1.0, p, 0.0],
+        [1.0, p, 0.0],
+        [-1.0, -p, 0.0],
+        [1.0, -p, 0.0],
+        [0.0, -1.0, p],
+        [0.0, 1.0, p],
+        [0.0, -1.0, -p],
+        [0.0, 1.0, -p],
+        [p, 0.0, -1.0],
+        [p, 0.0, 1.0],
+        [-p, 0.0, -1.0],
+        [-p, 0.0, 1.0],
+    ];
+    let faces = [
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    (corners, faces)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -343,6 +389,19 @@ mod tests {
                         assert!(hit.normal.dot(dir) > 0.0);
                     }
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn icosahedron_has_equal_edges_and_faces_wound_outward() {
+        let (corners, faces) = icosahedron();
+        let at = |i: u32| glam::DVec3::from_array(corners[i as usize]);
+        for [a, b, c] in faces {
+            let (a, b, c) = (at(a), at(b), at(c));
+            assert!((b - a).cross(c - a).dot(a) > 0.0, "face {a} {b} {c} is wound inward");
+            for edge in [b - a, c - b, a - c] {
+                assert!((edge.length() - 2.0).abs() < 1e-12, "edge {edge}");
             }
         }
     }

@@ -87,10 +87,16 @@ pub fn to_f32(x: Real) -> f32 {
     x as f32
 }
 
-/// A geometric vector widened to f64 (exactly).
+/// A geometric scalar widened to f64 (exactly).
 #[allow(clippy::unnecessary_cast)] // `Real` is f64 with the `f64` feature.
+#[inline]
+pub fn to_f64(x: Real) -> f64 {
+    x as f64
+}
+
+/// A geometric vector widened to f64 (exactly).
 pub fn widen(v: Vec3) -> glam::DVec3 {
-    glam::DVec3::new(v.x as f64, v.y as f64, v.z as f64)
+    glam::DVec3::new(to_f64(v.x), to_f64(v.y), to_f64(v.z))
 }
 
 /// An f64 vector rounded to the nearest [`Vec3`].

@@ -26,6 +26,7 @@ use rt_core::hard_cases::{CaseKind, all_cases};
 use rt_core::method::{BoxMethod, Methods, SphereMethod, TriangleMethod};
 use rt_core::{Renderer, Scene, load_scene};
 
+use crate::bench_cmd::median;
 use crate::cli::AccuracyArgs;
 
 /// The geometry's precision in this build.
@@ -288,12 +289,14 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         } else {
             size
         };
-        let reference = render(&scene, sweep.reference, size, 1)?;
+        let mut renders = Vec::new();
+        for &setting in &sweep.settings {
+            renders.push((setting, render(&scene, setting, size, runs)?));
+        }
         // The reference too (its error is 0 by definition), timed once: it is the slowest.
-        for setting in sweep.settings.iter().chain([&sweep.reference]) {
-            let is_reference = std::ptr::eq(setting, &sweep.reference);
-            let (image, time) =
-                if is_reference { reference.clone() } else { render(&scene, *setting, size, runs)? };
+        let reference = render(&scene, sweep.reference, size, 1)?;
+        renders.push((sweep.reference, reference.clone()));
+        for (setting, (image, time)) in renders {
             let (rmse, max_error) = image_error(&image.0, &reference.0.0);
             rows.push(Row {
                 precision: PRECISION.into(),
@@ -352,15 +355,15 @@ fn image_error(image: &[[u8; 3]], reference: &[[u8; 3]]) -> (f64, f64) {
 
 /// The median wall time of `runs` calls of `f`.
 fn median_time(runs: usize, mut f: impl FnMut()) -> Duration {
-    let mut times: Vec<Duration> = (0..runs.max(1))
-        .map(|_| {
-            let start = Instant::now();
-            f();
-            start.elapsed()
-        })
-        .collect();
-    times.sort();
-    times[times.len() / 2]
+    median(
+        (0..runs.max(1))
+            .map(|_| {
+                let start = Instant::now();
+                f();
+                start.elapsed()
+            })
+            .collect(),
+    )
 }
 
 /// The README's tables: images, then geometry (one line per case and method,
@@ -423,9 +426,8 @@ fn plot(path: &Path, rows: &[Row]) -> anyhow::Result<()> {
         plot_geometry(&right, rows)?;
         root.present()?;
     }
-    let image = image::RgbImage::from_raw(width, height, buffer).context("plot buffer")?;
-    let pending = crate::image_out::PendingImage::png(path)?;
-    pending.write_rgb8(width, height, &image.pixels().map(|p| p.0).collect::<Vec<_>>())
+    let pixels: Vec<[u8; 3]> = buffer.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
+    crate::image_out::PendingImage::png(path)?.write_rgb8(width, height, &pixels)
 }
 
 /// Registers the font the plot's text uses (egui's Ubuntu Light, already

@@ -269,7 +269,8 @@ fn write_camera(path: &Path, c: &Camera) -> anyhow::Result<()> {
     std::fs::write(path, json).with_context(|| format!("cannot write {}", path.display()))
 }
 
-fn median(mut times: Vec<Duration>) -> Duration {
+/// The median of `times` (the upper one of the middle two for an even count).
+pub(crate) fn median(mut times: Vec<Duration>) -> Duration {
     times.sort();
     times[times.len() / 2]
 }
