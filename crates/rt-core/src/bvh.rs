@@ -3,14 +3,19 @@
 //! Mesh triangles are flattened into it one by one; planes, which have no
 //! bounds, are kept aside and tested directly. The tree is built once per
 //! scene load with the binned surface-area heuristic (Wald, "On fast
-//! Construction of SAH-based Bounding Volume Hierarchies", 2007) and stored
-//! as 32-byte nodes (with f32 geometry) whose two children are adjacent.
-//! Traversal visits the nearer child first and skips subtrees that start
-//! beyond the closest hit so far.
+//! Construction of SAH-based Bounding Volume Hierarchies", 2007) as a binary
+//! tree, then collapsed into a 4-wide one (each node holds the boxes of up to
+//! four children, as Embree's BVH4 does; Wald, Benthin and Boulos, "Getting
+//! Rid of Packets", 2008): one node visit tests four boxes with the same
+//! instructions, which the compiler turns into 4-lane SIMD. Leaves store
+//! their triangles' corners inline, in tree order, so a leaf's triangles sit
+//! together in memory.
 //!
-//! Results equal the brute-force loop over all objects bit for bit: the same
-//! primitive functions compute each `t`, and exact ties go to the lower
-//! (object, primitive) index, as the in-order loop gives them.
+//! Traversal visits the children a ray enters nearest first and skips
+//! subtrees that start beyond the closest hit so far. Results equal the
+//! brute-force loop over all objects bit for bit: the same primitive
+//! functions compute each `t` from the same corners, and exact ties go to the
+//! lower (object, primitive) index, as the in-order loop gives them.
 
 use std::time::{Duration, Instant};
 
@@ -21,35 +26,50 @@ use crate::primitive::Primitive;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, gamma};
 use crate::scene::Object;
+use crate::triangle::{TriangleRay, intersect_by};
 
-/// Leaves hold at most this many primitives unless their centroids coincide.
+/// Leaves hold at most this many primitives.
 const MAX_LEAF: usize = 4;
 /// SAH bins per split.
 const BINS: usize = 16;
 /// Below this depth the SAH chooses splits; from here on, splits are at the
-/// median, so the depth stays under [`STACK`].
+/// median, so the depth stays under SAH_DEPTH plus log₂ of the primitive count.
 const SAH_DEPTH: usize = 64;
-/// Traversal stack size: SAH_DEPTH plus log₂ of the largest primitive count.
-const STACK: usize = 128;
+/// Traversal stack entries kept on the machine stack: enough for trees up
+/// to 21 levels deep (4²¹ leaves).
+const INLINE_STACK: usize = 64;
+/// Children per node.
+const WIDTH: usize = 4;
 /// Cost of visiting a node relative to testing one primitive.
 const TRAVERSAL_COST: Real = 1.0;
 
-/// One bounded piece of a scene: an object, and the triangle inside it for
-/// meshes (0 otherwise).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct PrimRef {
-    object: u32,
-    primitive: u32,
+/// One bounded primitive in a leaf: a mesh triangle with its corners copied
+/// in (so testing it reads nothing else), or a whole object.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Leaf {
+    /// Triangle `index` of the mesh `object`, corners a, b, c.
+    Triangle { corners: [Vec3; 3], object: u32, index: u32 },
+    /// Any other bounded primitive.
+    Object { object: u32 },
 }
 
-/// A node: its bounds, and either two adjacent children at `offset` and
-/// `offset + 1` (`count == 0`) or `count` primitives at `refs[offset..]`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Node {
-    min: Vec3,
-    offset: u32,
-    max: Vec3,
+/// A child slot of a [`Node`]: an inner node (`count == 0`), or a leaf of
+/// `count` primitives at `leaves[index..]`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Child {
+    index: u32,
     count: u32,
+}
+
+/// A 4-wide node: the boxes of its children, stored axis by axis
+/// (`min[axis][slot]`) so that one slab test covers all four. Unused slots
+/// have the empty box (min = +∞, max = −∞), which no ray enters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+struct Node {
+    min: [[Real; WIDTH]; 3],
+    max: [[Real; WIDTH]; 3],
+    children: [Child; WIDTH],
 }
 
 /// What a build produced, for `--stats` and benchmarks.
@@ -60,28 +80,44 @@ pub struct BvhStats {
     pub primitives: usize,
     /// Nodes in the tree.
     pub nodes: usize,
-    /// Bytes of nodes and primitive references.
+    /// Nodes on the longest path from the root to a leaf.
+    pub depth: usize,
+    /// Bytes of nodes and leaf primitives.
     pub bytes: usize,
     /// Wall time of the build.
     pub build_time: Duration,
 }
 
-/// The hierarchy over a scene's objects (it stores indices, not geometry).
+/// The hierarchy over a scene's objects (it stores triangle corners and
+/// indices; every other primitive is looked up in the scene).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bvh {
     nodes: Vec<Node>,
-    refs: Vec<PrimRef>,
+    leaves: Vec<Leaf>,
+    /// Nodes on the longest path from the root to a leaf.
+    depth: usize,
     /// Objects without bounds (planes), tested on every query.
     unbounded: Vec<u32>,
     stats: BvhStats,
 }
 
-/// A primitive during the build.
+/// A primitive during the build: object `object`, and the triangle `index`
+/// inside it for meshes.
 #[derive(Clone, Copy)]
 struct Item {
     bounds: Aabb,
     centroid: Vec3,
-    r: PrimRef,
+    object: u32,
+    index: u32,
+}
+
+/// A node of the binary tree the build makes first: two adjacent children at
+/// `offset` and `offset + 1` (`count == 0`), or `count` items at `offset`.
+#[derive(Clone, Copy)]
+struct BinaryNode {
+    bounds: Aabb,
+    offset: u32,
+    count: u32,
 }
 
 impl Bvh {
@@ -91,108 +127,60 @@ impl Bvh {
         let mut items = Vec::new();
         let mut unbounded = Vec::new();
         for (o, object) in objects.iter().enumerate() {
-            match &object.primitive {
+            let (primitive, object) = (&object.primitive, o as u32);
+            match primitive {
                 Primitive::Mesh(mesh) => {
                     for i in 0..mesh.triangle_count() {
                         if mesh.normal(i) != Vec3::ZERO {
                             let bounds = Aabb::from_points(mesh.triangle(i)).expect("three corners");
-                            items.push(Item::new(bounds, o, i));
+                            items.push(Item::new(bounds, object, i as u32));
                         }
                     }
                 }
                 p => match p.bounds() {
-                    Some(bounds) => items.push(Item::new(bounds, o, 0)),
-                    None => unbounded.push(o as u32),
+                    Some(bounds) => items.push(Item::new(bounds, object, 0)),
+                    None => unbounded.push(object),
                 },
             }
         }
-        let mut bvh = Self { nodes: Vec::new(), refs: Vec::new(), unbounded, stats: BvhStats::default() };
+        let mut nodes = Vec::new();
+        let mut depth = 0;
         if !items.is_empty() {
-            bvh.nodes.push(Node::PLACEHOLDER);
-            bvh.build_node(&mut items, 0, 0, 0);
+            let mut binary = vec![BinaryNode::placeholder()];
+            build_binary(&mut binary, &mut items, 0, 0, 0);
+            let root;
+            (root, depth) = child_of(&binary, 0, &mut nodes);
+            if root.count > 0 {
+                // The whole tree is one leaf: a root node with it as its only child.
+                let mut node = Node::EMPTY;
+                node.set(0, binary[0].bounds, root);
+                nodes.push(node);
+                depth = 1;
+            }
         }
-        bvh.refs = items.iter().map(|i| i.r).collect();
-        bvh.stats = BvhStats {
-            primitives: items.len(),
-            nodes: bvh.nodes.len(),
-            bytes: bvh.nodes.len() * size_of::<Node>() + bvh.refs.len() * size_of::<PrimRef>(),
+        let leaves: Vec<Leaf> = items
+            .iter()
+            .map(|&Item { object, index, .. }| match object_primitive(objects, object) {
+                Primitive::Mesh(mesh) => {
+                    Leaf::Triangle { corners: mesh.triangle(index as usize), object, index }
+                }
+                _ => Leaf::Object { object },
+            })
+            .collect();
+        drop(items);
+        let stats = BvhStats {
+            primitives: leaves.len(),
+            nodes: nodes.len(),
+            depth,
+            bytes: nodes.len() * size_of::<Node>() + leaves.len() * size_of::<Leaf>(),
             build_time: start.elapsed(),
         };
-        bvh
+        Self { nodes, leaves, depth, unbounded, stats }
     }
 
     /// Statistics of the build.
     pub fn stats(&self) -> BvhStats {
         self.stats
-    }
-
-    /// Splits node `node`, which holds `items` (starting at `first` in the
-    /// final order), by the binned SAH, or leaves it a leaf.
-    fn build_node(&mut self, items: &mut [Item], node: usize, first: usize, depth: usize) {
-        let n = items.len();
-        self.nodes[node] = Node::leaf(items, first);
-        if n <= 1 {
-            return;
-        }
-        let centroids = Aabb::from_points(items.iter().map(|i| i.centroid)).expect("non-empty");
-        let axis = centroids.size().max_position();
-        let (lo, extent) = (centroids.min()[axis], centroids.size()[axis]);
-        let mid = if extent <= 0.0 || depth >= SAH_DEPTH {
-            // Coincident centroids, or deep enough: a leaf if small, else the median.
-            if n <= MAX_LEAF && extent <= 0.0 {
-                return;
-            }
-            items.sort_unstable_by(|a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
-            n / 2
-        } else {
-            let bin_of = |c: Vec3| (((c[axis] - lo) / extent * BINS as Real) as usize).min(BINS - 1);
-            let mut bins = [(None::<Aabb>, 0usize); BINS];
-            for item in items.iter() {
-                let b = &mut bins[bin_of(item.centroid)];
-                b.0 = Some(b.0.map_or(item.bounds, |x| x.union(item.bounds)));
-                b.1 += 1;
-            }
-            // Sweep from the right for the right-hand areas, then from the left.
-            let mut right_area = [0.0 as Real; BINS];
-            let (mut acc, mut count) = (None::<Aabb>, 0);
-            let mut right_count = [0usize; BINS];
-            for k in (1..BINS).rev() {
-                acc = union_opt(acc, bins[k].0);
-                count += bins[k].1;
-                right_area[k] = acc.map_or(0.0, |b| b.surface_area());
-                right_count[k] = count;
-            }
-            let (mut best, mut best_cost) = (0, Real::INFINITY);
-            let (mut acc, mut count) = (None::<Aabb>, 0);
-            for k in 1..BINS {
-                acc = union_opt(acc, bins[k - 1].0);
-                count += bins[k - 1].1;
-                let cost = count as Real * acc.map_or(0.0, |b| b.surface_area())
-                    + right_count[k] as Real * right_area[k];
-                if cost < best_cost && count > 0 && right_count[k] > 0 {
-                    (best, best_cost) = (k, cost);
-                }
-            }
-            let area = self.nodes[node].bounds().surface_area();
-            let split_cost = TRAVERSAL_COST + best_cost / area.max(Real::MIN_POSITIVE);
-            if best == 0 || (n <= MAX_LEAF && split_cost >= n as Real) {
-                if n <= MAX_LEAF {
-                    return;
-                }
-                items.sort_unstable_by(|a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
-                n / 2
-            } else {
-                partition(items, |i| bin_of(i.centroid) < best)
-            }
-        };
-        let children = self.nodes.len();
-        // Filled in by the recursive calls below, which compute their bounds.
-        self.nodes.push(Node::PLACEHOLDER);
-        self.nodes.push(Node::PLACEHOLDER);
-        self.nodes[node] = Node { count: 0, offset: children as u32, ..self.nodes[node] };
-        let (left, right) = items.split_at_mut(mid);
-        self.build_node(left, children, first, depth + 1);
-        self.build_node(right, children + 1, first + mid, depth + 1);
     }
 
     /// The closest hit with `t` in `range`, exactly as the in-order loop over
@@ -205,12 +193,12 @@ impl Bvh {
         methods: Methods,
     ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
-        let consider = |r: PrimRef, best: &mut Option<Hit>| {
+        let prepared = TriangleRay::new(ray);
+        let consider = |leaf: &Leaf, best: &mut Option<Hit>| {
             // Accept t equal to the best so far, so that ties can go to the lower index.
             let max = best.map_or(range.max, |b| b.t.next_up());
-            let hit = intersect_ref(objects, r, ray, Interval::new(range.min, max), methods);
-            if let Some(h) = hit {
-                let h = Hit::new(r.object as usize, h);
+            if let Some(h) = intersect_leaf(objects, leaf, &prepared, Interval::new(range.min, max), methods)
+            {
                 let better = best.is_none_or(|b| {
                     h.t < b.t || (h.t == b.t && (h.object, h.primitive) < (b.object, b.primitive))
                 });
@@ -219,15 +207,15 @@ impl Bvh {
                 }
             }
         };
-        for &o in &self.unbounded {
-            consider(PrimRef { object: o, primitive: 0 }, &mut best);
+        for &object in &self.unbounded {
+            consider(&Leaf::Object { object }, &mut best);
         }
         // Boxes entering beyond the best hit so far cannot improve on it (one
         // entering exactly there can still win a tie, and is visited).
         let t_max = best.map_or(range.max, |b| b.t);
-        self.traverse(ray, Interval::new(range.min, t_max), |refs| {
-            for &r in refs {
-                consider(r, &mut best);
+        self.traverse(ray, Interval::new(range.min, t_max), |leaves| {
+            for leaf in leaves {
+                consider(leaf, &mut best);
             }
             best.map(|b| b.t)
         });
@@ -237,62 +225,83 @@ impl Bvh {
     /// Whether anything is hit with `t` in `range` (shadow rays): stops at
     /// the first hit found.
     pub fn any_hit(&self, objects: &[Object], ray: &Ray, range: Interval, methods: Methods) -> bool {
-        let hits = |r: PrimRef| intersect_ref(objects, r, ray, range, methods).is_some();
-        if self.unbounded.iter().any(|&o| hits(PrimRef { object: o, primitive: 0 })) {
+        let prepared = TriangleRay::new(ray);
+        let hits = |leaf: &Leaf| intersect_leaf(objects, leaf, &prepared, range, methods).is_some();
+        if self.unbounded.iter().any(|&object| hits(&Leaf::Object { object })) {
             return true;
         }
         let mut found = false;
-        self.traverse(ray, range, |refs| {
-            found = refs.iter().any(|&r| hits(r));
+        self.traverse(ray, range, |leaves| {
+            found = leaves.iter().any(hits);
             // −∞ as the new limit: no box can be entered before it, so the traversal ends.
             found.then_some(Real::NEG_INFINITY)
         });
         found
     }
 
-    /// Visits the leaves whose boxes the ray enters within `range`, nearer
-    /// child first. `leaf` tests a leaf's primitives and returns the `t` of
-    /// the closest hit so far, which prunes boxes that start beyond it.
-    fn traverse(&self, ray: &Ray, range: Interval, mut leaf: impl FnMut(&[PrimRef]) -> Option<Real>) {
+    /// Visits the leaves whose boxes the ray enters within `range`, nearest
+    /// first. `leaf` tests a leaf's primitives and returns the `t` of the
+    /// closest hit so far, which prunes boxes that start beyond it.
+    fn traverse(&self, ray: &Ray, range: Interval, leaf: impl FnMut(&[Leaf]) -> Option<Real>) {
         if self.nodes.is_empty() {
             return;
         }
+        // Each node on the path down pushes at most three children. The
+        // stack is on the machine stack unless the tree is unusually deep
+        // (clearing a bigger array would cost more than a whole ray).
+        let needed = (WIDTH - 1) * self.depth;
+        if needed <= INLINE_STACK {
+            self.traverse_with(&mut [(Child::default(), 0.0); INLINE_STACK], ray, range, leaf);
+        } else {
+            self.traverse_with(&mut vec![(Child::default(), 0.0); needed], ray, range, leaf);
+        }
+    }
+
+    /// [`Bvh::traverse`] with `stack` for the children still to visit, with
+    /// the t where the ray enters them.
+    fn traverse_with(
+        &self,
+        stack: &mut [(Child, Real)],
+        ray: &Ray,
+        range: Interval,
+        mut leaf: impl FnMut(&[Leaf]) -> Option<Real>,
+    ) {
         let slabs = Slabs::new(ray);
         let mut t_max = range.max;
-        let mut stack = [0u32; STACK];
         let mut sp = 0;
-        let mut node = 0usize;
-        if slabs.entry(&self.nodes[0], range.min, t_max).is_none() {
-            return;
-        }
+        let mut current = Child { index: 0, count: 0 };
         loop {
-            let n = &self.nodes[node];
-            if n.count > 0 {
-                let refs = &self.refs[n.offset as usize..(n.offset + n.count) as usize];
-                if let Some(t) = leaf(refs) {
-                    t_max = t_max.min(t);
+            if current.count == 0 {
+                let node = &self.nodes[current.index as usize];
+                let (near, entered) = slabs.entries(node, range.min, t_max);
+                // The entered children, sorted by entry t (at most four: insertion sort).
+                let mut hit = [(Child::default(), 0.0 as Real); WIDTH];
+                let (mut k, mut entered) = (0, entered);
+                while entered != 0 {
+                    let slot = entered.trailing_zeros() as usize;
+                    entered &= entered - 1;
+                    let entry = (node.children[slot], near[slot]);
+                    let mut j = k;
+                    while j > 0 && hit[j - 1].1 > entry.1 {
+                        hit[j] = hit[j - 1];
+                        j -= 1;
+                    }
+                    hit[j] = entry;
+                    k += 1;
+                }
+                if k > 0 {
+                    // Farther ones on the stack, farthest deepest; go on with the nearest.
+                    for &entry in hit[1..k].iter().rev() {
+                        stack[sp] = entry;
+                        sp += 1;
+                    }
+                    current = hit[0].0;
+                    continue;
                 }
             } else {
-                let (a, b) = (n.offset as usize, n.offset as usize + 1);
-                let ta = slabs.entry(&self.nodes[a], range.min, t_max);
-                let tb = slabs.entry(&self.nodes[b], range.min, t_max);
-                match (ta, tb) {
-                    (Some(ta), Some(tb)) => {
-                        let (near, far) = if ta <= tb { (a, b) } else { (b, a) };
-                        stack[sp] = far as u32;
-                        sp += 1;
-                        node = near;
-                        continue;
-                    }
-                    (Some(_), None) => {
-                        node = a;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        node = b;
-                        continue;
-                    }
-                    (None, None) => {}
+                let first = current.index as usize;
+                if let Some(t) = leaf(&self.leaves[first..first + current.count as usize]) {
+                    t_max = t_max.min(t);
                 }
             }
             // Pop the next subtree that can still hold a hit no later than t_max.
@@ -301,8 +310,8 @@ impl Bvh {
                     return;
                 }
                 sp -= 1;
-                node = stack[sp] as usize;
-                if slabs.entry(&self.nodes[node], range.min, t_max).is_some() {
+                if stack[sp].1 <= t_max {
+                    current = stack[sp].0;
                     break;
                 }
             }
@@ -310,90 +319,223 @@ impl Bvh {
     }
 }
 
+/// The primitive of object `o`.
+fn object_primitive(objects: &[Object], o: u32) -> &Primitive {
+    &objects[o as usize].primitive
+}
+
+/// Splits binary node `node`, which holds `items` (starting at `first` in
+/// the final order), by the binned SAH, or leaves it a leaf.
+fn build_binary(nodes: &mut Vec<BinaryNode>, items: &mut [Item], node: usize, first: usize, depth: usize) {
+    let n = items.len();
+    let bounds = items.iter().map(|i| i.bounds).reduce(Aabb::union).expect("non-empty");
+    nodes[node] = BinaryNode { bounds, offset: first as u32, count: n as u32 };
+    if n <= 1 {
+        return;
+    }
+    let centroids = Aabb::from_points(items.iter().map(|i| i.centroid)).expect("non-empty");
+    let axis = centroids.size().max_position();
+    let (lo, extent) = (centroids.min()[axis], centroids.size()[axis]);
+    let mid = if extent <= 0.0 || depth >= SAH_DEPTH {
+        // Coincident centroids, or deep enough: a leaf if small, else the median.
+        if n <= MAX_LEAF && extent <= 0.0 {
+            return;
+        }
+        items.sort_unstable_by(|a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+        n / 2
+    } else {
+        let bin_of = |c: Vec3| (((c[axis] - lo) / extent * BINS as Real) as usize).min(BINS - 1);
+        let mut bins = [(None::<Aabb>, 0usize); BINS];
+        for item in items.iter() {
+            let b = &mut bins[bin_of(item.centroid)];
+            b.0 = Some(b.0.map_or(item.bounds, |x| x.union(item.bounds)));
+            b.1 += 1;
+        }
+        // Sweep from the right for the right-hand areas, then from the left.
+        let mut right_area = [0.0 as Real; BINS];
+        let (mut acc, mut count) = (None::<Aabb>, 0);
+        let mut right_count = [0usize; BINS];
+        for k in (1..BINS).rev() {
+            acc = union_opt(acc, bins[k].0);
+            count += bins[k].1;
+            right_area[k] = acc.map_or(0.0, |b| b.surface_area());
+            right_count[k] = count;
+        }
+        let (mut best, mut best_cost) = (0, Real::INFINITY);
+        let (mut acc, mut count) = (None::<Aabb>, 0);
+        for k in 1..BINS {
+            acc = union_opt(acc, bins[k - 1].0);
+            count += bins[k - 1].1;
+            let cost = count as Real * acc.map_or(0.0, |b| b.surface_area())
+                + right_count[k] as Real * right_area[k];
+            if cost < best_cost && count > 0 && right_count[k] > 0 {
+                (best, best_cost) = (k, cost);
+            }
+        }
+        let split_cost = TRAVERSAL_COST + best_cost / bounds.surface_area().max(Real::MIN_POSITIVE);
+        if best == 0 || (n <= MAX_LEAF && split_cost >= n as Real) {
+            if n <= MAX_LEAF {
+                return;
+            }
+            items.sort_unstable_by(|a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+            n / 2
+        } else {
+            partition(items, |i| bin_of(i.centroid) < best)
+        }
+    };
+    let children = nodes.len();
+    // Filled in by the recursive calls below, which compute their bounds.
+    nodes.push(BinaryNode::placeholder());
+    nodes.push(BinaryNode::placeholder());
+    nodes[node].count = 0;
+    nodes[node].offset = children as u32;
+    let (left, right) = items.split_at_mut(mid);
+    build_binary(nodes, left, children, first, depth + 1);
+    build_binary(nodes, right, children + 1, first + mid, depth + 1);
+}
+
+/// The 4-wide child for binary node `b`: a leaf as it is, or a new node
+/// (appended to `nodes`) whose children are the up to four binary subtrees
+/// found by repeatedly opening the inner child with the largest surface
+/// area (the usual collapse; it keeps the SAH tree's splits).
+///
+/// Also returns the number of 4-wide nodes on the longest path down.
+fn child_of(binary: &[BinaryNode], b: usize, nodes: &mut Vec<Node>) -> (Child, usize) {
+    let node = binary[b];
+    if node.count > 0 {
+        return (Child { index: node.offset, count: node.count }, 0);
+    }
+    let mut open = vec![node.offset as usize, node.offset as usize + 1];
+    while open.len() < WIDTH {
+        let widest =
+            open.iter().enumerate().filter(|&(_, &c)| binary[c].count == 0).max_by(|a, b| {
+                binary[*a.1].bounds.surface_area().total_cmp(&binary[*b.1].bounds.surface_area())
+            });
+        let Some((slot, &c)) = widest else { break };
+        let first = binary[c].offset as usize;
+        open[slot] = first;
+        open.insert(slot + 1, first + 1);
+    }
+    let index = nodes.len();
+    nodes.push(Node::EMPTY);
+    let mut depth = 0;
+    for (slot, &c) in open.iter().enumerate() {
+        let (child, below) = child_of(binary, c, nodes);
+        nodes[index].set(slot, binary[c].bounds, child);
+        depth = depth.max(below);
+    }
+    (Child { index: index as u32, count: 0 }, depth + 1)
+}
+
 impl Item {
-    fn new(bounds: Aabb, object: usize, primitive: usize) -> Self {
+    fn new(bounds: Aabb, object: u32, index: u32) -> Self {
         // Widen by a few ulps, so that rounding in a primitive's own bounds
         // can never cut off a hit its intersection routine finds.
         let pad = Vec3::splat(4.0 * Real::EPSILON) * bounds.min().abs().max(bounds.max().abs());
         let bounds = Aabb::from_corners(bounds.min() - pad, bounds.max() + pad);
-        Self {
-            bounds,
-            centroid: bounds.center(),
-            r: PrimRef { object: object as u32, primitive: primitive as u32 },
-        }
+        Self { bounds, centroid: bounds.center(), object, index }
+    }
+}
+
+impl BinaryNode {
+    /// A slot reserved for a node that `build_binary` fills in.
+    fn placeholder() -> Self {
+        Self { bounds: Aabb::from_corners(Vec3::ZERO, Vec3::ZERO), offset: 0, count: 0 }
     }
 }
 
 impl Node {
-    /// A slot reserved for a node that `build_node` fills in.
-    const PLACEHOLDER: Node = Node { min: Vec3::ZERO, offset: 0, max: Vec3::ZERO, count: 0 };
+    /// A node with four empty slots.
+    const EMPTY: Node = Node {
+        min: [[Real::INFINITY; WIDTH]; 3],
+        max: [[Real::NEG_INFINITY; WIDTH]; 3],
+        children: [Child { index: 0, count: 0 }; WIDTH],
+    };
 
-    /// A leaf over `items`, which start at `first` in the final order.
-    fn leaf(items: &[Item], first: usize) -> Self {
-        let b = items.iter().map(|i| i.bounds).reduce(Aabb::union).expect("non-empty");
-        Self { min: b.min(), max: b.max(), offset: first as u32, count: items.len() as u32 }
-    }
-
-    fn bounds(&self) -> Aabb {
-        Aabb::from_corners(self.min, self.max)
+    /// Puts `child` with `bounds` into `slot`.
+    fn set(&mut self, slot: usize, bounds: Aabb, child: Child) {
+        for axis in 0..3 {
+            self.min[axis][slot] = bounds.min()[axis];
+            self.max[axis][slot] = bounds.max()[axis];
+        }
+        self.children[slot] = child;
     }
 }
 
-/// A ray prepared for many slab tests: its inverse direction per axis.
+/// A ray prepared for many slab tests: its origin and inverse direction,
+/// and per axis whether the direction is negative (then the box's max plane
+/// is the one the ray enters by).
 struct Slabs {
-    origin: Vec3,
-    inv: Vec3,
+    origin: [Real; 3],
+    inv: [Real; 3],
+    negative: [bool; 3],
 }
 
 impl Slabs {
     fn new(ray: &Ray) -> Self {
-        Self { origin: ray.origin, inv: Vec3::ONE / ray.dir }
+        let inv = Vec3::ONE / ray.dir;
+        Self { origin: ray.origin.into(), inv: inv.into(), negative: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0] }
     }
 
-    /// Where the ray enters the node's box, if the box overlaps `[t_min, t_max]`.
+    /// Where the ray enters each of the node's four boxes, and a mask with
+    /// bit `slot` set where it overlaps `[t_min, t_max]` there.
     ///
     /// A zero direction component gives an infinite inverse; `(min − o)·∞`
     /// is NaN exactly when the origin lies on that face plane, i.e. the ray
     /// runs inside the closed slab. Bounds are updated with `>`/`<`
     /// comparisons, which are false for NaN, so such a bound is ignored
     /// instead of poisoning the result (pbrt-v4's `Bounds3::IntersectP`), for
-    /// +0.0 and −0.0 alike. The far bound is widened by 1 + 2γ₃ so rounding
-    /// never rejects a box the ray touches.
-    #[inline]
-    fn entry(&self, node: &Node, t_min: Real, t_max: Real) -> Option<Real> {
-        let (mut near, mut far) = (t_min, t_max);
+    /// +0.0 and −0.0 alike; the same comparisons are SIMD max/min. The far
+    /// bound is widened by 1 + 2γ₃ so rounding never rejects a box the ray
+    /// touches.
+    #[inline(always)]
+    fn entries(&self, node: &Node, t_min: Real, t_max: Real) -> ([Real; WIDTH], u32) {
+        let mut near = [t_min; WIDTH];
+        let mut far = [t_max; WIDTH];
         for axis in 0..3 {
-            let inv = self.inv[axis];
-            let mut t0 = (node.min[axis] - self.origin[axis]) * inv;
-            let mut t1 = (node.max[axis] - self.origin[axis]) * inv;
-            if inv < 0.0 {
-                std::mem::swap(&mut t0, &mut t1);
-            }
-            t1 *= 1.0 + 2.0 * gamma(3);
-            if t0 > near {
-                near = t0;
-            }
-            if t1 < far {
-                far = t1;
+            let (enter, leave) = if self.negative[axis] {
+                (&node.max[axis], &node.min[axis])
+            } else {
+                (&node.min[axis], &node.max[axis])
+            };
+            let (o, inv) = (self.origin[axis], self.inv[axis]);
+            for slot in 0..WIDTH {
+                let t0 = (enter[slot] - o) * inv;
+                let t1 = (leave[slot] - o) * inv * (1.0 + 2.0 * gamma(3));
+                near[slot] = if t0 > near[slot] { t0 } else { near[slot] };
+                far[slot] = if t1 < far[slot] { t1 } else { far[slot] };
             }
         }
-        (near <= far).then_some(near)
+        let entered = (0..WIDTH).fold(0, |mask, slot| mask | (u32::from(near[slot] <= far[slot]) << slot));
+        (near, entered)
     }
 }
 
-/// The hit on one referenced primitive: a single triangle of a mesh, or the
-/// whole primitive otherwise.
+/// The hit on one leaf primitive: a single triangle of a mesh, or the whole
+/// primitive otherwise.
 #[inline]
-fn intersect_ref(
+fn intersect_leaf(
     objects: &[Object],
-    r: PrimRef,
-    ray: &Ray,
+    leaf: &Leaf,
+    ray: &TriangleRay,
     range: Interval,
     methods: Methods,
-) -> Option<PrimitiveHit> {
-    match &objects[r.object as usize].primitive {
-        Primitive::Mesh(m) => m.intersect_triangle(r.primitive as usize, ray, range, methods.triangle),
-        p => p.intersect_with(ray, range, methods),
+) -> Option<Hit> {
+    match *leaf {
+        Leaf::Triangle { corners: [a, b, c], object, index } => {
+            let hit = intersect_by(methods.triangle, a, b, c, ray, range)?;
+            let Primitive::Mesh(mesh) = object_primitive(objects, object) else {
+                unreachable!("triangle leaves come from meshes")
+            };
+            let index = index as usize;
+            Some(Hit::new(
+                object as usize,
+                PrimitiveHit { t: hit.t, primitive: index, normal: mesh.normal(index) },
+            ))
+        }
+        Leaf::Object { object } => object_primitive(objects, object)
+            .intersect_with(&ray.ray, range, methods)
+            .map(|h| Hit::new(object as usize, h)),
     }
 }
 
@@ -502,9 +644,34 @@ mod tests {
     }
 
     #[test]
-    fn nodes_are_32_bytes_with_f32_geometry() {
+    fn a_tree_too_deep_for_the_inline_stack_still_finds_every_hit() {
+        // Boxes at exponentially growing distances: each SAH split peels off
+        // only the farthest few, so the tree is a long chain.
+        let boxes: Vec<Primitive> = (0..100)
+            .map(|k| {
+                let s = (1.5 as Real).powi(k);
+                Primitive::Aabb(Aabb::new(Vec3::splat(s), Vec3::splat(1.2 * s)).unwrap())
+            })
+            .collect();
+        let s = scene(boxes);
+        let depth = s.bvh_stats().depth;
+        assert!((WIDTH - 1) * depth > INLINE_STACK, "depth {depth}");
+        for k in 0..100 {
+            let target = Vec3::splat(1.1 * (1.5 as Real).powi(k));
+            for origin in [Vec3::new(-1.0, 0.0, 0.5), Vec3::splat(1e30)] {
+                let ray = Ray::new(origin, target - origin);
+                let range = s.cast_range(&ray);
+                assert_eq!(s.closest_hit(&ray, range), s.closest_hit_brute_force(&ray, range), "box {k}");
+                assert!(s.any_hit(&ray, range));
+            }
+        }
+    }
+
+    #[test]
+    fn nodes_fill_two_cache_lines_with_f32_geometry() {
         if size_of::<Real>() == 4 {
-            assert_eq!(size_of::<Node>(), 32);
+            assert_eq!(size_of::<Node>(), 128);
+            assert_eq!(align_of::<Node>(), 64);
         }
     }
 
@@ -525,8 +692,11 @@ mod tests {
         let s = scene(vec![Primitive::Mesh(Mesh::new(positions, triangles).unwrap())]);
         let stats = s.bvh_stats();
         assert_eq!(stats.primitives, 20_000);
-        assert!(stats.nodes < 2 * 20_000 && stats.nodes > 20_000 / MAX_LEAF, "{} nodes", stats.nodes);
-        assert_eq!(stats.bytes, stats.nodes * size_of::<Node>() + 20_000 * size_of::<PrimRef>());
+        // A 4-wide tree over leaves of up to MAX_LEAF triangles: about a
+        // third as many nodes as leaves.
+        let leaves_min = 20_000 / MAX_LEAF;
+        assert!(stats.nodes > leaves_min / 4 && stats.nodes < 20_000 / 2, "{} nodes", stats.nodes);
+        assert_eq!(stats.bytes, stats.nodes * size_of::<Node>() + 20_000 * size_of::<Leaf>());
         let ray = Ray::new(Vec3::new(37.3, 61.2, -10.0), Vec3::Z);
         let hit = s.cast(&ray).unwrap();
         assert_eq!(Some(hit), s.closest_hit_brute_force(&ray, s.cast_range(&ray)));

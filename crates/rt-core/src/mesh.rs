@@ -10,7 +10,7 @@ use crate::method::TriangleMethod;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3};
 use crate::surface::SurfacePoint;
-use crate::triangle::{geometric_normal, intersect_by, triangle_surface_point};
+use crate::triangle::{TriangleRay, geometric_normal, intersect_by, triangle_surface_point};
 
 /// Most triangles one mesh may have (after fanning faces): 2²⁶ ≈ 67 M.
 pub const MAX_MESH_TRIANGLES: usize = 1 << 26;
@@ -184,12 +184,12 @@ impl Mesh {
         triangle_surface_point(self.triangle(i), self.normals[i], p)
     }
 
-    /// The hit on triangle `i` alone with `t` in `range` (the BVH tests
-    /// triangles one by one). Degenerate triangles are never hit.
+    /// The hit on triangle `i` alone with `t` in `range`. Degenerate
+    /// triangles are never hit.
     pub fn intersect_triangle(
         &self,
         i: usize,
-        ray: &Ray,
+        ray: &TriangleRay,
         range: Interval,
         method: TriangleMethod,
     ) -> Option<PrimitiveHit> {
@@ -216,8 +216,9 @@ impl Mesh {
         }
         let mut range = range;
         let mut closest = None;
+        let ray = TriangleRay::new(ray);
         for i in 0..self.triangles.len() {
-            if let Some(hit) = self.intersect_triangle(i, ray, range, method) {
+            if let Some(hit) = self.intersect_triangle(i, &ray, range, method) {
                 range.max = hit.t;
                 closest = Some(hit);
             }
