@@ -35,8 +35,8 @@ const BINS: usize = 16;
 /// Below this depth the SAH chooses splits; from here on, splits are at the
 /// median, so the depth stays under SAH_DEPTH plus log₂ of the primitive count.
 const SAH_DEPTH: usize = 64;
-/// Traversal stack entries kept on the machine stack: enough for trees up
-/// to 21 levels deep (4²¹ leaves).
+/// Traversal stack entries kept on the machine stack at most: enough for
+/// any tree up to 21 levels deep (4²¹ leaves).
 const INLINE_STACK: usize = 64;
 /// Children per node.
 const WIDTH: usize = 4;
@@ -62,13 +62,13 @@ struct Child {
 }
 
 /// A 4-wide node: the boxes of its children, stored axis by axis
-/// (`min[axis][slot]`) so that one slab test covers all four. Unused slots
+/// (`bounds[min or max][axis][slot]`) so that one slab test covers all four. Unused slots
 /// have the empty box (min = +∞, max = −∞), which no ray enters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
 struct Node {
-    min: [[Real; WIDTH]; 3],
-    max: [[Real; WIDTH]; 3],
+    /// `bounds[0]` are the minima, `bounds[1]` the maxima.
+    bounds: [[[Real; WIDTH]; 3]; 2],
     children: [Child; WIDTH],
 }
 
@@ -94,8 +94,9 @@ pub struct BvhStats {
 pub struct Bvh {
     nodes: Vec<Node>,
     leaves: Vec<Leaf>,
-    /// Nodes on the longest path from the root to a leaf.
-    depth: usize,
+    /// The most entries the traversal stack can hold: over all paths from
+    /// the root, the largest sum of (children − 1) of the nodes on it.
+    stack_bound: usize,
     /// Objects without bounds (planes), tested on every query.
     unbounded: Vec<u32>,
     stats: BvhStats,
@@ -144,12 +145,12 @@ impl Bvh {
             }
         }
         let mut nodes = Vec::new();
-        let mut depth = 0;
+        let (mut depth, mut stack_bound) = (0, 0);
         if !items.is_empty() {
             let mut binary = vec![BinaryNode::placeholder()];
             build_binary(&mut binary, &mut items, 0, 0, 0);
             let root;
-            (root, depth) = child_of(&binary, 0, &mut nodes);
+            (root, depth, stack_bound) = child_of(&binary, 0, &mut nodes);
             if root.count > 0 {
                 // The whole tree is one leaf: a root node with it as its only child.
                 let mut node = Node::EMPTY;
@@ -175,7 +176,7 @@ impl Bvh {
             bytes: nodes.len() * size_of::<Node>() + leaves.len() * size_of::<Leaf>(),
             build_time: start.elapsed(),
         };
-        Self { nodes, leaves, depth, unbounded, stats }
+        Self { nodes, leaves, stack_bound, unbounded, stats }
     }
 
     /// Statistics of the build.
@@ -246,14 +247,15 @@ impl Bvh {
         if self.nodes.is_empty() {
             return;
         }
-        // Each node on the path down pushes at most three children. The
-        // stack is on the machine stack unless the tree is unusually deep
-        // (clearing a bigger array would cost more than a whole ray).
-        let needed = (WIDTH - 1) * self.depth;
-        if needed <= INLINE_STACK {
-            self.traverse_with(&mut [(Child::default(), 0.0); INLINE_STACK], ray, range, leaf);
-        } else {
-            self.traverse_with(&mut vec![(Child::default(), 0.0); needed], ray, range, leaf);
+        // The stack is an array on the machine stack, no bigger than the
+        // tree needs (clearing it is part of every ray's cost), unless the
+        // tree is unusually deep.
+        const EMPTY: (Child, Real) = (Child { index: 0, count: 0 }, 0.0);
+        match self.stack_bound {
+            0..=16 => self.traverse_with(&mut [EMPTY; 16], ray, range, leaf),
+            17..=32 => self.traverse_with(&mut [EMPTY; 32], ray, range, leaf),
+            33..=INLINE_STACK => self.traverse_with(&mut [EMPTY; INLINE_STACK], ray, range, leaf),
+            needed => self.traverse_with(&mut vec![EMPTY; needed], ray, range, leaf),
         }
     }
 
@@ -274,28 +276,24 @@ impl Bvh {
             if current.count == 0 {
                 let node = &self.nodes[current.index as usize];
                 let (near, entered) = slabs.entries(node, range.min, t_max);
-                // The entered children, sorted by entry t (at most four: insertion sort).
-                let mut hit = [(Child::default(), 0.0 as Real); WIDTH];
-                let (mut k, mut entered) = (0, entered);
-                while entered != 0 {
+                // Go on with the nearest entered child; the others wait on the
+                // stack (pushed in slot order: with at most three of them, a
+                // full sort buys little).
+                if entered != 0 {
                     let slot = entered.trailing_zeros() as usize;
-                    entered &= entered - 1;
-                    let entry = (node.children[slot], near[slot]);
-                    let mut j = k;
-                    while j > 0 && hit[j - 1].1 > entry.1 {
-                        hit[j] = hit[j - 1];
-                        j -= 1;
-                    }
-                    hit[j] = entry;
-                    k += 1;
-                }
-                if k > 0 {
-                    // Farther ones on the stack, farthest deepest; go on with the nearest.
-                    for &entry in hit[1..k].iter().rev() {
+                    let mut rest = entered & (entered - 1);
+                    let mut nearest = (node.children[slot], near[slot]);
+                    while rest != 0 {
+                        let slot = rest.trailing_zeros() as usize;
+                        rest &= rest - 1;
+                        let mut entry = (node.children[slot], near[slot]);
+                        if entry.1 < nearest.1 {
+                            std::mem::swap(&mut entry, &mut nearest);
+                        }
                         stack[sp] = entry;
                         sp += 1;
                     }
-                    current = hit[0].0;
+                    current = nearest.0;
                     continue;
                 }
             } else {
@@ -399,11 +397,12 @@ fn build_binary(nodes: &mut Vec<BinaryNode>, items: &mut [Item], node: usize, fi
 /// found by repeatedly opening the inner child with the largest surface
 /// area (the usual collapse; it keeps the SAH tree's splits).
 ///
-/// Also returns the number of 4-wide nodes on the longest path down.
-fn child_of(binary: &[BinaryNode], b: usize, nodes: &mut Vec<Node>) -> (Child, usize) {
+/// Also returns the number of 4-wide nodes on the longest path down, and the
+/// stack bound of the subtree (see [`Bvh::stack_bound`]).
+fn child_of(binary: &[BinaryNode], b: usize, nodes: &mut Vec<Node>) -> (Child, usize, usize) {
     let node = binary[b];
     if node.count > 0 {
-        return (Child { index: node.offset, count: node.count }, 0);
+        return (Child { index: node.offset, count: node.count }, 0, 0);
     }
     let mut open = vec![node.offset as usize, node.offset as usize + 1];
     while open.len() < WIDTH {
@@ -418,13 +417,14 @@ fn child_of(binary: &[BinaryNode], b: usize, nodes: &mut Vec<Node>) -> (Child, u
     }
     let index = nodes.len();
     nodes.push(Node::EMPTY);
-    let mut depth = 0;
+    let (mut depth, mut stack) = (0, 0);
     for (slot, &c) in open.iter().enumerate() {
-        let (child, below) = child_of(binary, c, nodes);
+        let (child, below, child_stack) = child_of(binary, c, nodes);
         nodes[index].set(slot, binary[c].bounds, child);
         depth = depth.max(below);
+        stack = stack.max(child_stack);
     }
-    (Child { index: index as u32, count: 0 }, depth + 1)
+    (Child { index: index as u32, count: 0 }, depth + 1, stack + open.len() - 1)
 }
 
 impl Item {
@@ -447,34 +447,34 @@ impl BinaryNode {
 impl Node {
     /// A node with four empty slots.
     const EMPTY: Node = Node {
-        min: [[Real::INFINITY; WIDTH]; 3],
-        max: [[Real::NEG_INFINITY; WIDTH]; 3],
+        bounds: [[[Real::INFINITY; WIDTH]; 3], [[Real::NEG_INFINITY; WIDTH]; 3]],
         children: [Child { index: 0, count: 0 }; WIDTH],
     };
 
     /// Puts `child` with `bounds` into `slot`.
     fn set(&mut self, slot: usize, bounds: Aabb, child: Child) {
         for axis in 0..3 {
-            self.min[axis][slot] = bounds.min()[axis];
-            self.max[axis][slot] = bounds.max()[axis];
+            self.bounds[0][axis][slot] = bounds.min()[axis];
+            self.bounds[1][axis][slot] = bounds.max()[axis];
         }
         self.children[slot] = child;
     }
 }
 
 /// A ray prepared for many slab tests: its origin and inverse direction,
-/// and per axis whether the direction is negative (then the box's max plane
-/// is the one the ray enters by).
+/// and per axis which of a box's planes it enters by: 0 (min) for a
+/// positive direction, 1 (max) for a negative one.
 struct Slabs {
     origin: [Real; 3],
     inv: [Real; 3],
-    negative: [bool; 3],
+    enter: [usize; 3],
 }
 
 impl Slabs {
     fn new(ray: &Ray) -> Self {
         let inv = Vec3::ONE / ray.dir;
-        Self { origin: ray.origin.into(), inv: inv.into(), negative: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0] }
+        let enter = [inv.x, inv.y, inv.z].map(|i| usize::from(i < 0.0));
+        Self { origin: ray.origin.into(), inv: inv.into(), enter }
     }
 
     /// Where the ray enters each of the node's four boxes, and a mask with
@@ -493,11 +493,9 @@ impl Slabs {
         let mut near = [t_min; WIDTH];
         let mut far = [t_max; WIDTH];
         for axis in 0..3 {
-            let (enter, leave) = if self.negative[axis] {
-                (&node.max[axis], &node.min[axis])
-            } else {
-                (&node.min[axis], &node.max[axis])
-            };
+            // `& 1` shows the optimiser both indices are in bounds.
+            let side = self.enter[axis] & 1;
+            let (enter, leave) = (&node.bounds[side][axis], &node.bounds[side ^ 1][axis]);
             let (o, inv) = (self.origin[axis], self.inv[axis]);
             for slot in 0..WIDTH {
                 let t0 = (enter[slot] - o) * inv;
@@ -655,7 +653,8 @@ mod tests {
             .collect();
         let s = scene(boxes);
         let depth = s.bvh_stats().depth;
-        assert!((WIDTH - 1) * depth > INLINE_STACK, "depth {depth}");
+        let bound = Bvh::build(s.objects()).stack_bound;
+        assert!(bound > INLINE_STACK, "depth {depth}, stack bound {bound}");
         for k in 0..100 {
             let target = Vec3::splat(1.1 * (1.5 as Real).powi(k));
             for origin in [Vec3::new(-1.0, 0.0, 0.5), Vec3::splat(1e30)] {

@@ -105,9 +105,19 @@ pub fn narrow(v: glam::DVec3) -> Vec3 {
     Vec3::new(v.x as Real, v.y as Real, v.z as Real)
 }
 
-/// `2ⁿ` for |n| ≤ 75, exactly (powers of two in that range are normal in f32).
+/// `2ⁿ` for |n| ≤ 75 (f32) or ≤ 540 (f64), exactly: a normal number built
+/// from its exponent bits.
 fn pow2_small(n: i32) -> Real {
-    (2.0 as Real).powi(n)
+    let biased = n + Real::MAX_EXP - 1;
+    debug_assert!(biased > 0 && biased < 2 * Real::MAX_EXP - 1, "2^{n} is not a normal number");
+    #[cfg(not(feature = "f64"))]
+    {
+        f32::from_bits((biased as u32) << (f32::MANTISSA_DIGITS - 1))
+    }
+    #[cfg(feature = "f64")]
+    {
+        f64::from_bits((biased as u64) << (f64::MANTISSA_DIGITS - 1))
+    }
 }
 
 /// `x · 2ⁿ`, exact unless the result overflows or underflows; `n` may be
@@ -117,10 +127,18 @@ pub fn scale_pow2(x: Real, n: i32) -> Real {
     x * pow2_small(half) * pow2_small(n - half)
 }
 
-/// The exponent `n` with `2ⁿ ≤ m < 2ⁿ⁺¹` (up to one off after rounding, which
-/// is harmless: callers only need some nearby power of two). `m` > 0, finite.
+/// The exponent `n` with `2ⁿ ≤ m < 2ⁿ⁺¹`: read from the bits of a normal
+/// `m`; for a subnormal one, from its logarithm (possibly one off, which is
+/// harmless: callers only need some nearby power of two). `m` > 0, finite.
 pub fn exponent_of(m: Real) -> i32 {
-    m.log2().floor() as i32
+    if m < Real::MIN_POSITIVE {
+        return m.log2().floor() as i32;
+    }
+    #[cfg(not(feature = "f64"))]
+    let biased = (m.to_bits() >> (f32::MANTISSA_DIGITS - 1)) as i32;
+    #[cfg(feature = "f64")]
+    let biased = (m.to_bits() >> (f64::MANTISSA_DIGITS - 1)) as i32;
+    biased - (Real::MAX_EXP - 1)
 }
 /// The sign-exact 2D edge function `a·b − c·d`, as used by the watertight
 /// ray/triangle test.
@@ -193,6 +211,13 @@ mod tests {
             if y != 0.0 && y.is_finite() && y.is_normal() {
                 assert_eq!(scale_pow2(y, -n), x, "n = {n}");
             }
+        }
+        assert_eq!(exponent_of(Real::MAX), Real::MAX_EXP - 1);
+        assert_eq!(exponent_of(Real::MIN_POSITIVE), Real::MIN_EXP - 1);
+        assert_eq!(exponent_of(Real::MIN_POSITIVE / 2.0), Real::MIN_EXP - 2);
+        for m in [1e-30 as Real, 3e-7, 0.999, 1.5, 7.0, 8.0, 3e12] {
+            let n = exponent_of(m);
+            assert!(scale_pow2(1.0, n) <= m && m < scale_pow2(2.0, n), "{m}: {n}");
         }
         assert_eq!(exponent_of(1.0), 0);
         assert_eq!(exponent_of(0.75), -1);
