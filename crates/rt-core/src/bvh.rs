@@ -11,11 +11,11 @@
 //! their triangles' corners inline, in tree order, so a leaf's triangles sit
 //! together in memory.
 //!
-//! Traversal visits the children a ray enters nearest first and skips
-//! subtrees that start beyond the closest hit so far. Results equal the
-//! brute-force loop over all objects bit for bit: the same primitive
-//! functions compute each `t` from the same corners, and exact ties go to the
-//! lower (object, primitive) index, as the in-order loop gives them.
+//! Traversal goes on with the nearest child a ray enters (the others wait on
+//! a stack) and skips subtrees that start beyond the closest hit so far.
+//! Results equal the brute-force loop over all objects bit for bit: the same
+//! primitive functions compute each `t` from the same corners, and exact ties
+//! go to the lower (object, primitive) index, as the in-order loop gives them.
 
 use std::time::{Duration, Instant};
 
