@@ -55,15 +55,16 @@ enum Leaf {
 
 /// A child slot of a [`Node`]: an inner node (`count == 0`), or a leaf of
 /// `count` primitives at `leaves[index..]`.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 struct Child {
     index: u32,
     count: u32,
 }
 
 /// A 4-wide node: the boxes of its children, stored axis by axis
-/// (`bounds[min or max][axis][slot]`) so that one slab test covers all four. Unused slots
-/// have the empty box (min = +∞, max = −∞), which no ray enters.
+/// (`bounds[min or max][axis][slot]`) so that one slab test covers all
+/// four. Unused slots have the empty box (min = +∞, max = −∞), which no ray
+/// enters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
 struct Node {
@@ -168,7 +169,6 @@ impl Bvh {
                 _ => Leaf::Object { object },
             })
             .collect();
-        drop(items);
         let stats = BvhStats {
             primitives: leaves.len(),
             nodes: nodes.len(),
@@ -240,8 +240,8 @@ impl Bvh {
         found
     }
 
-    /// Visits the leaves whose boxes the ray enters within `range`, nearest
-    /// first. `leaf` tests a leaf's primitives and returns the `t` of the
+    /// Visits the leaves whose boxes the ray enters within `range`, always
+    /// going on with the nearest child entered at each node. `leaf` tests a leaf's primitives and returns the `t` of the
     /// closest hit so far, which prunes boxes that start beyond it.
     fn traverse(&self, ray: &Ray, range: Interval, leaf: impl FnMut(&[Leaf]) -> Option<Real>) {
         if self.nodes.is_empty() {
