@@ -7,7 +7,7 @@ Usage (after `rt-view bench --out bench-out`):
 
 For every bench-out/terrain_*.obj with its camera JSON, it loads the mesh,
 builds Embree's BVH, casts one primary ray through each pixel centre (the
-camera math of SPEC.md: perspective rays from C through
+camera math of docs/conventions.md: perspective rays from C through
 O + (ix+0.5)(w/W)·x − (iy+0.5)(h/H)·y), and prints the build time, the
 median throughput in Mrays/s, the hit count (compare it with rt-view's) and
 how many CPU seconds the casting used per wall second (embreex casts rays one

@@ -1,7 +1,7 @@
 //! Axis-aligned boxes: `min ≤ p ≤ max` componentwise; slab-test intersection.
 
+use crate::geometry_error::GeometryError;
 use crate::hit::PrimitiveHit;
-use crate::primitive::GeometryError;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, gamma};
 use crate::surface::SurfacePoint;

@@ -22,10 +22,10 @@ use std::time::{Duration, Instant};
 use crate::aabb::Aabb;
 use crate::hit::{Hit, PrimitiveHit};
 use crate::method::Methods;
+use crate::object::Object;
 use crate::primitive::Primitive;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, gamma};
-use crate::scene::Object;
 use crate::triangle::{TriangleRay, intersect_by};
 
 /// Leaves hold at most this many primitives.
@@ -100,6 +100,8 @@ pub struct Bvh {
     stack_bound: usize,
     /// Objects without bounds (planes), tested on every query.
     unbounded: Vec<u32>,
+    /// The box around every bounded object; `None` if there is none.
+    bounds: Option<Aabb>,
     stats: BvhStats,
 }
 
@@ -147,9 +149,11 @@ impl Bvh {
         }
         let mut nodes = Vec::new();
         let (mut depth, mut stack_bound) = (0, 0);
+        let mut bounds = None;
         if !items.is_empty() {
             let mut binary = vec![BinaryNode::placeholder()];
             build_binary(&mut binary, &mut items, 0, 0, 0);
+            bounds = Some(binary[0].bounds);
             let root;
             (root, depth, stack_bound) = child_of(&binary, 0, &mut nodes);
             if root.count > 0 {
@@ -176,7 +180,12 @@ impl Bvh {
             bytes: nodes.len() * size_of::<Node>() + leaves.len() * size_of::<Leaf>(),
             build_time: start.elapsed(),
         };
-        Self { nodes, leaves, stack_bound, unbounded, stats }
+        Self { nodes, leaves, stack_bound, unbounded, bounds, stats }
+    }
+
+    /// The box around every bounded object; `None` if there is none.
+    pub fn bounds(&self) -> Option<Aabb> {
+        self.bounds
     }
 
     /// Statistics of the build.

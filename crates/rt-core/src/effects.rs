@@ -5,18 +5,20 @@
 use std::ops::{Add, AddAssign};
 
 use crate::light::Light;
-use crate::material::Color;
+use crate::material::{Color, Material};
 use crate::real::Real;
-use crate::scene::Scene;
 
 /// Deepest reflection/refraction recursion a scene may ask for.
 pub const MAX_DEPTH: u32 = 64;
+
+/// Largest sample count of an area light or of ambient occlusion per shaded point.
+pub const MAX_EFFECT_SAMPLES: u32 = 4096;
 
 /// The scene file's lighting: lights, ambient light and effect settings.
 /// The default (no lights) is pure ray casting.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Lighting {
-    /// The lights; none means flat colours (SPEC.md).
+    /// The lights; none means flat colours (pure ray casting).
     pub lights: Vec<Light>,
     /// Light reaching every point from everywhere, times the diffuse albedo.
     pub ambient: Color,
@@ -26,6 +28,24 @@ pub struct Lighting {
     /// Ambient occlusion, if asked for: darkens the ambient term by how much
     /// of the hemisphere is blocked within a radius.
     pub ambient_occlusion: Option<AmbientOcclusion>,
+    /// Global illumination, if asked for: path tracing replaces the
+    /// direct-lighting tracer ([`crate::path_tracer`]).
+    pub global_illumination: Option<GlobalIllumination>,
+}
+
+/// Most surfaces a path may scatter from under global illumination.
+pub const MAX_BOUNCES: u32 = 1024;
+
+/// Global-illumination settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GlobalIllumination {
+    /// How many surfaces a path may scatter from, 0 to [`MAX_BOUNCES`]: 0
+    /// shows only what glows, 1 is direct lighting, each more adds one
+    /// bounce of indirect light.
+    pub max_bounces: u32,
+    /// Whether Russian roulette may end paths early (unbiased; faster for
+    /// the same noise on most scenes).
+    pub russian_roulette: bool,
 }
 
 /// Ambient-occlusion settings.
@@ -55,6 +75,9 @@ pub struct EffectPlan {
     pub ambient_occlusion: Option<AmbientOcclusion>,
     /// Recursion limit for reflection and refraction rays.
     pub max_depth: u32,
+    /// Path tracing instead of the direct-lighting tracer; the flags above
+    /// then say what the direct-lighting tracer would do if it were switched off.
+    pub global_illumination: Option<GlobalIllumination>,
 }
 
 /// Effects a user can switch off in the viewer; a plan never turns on what
@@ -69,22 +92,30 @@ pub struct EffectToggles {
     pub refraction: bool,
     /// Keep ambient-occlusion rays.
     pub ambient_occlusion: bool,
+    /// Keep global illumination (off: the direct-lighting tracer).
+    pub global_illumination: bool,
 }
 
 impl Default for EffectToggles {
     fn default() -> Self {
-        Self { shadows: true, reflection: true, refraction: true, ambient_occlusion: true }
+        Self {
+            shadows: true,
+            reflection: true,
+            refraction: true,
+            ambient_occlusion: true,
+            global_illumination: true,
+        }
     }
 }
 
 impl EffectPlan {
-    /// The effects `scene` asks for.
-    pub fn for_scene(scene: &Scene) -> Self {
-        let lighting = &scene.lighting;
-        let shading = !lighting.lights.is_empty();
-        let used = scene.objects().iter().map(|o| &scene.materials[o.material]);
+    /// The effects a scene with `lighting` asks for, given the materials its
+    /// objects use (a material no object uses asks for nothing).
+    pub fn new<'m>(lighting: &Lighting, used_materials: impl IntoIterator<Item = &'m Material>) -> Self {
+        let global_illumination = lighting.global_illumination;
+        let shading = !lighting.lights.is_empty() || global_illumination.is_some();
         let (mut reflects, mut refracts) = (false, false);
-        for m in used {
+        for m in used_materials {
             reflects |= m.reflectivity > 0.0 || m.transparency > 0.0;
             refracts |= m.transparency > 0.0;
         }
@@ -98,6 +129,7 @@ impl EffectPlan {
                 .ambient_occlusion
                 .filter(|_| shading && lighting.ambient != Color::ZERO),
             max_depth: if recursion { lighting.max_depth } else { 0 },
+            global_illumination,
         }
     }
 
@@ -108,6 +140,7 @@ impl EffectPlan {
             reflection: self.reflection && toggles.reflection,
             refraction: self.refraction && toggles.refraction,
             ambient_occlusion: self.ambient_occlusion.filter(|_| toggles.ambient_occlusion),
+            global_illumination: self.global_illumination.filter(|_| toggles.global_illumination),
             ..self
         }
     }
@@ -126,12 +159,24 @@ pub struct RayCounts {
     pub refraction: u64,
     /// Ambient-occlusion rays.
     pub ambient_occlusion: u64,
+    /// Global illumination: rays that carry a path on from a surface, in a
+    /// direction its BSDF chose.
+    pub bounce: u64,
+    /// Global illumination: shadow rays towards sampled points on lights
+    /// (next-event estimation).
+    pub next_event: u64,
 }
 
 impl RayCounts {
     /// All rays together.
     pub fn total(&self) -> u64 {
-        self.primary + self.shadow + self.reflection + self.refraction + self.ambient_occlusion
+        self.primary
+            + self.shadow
+            + self.reflection
+            + self.refraction
+            + self.ambient_occlusion
+            + self.bounce
+            + self.next_event
     }
 }
 
@@ -144,6 +189,8 @@ impl Add for RayCounts {
             reflection: self.reflection + o.reflection,
             refraction: self.refraction + o.refraction,
             ambient_occlusion: self.ambient_occlusion + o.ambient_occlusion,
+            bounce: self.bounce + o.bounce,
+            next_event: self.next_event + o.next_event,
         }
     }
 }
@@ -176,7 +223,7 @@ mod tests {
             {extra}
         )"#
         );
-        EffectPlan::for_scene(&crate::parse_scene(&text, "t.ron", Path::new(".")).unwrap())
+        crate::parse_scene(&text, "t.ron", Path::new(".")).unwrap().effect_plan()
     }
 
     #[test]
@@ -194,7 +241,8 @@ mod tests {
                 reflection: false,
                 refraction: false,
                 ambient_occlusion: None,
-                max_depth: 0
+                max_depth: 0,
+                global_illumination: None,
             }
         );
     }
@@ -223,8 +271,13 @@ mod tests {
             "transparency: 0.9",
             "ambient: (0.1, 0.1, 0.1), effects: (ambient_occlusion: (samples: 4, radius: 1)),",
         );
-        let none =
-            EffectToggles { shadows: false, reflection: false, refraction: false, ambient_occlusion: false };
+        let none = EffectToggles {
+            shadows: false,
+            reflection: false,
+            refraction: false,
+            ambient_occlusion: false,
+            global_illumination: false,
+        };
         let off = all.restricted(none);
         assert!(
             off.shading

@@ -1,21 +1,29 @@
 //! Lights: point, directional and spherical area lights.
 //!
-//! A light is not geometry: rays never hit it. Each one says, for a shaded
-//! point, from which direction and distance light arrives and how much
-//! ([`Light::sample`]); an area light answers differently for each sample,
-//! which is what makes its shadows soft.
+//! A light is not geometry: rays never hit it, and the camera does not see
+//! it. Each one says, for a shaded point, from which direction and distance
+//! light arrives and how much ([`Light::sample`]); an area light answers
+//! differently for each sample, which is what makes its shadows soft.
+//!
+//! Units (pbrt-v4's and Mitsuba 3's, see [`crate::bsdf`]): a point light has
+//! radiant intensity I = `color·intensity` in W/sr, so the irradiance it
+//! gives a surface facing it at distance r is `I/r²`; a directional light
+//! gives irradiance E = `color·intensity` in W/m²; a sphere light of radius
+//! R is a sphere of uniform radiance `I/(π·R²)`, whose intensity seen from
+//! far away is I in every direction, like the point light it becomes as R
+//! shrinks.
 
 use crate::material::Color;
 use crate::real::{Real, Vec3, to_f32};
-use crate::sampler::{concentric_disk, stratified};
+use crate::sampler::stratified;
 
 /// One light of a scene.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Light {
     /// What kind and where.
     pub kind: LightKind,
-    /// Colour times intensity: radiant intensity for point and sphere lights
-    /// (irradiance at distance r is `power / r²`), irradiance for directional ones.
+    /// Colour times intensity: radiant intensity I (W/sr) for point and
+    /// sphere lights, irradiance E (W/m²) for directional ones.
     pub power: Color,
     /// Whether objects between a point and this light shade it.
     pub shadows: bool,
@@ -34,8 +42,8 @@ pub enum LightKind {
         /// Unit direction the light travels in (e.g. −y shines downward).
         direction: Vec3,
     },
-    /// A glowing sphere: the point light's intensity spread over the disk the
-    /// sphere shows to the shaded point, sampled `samples` times.
+    /// A glowing sphere of radiance `power/(π·radius²)`, sampled `samples`
+    /// times per shaded point by the directions it subtends.
     Sphere {
         /// Centre, world units.
         center: Vec3,
@@ -53,8 +61,11 @@ pub struct LightSample {
     pub to_light: Vec3,
     /// Distance to the light along `to_light`; ∞ for directional lights.
     pub distance: Real,
-    /// Irradiance on a surface facing the light, already divided by the
-    /// number of samples, so a light's samples add up.
+    /// What arrives, over the density it was sampled with, divided by the
+    /// number of samples: `I/r²` for a point light, `E` for a directional
+    /// one, `L/pdf` for a sphere light (L its radiance, pdf the density of
+    /// the direction over solid angle). Times `f·cos θ` it is the sample's
+    /// share of the reflected radiance, so a light's samples add up.
     pub irradiance: Color,
 }
 
@@ -70,6 +81,16 @@ impl Light {
     /// Sample `k` of [`Light::sample_count`] seen from `p`; `jitter` ∈ [0,1)²
     /// places it inside its stratum. `None` if `p` is at the light itself.
     pub fn sample(&self, p: Vec3, k: u32, jitter: (Real, Real)) -> Option<LightSample> {
+        self.sample_stratum(p, k, self.sample_count(), jitter)
+    }
+
+    /// One sample on its own, at `u` ∈ [0,1)² (a path's next-event estimate).
+    pub fn sample_one(&self, p: Vec3, u: (Real, Real)) -> Option<LightSample> {
+        self.sample_stratum(p, 0, 1, u)
+    }
+
+    /// Sample `k` of `samples` stratified ones, at `jitter` in its stratum.
+    fn sample_stratum(&self, p: Vec3, k: u32, samples: u32, jitter: (Real, Real)) -> Option<LightSample> {
         let towards = |target: Vec3, share: f32| {
             let v = target - p;
             let distance = v.length();
@@ -84,7 +105,7 @@ impl Light {
             LightKind::Directional { direction } => {
                 Some(LightSample { to_light: -direction, distance: Real::INFINITY, irradiance: self.power })
             }
-            LightKind::Sphere { center, radius, samples } => {
+            LightKind::Sphere { center, radius, .. } => {
                 let axis = center - p;
                 let distance = axis.length();
                 let share = 1.0 / samples as f32;
@@ -93,12 +114,70 @@ impl Light {
                     return towards(center, share);
                 }
                 let w = axis * distance.recip(); // As `normalize` computes it.
-                // The disk through the centre facing p (Shirley & Chiu's
-                // concentric map keeps the strata compact).
-                let (u, v) = w.any_orthonormal_pair();
-                let (dx, dy) = concentric_disk(stratified(k, samples, jitter));
-                towards(center + radius * (dx * u + dy * v), share)
+                let cone = SphereCone::new(distance, radius);
+                let (u, v) = stratified(k, samples, jitter);
+                let (to_light, along) = cone.sample(w, u, v);
+                let radiance = self.power / to_f32(std::f64::consts::PI as Real * radius * radius);
+                Some(LightSample {
+                    to_light,
+                    distance: along,
+                    irradiance: radiance * (share / to_f32(cone.pdf())),
+                })
             }
         }
+    }
+}
+
+/// The cone of directions a sphere of radius `r` subtends from a point at
+/// distance `d > r` from its centre, sampled uniformly (pbrt-v4 §6.2.4,
+/// `Sphere::Sample` for reference points outside the sphere).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SphereCone {
+    /// Distance from the point to the sphere's centre.
+    d: Real,
+    /// The sphere's radius.
+    r: Real,
+    /// `sin²θ_max = r²/d²`.
+    sin2_max: Real,
+    /// `1 − cos θ_max`, without cancellation for small cones.
+    one_minus_cos_max: Real,
+}
+
+impl SphereCone {
+    /// The cone of a sphere of radius `r` seen from distance `d > r`.
+    pub fn new(d: Real, r: Real) -> Self {
+        let sin2_max = (r / d) * (r / d);
+        // 1 − √(1 − s) loses s to rounding when it is small; its series
+        // s/2 + s²/8 is exact to f32 there (pbrt-v4 uses the same switch).
+        let one_minus_cos_max = if sin2_max < 0.00068523 {
+            sin2_max / 2.0 + sin2_max * sin2_max / 8.0
+        } else {
+            1.0 - (1.0 - sin2_max).sqrt()
+        };
+        Self { d, r, sin2_max, one_minus_cos_max }
+    }
+
+    /// The density of each direction in the cone over solid angle:
+    /// `1/(2π·(1 − cos θ_max))`.
+    pub fn pdf(&self) -> Real {
+        1.0 / (2.0 * std::f64::consts::PI as Real * self.one_minus_cos_max)
+    }
+
+    /// The direction for (u, v) ∈ [0,1)² about the unit axis `w` towards the
+    /// centre, and the distance along it to the sphere's near surface.
+    pub fn sample(&self, w: Vec3, u: Real, v: Real) -> (Vec3, Real) {
+        // cos θ uniform in [cos θ_max, 1]: 1 − cos θ = u·(1 − cos θ_max).
+        let one_minus_cos = u * self.one_minus_cos_max;
+        let cos_theta = 1.0 - one_minus_cos;
+        let sin2 = (one_minus_cos * (2.0 - one_minus_cos)).max(0.0);
+        let sin_theta = sin2.sqrt();
+        let phi = 2.0 * std::f64::consts::PI as Real * v;
+        let (a, b) = w.any_orthonormal_pair();
+        let dir = (cos_theta * w + sin_theta * (phi.cos() * a + phi.sin() * b)).normalize_or(w);
+        // The near intersection of the ray with the sphere: d·cos θ − √(r² − d²·sin²θ).
+        let h2 = (self.r * self.r - self.d * self.d * sin2).max(0.0);
+        let along = (self.d * cos_theta - h2.sqrt()).max(0.0);
+        debug_assert!(sin2 <= self.sin2_max * (1.0 + 1e-3) + 1e-12);
+        (dir, along)
     }
 }

@@ -109,7 +109,7 @@ impl Mesh {
             return Err(MeshError::FileTooLarge { path: path.to_owned(), bytes: meta.len(), limit });
         }
         let options = tobj::LoadOptions {
-            triangulate: false, // We fan faces ourselves, in the order SPEC.md fixes.
+            triangulate: false, // We fan faces ourselves, in the order docs/conventions.md fixes.
             single_index: false,
             ignore_points: true,
             ignore_lines: true,
@@ -409,7 +409,7 @@ mod tests {
 
     #[test]
     fn a_closed_mesh_far_from_the_origin_has_no_leaks_from_inside() {
-        // The radius-2 icosphere at (148376, 1234, −223423) (issue 6's case):
+        // The radius-2 icosphere at (148376, 1234, −223423):
         // 10 000 rays from its centre in directions spread over the sphere.
         let obj_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/meshes/icosphere.obj");
         let centre = Vec3::new(148376.0, 1234.0, -223423.0);

@@ -1,7 +1,7 @@
 //! Infinite planes `p·n = d`: above/on/below test, closest point, ray intersection.
 
+use crate::geometry_error::GeometryError;
 use crate::hit::PrimitiveHit;
-use crate::primitive::GeometryError;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3};
 use crate::surface::{SurfacePoint, project_onto_plane};

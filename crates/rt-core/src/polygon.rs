@@ -1,8 +1,8 @@
 //! Planar polygons: a plane hit, then a point-in-polygon test in 2D.
 
 use crate::aabb::Aabb;
+use crate::geometry_error::GeometryError;
 use crate::hit::PrimitiveHit;
-use crate::primitive::GeometryError;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, magnitude_scale, normalize_robust};
 use crate::surface::{SurfacePoint, project_onto_plane};
@@ -85,6 +85,44 @@ impl Polygon {
         inside
     }
 
+    /// The polygon cut into triangles with its own corners (ear clipping
+    /// in the plane of projection; Eberly, "Triangulation by Ear Clipping",
+    /// 2002), each wound like the polygon. `None` if the polygon is not
+    /// simple (its edges cross), where the even–odd rule's region is not the
+    /// union of such triangles. Used to sample points on an emissive polygon
+    /// by area.
+    pub fn triangulate(&self) -> Option<Vec<[Vec3; 3]>> {
+        let [u, v] = self.axes;
+        let flat: Vec<(f64, f64)> =
+            self.points.iter().map(|p| (crate::real::to_f64(p[u]), crate::real::to_f64(p[v]))).collect();
+        // Orientation of the projected winding: counter-clockwise (> 0) or not.
+        let n = flat.len();
+        let signed: f64 = (0..n).map(|i| cross2(flat[i], flat[(i + 1) % n], (0.0, 0.0))).sum();
+        if signed == 0.0 || edges_cross(&flat) {
+            return None;
+        }
+        let orientation = signed.signum();
+        let mut remaining: Vec<usize> = (0..n).collect();
+        let mut triangles = Vec::with_capacity(n - 2);
+        while remaining.len() > 3 {
+            let m = remaining.len();
+            let ear = (0..m).find(|&i| {
+                let (a, b, c) = (remaining[(i + m - 1) % m], remaining[i], remaining[(i + 1) % m]);
+                let convex = cross2(flat[a], flat[b], flat[c]) * orientation > 0.0;
+                convex
+                    && remaining
+                        .iter()
+                        .filter(|&&k| k != a && k != b && k != c)
+                        .all(|&k| !inside_triangle(flat[k], flat[a], flat[b], flat[c]))
+            })?;
+            let (a, b, c) = (remaining[(ear + m - 1) % m], remaining[ear], remaining[(ear + 1) % m]);
+            triangles.push([self.points[a], self.points[b], self.points[c]]);
+            remaining.remove(ear);
+        }
+        triangles.push(remaining.iter().map(|&k| self.points[k]).collect::<Vec<_>>().try_into().ok()?);
+        Some(triangles)
+    }
+
     /// `p` (a computed hit) projected onto the polygon's plane `x·n = d`,
     /// which is exactly the plane [`Polygon::intersect`] tests against.
     pub fn surface_point(&self, p: Vec3) -> SurfacePoint {
@@ -107,6 +145,36 @@ impl Polygon {
     }
 }
 
+/// Twice the signed area of the 2D triangle (a, b, c): > 0 counter-clockwise.
+fn cross2(a: (f64, f64), b: (f64, f64), c: (f64, f64)) -> f64 {
+    (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)
+}
+
+/// Whether `p` lies inside or on the 2D triangle (a, b, c) of either orientation.
+fn inside_triangle(p: (f64, f64), a: (f64, f64), b: (f64, f64), c: (f64, f64)) -> bool {
+    let (d1, d2, d3) = (cross2(a, b, p), cross2(b, c, p), cross2(c, a, p));
+    let negative = d1 < 0.0 || d2 < 0.0 || d3 < 0.0;
+    let positive = d1 > 0.0 || d2 > 0.0 || d3 > 0.0;
+    !(negative && positive)
+}
+
+/// Whether two non-adjacent edges of the closed 2D polygon cross or touch.
+fn edges_cross(points: &[(f64, f64)]) -> bool {
+    let n = points.len();
+    let edge = |i: usize| (points[i], points[(i + 1) % n]);
+    (0..n).any(|i| {
+        (i + 2..n).any(|j| {
+            if i == 0 && j == n - 1 {
+                return false; // Adjacent through the closing edge.
+            }
+            let ((a, b), (c, d)) = (edge(i), edge(j));
+            let (d1, d2) = (cross2(a, b, c), cross2(a, b, d));
+            let (d3, d4) = (cross2(c, d, a), cross2(c, d, b));
+            (d1 * d2 <= 0.0) && (d3 * d4 <= 0.0) && !(d1 == 0.0 && d2 == 0.0 && d3 == 0.0 && d4 == 0.0)
+        })
+    })
+}
+
 /// The unit normal from Newell's area vector Σ (pᵢ − c) × (pᵢ₊₁ − c), which is
 /// twice the area times the normal, oriented by the winding. The offsets are
 /// divided by their largest component first so the products neither overflow
@@ -123,7 +191,7 @@ fn newell_normal(points: &[Vec3], center: Vec3) -> Option<Vec3> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     const ALL: Interval = Interval::new(0.0, Real::INFINITY);
@@ -183,6 +251,47 @@ mod tests {
         // = (2·(−1) − 0·2, 0·1 − 0·(−1), 0·2 − 2·1) = (−2,0,−2).
         assert!((h.t - 2.5).abs() < 1e-6);
         assert!((h.normal + Vec3::new(1.0, 0.0, 1.0).normalize()).length() < 1e-6);
+    }
+
+    /// The area of triangles by the cross product.
+    fn area(triangles: &[[Vec3; 3]]) -> Real {
+        triangles.iter().map(|[a, b, c]| 0.5 * (*b - *a).cross(*c - *a).length()).sum()
+    }
+
+    #[test]
+    fn a_concave_polygon_is_cut_into_triangles_covering_exactly_its_area() {
+        let p = l_shape();
+        let triangles = p.triangulate().unwrap();
+        assert_eq!(triangles.len(), 4);
+        assert!((area(&triangles) - 3.0).abs() < 1e-6, "the L covers 3 unit squares");
+        for t in &triangles {
+            // Wound like the polygon, and inside it.
+            let n = (t[1] - t[0]).cross(t[2] - t[0]);
+            assert!(n.dot(p.normal()) > 0.0);
+            assert!(p.contains_projected((t[0] + t[1] + t[2]) / 3.0));
+        }
+        let mut reversed = p.points().to_vec();
+        reversed.reverse();
+        let r = Polygon::new(reversed).unwrap().triangulate().unwrap();
+        assert!((area(&r) - 3.0).abs() < 1e-6);
+    }
+
+    /// A five-pointed star drawn in one stroke: its edges cross.
+    pub(crate) fn pentagram() -> Polygon {
+        let points = (0..5)
+            .map(|k| {
+                let a = (90.0 + 144.0 * k as Real).to_radians();
+                Vec3::new(a.cos(), a.sin(), 0.0)
+            })
+            .collect();
+        Polygon::new(points).unwrap()
+    }
+
+    #[test]
+    fn a_self_crossing_polygon_cannot_be_triangulated() {
+        assert_eq!(pentagram().triangulate(), None);
+        // Its centre is outside by the even–odd rule.
+        assert!(!pentagram().contains_projected(Vec3::ZERO));
     }
 
     #[test]

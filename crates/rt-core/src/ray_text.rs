@@ -1,4 +1,4 @@
-//! The text form of rays used by `rt-view cast` (SPEC.md): one ray a line,
+//! The text form of rays used by `rt-view cast` (`docs/command-line.md`): one ray a line,
 //! `ox,oy,oz,dx,dy,dz`; blank lines and lines starting with `#` are skipped.
 //! Numbers are parsed at the geometry's precision ([`Real`]).
 

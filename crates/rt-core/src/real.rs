@@ -46,8 +46,8 @@ pub fn magnitude_scale(p: Vec3) -> Real {
 /// A hit counts only if its distance from the origin, `t·|d|`, is greater than
 /// `2⁻¹⁶ · s` with `s = max(1, largest |coordinate| of the origin)`.
 ///
-/// SPEC.md requires hits at distance ≤ 2⁻²⁰·s never to count and hits at
-/// distance ≥ 2⁻¹⁰·s always to count. 2⁻¹⁶ is 16× above the lower bound and
+/// The `cast` contract (`docs/conventions.md`) requires hits at distance
+/// ≤ 2⁻²⁰·s never to count and hits at distance ≥ 2⁻¹⁰·s always to count. 2⁻¹⁶ is 16× above the lower bound and
 /// 64× below the upper one, leaning towards keeping near hits. In f32 a point
 /// on a surface at magnitude s is off the surface by a few ulps, about 2⁻²³·s
 /// each, so 2⁻¹⁶·s leaves a margin of 2⁷ = 128 ulps.

@@ -1,4 +1,5 @@
-//! The render loop: pixels → samples → primary rays → [`Tracer`] → colours → rows → image.
+//! The render loop: pixels → samples → primary rays → [`Tracer`] (or, under
+//! global illumination, [`PathTracer`]) → colours → rows → image.
 //!
 //! Rows are independent: [`Renderer::render_row`] fills one, and
 //! [`Renderer::render`] fills all of them in parallel with rayon. Every
@@ -15,9 +16,9 @@ use thiserror::Error;
 use crate::camera::Camera;
 use crate::effects::{EffectPlan, RayCounts};
 use crate::material::{Color, ColorSpace};
-use crate::sampler::{SampleRng, subpixel_offset};
+use crate::path_tracer::PathTracer;
+use crate::sampler::{MAX_SAMPLES_PER_PIXEL, SampleRng, subpixel_offset};
 use crate::scene::Scene;
-use crate::scene_file::MAX_SAMPLES_PER_PIXEL;
 use crate::tracer::Tracer;
 use crate::view_plane::{ViewPlane, ViewPlaneError};
 
@@ -61,8 +62,11 @@ impl Frame {
 #[derive(Clone, Copy, Debug)]
 pub struct Renderer<'s> {
     tracer: Tracer<'s>,
+    /// Under global illumination, the path tracer that replaces `tracer`.
+    path_tracer: Option<PathTracer<'s>>,
     view: ViewPlane,
     spp: u32,
+    seed: u64,
     color_space: ColorSpace,
 }
 
@@ -81,7 +85,7 @@ impl<'s> Renderer<'s> {
         height: u32,
         spp: u32,
     ) -> Result<Self, RenderError> {
-        Self::with_plan(scene, camera, width, height, spp, EffectPlan::for_scene(scene))
+        Self::with_plan(scene, camera, width, height, spp, scene.effect_plan())
     }
 
     /// A renderer that simulates what `plan` allows (the viewer's toggles).
@@ -98,10 +102,19 @@ impl<'s> Renderer<'s> {
         }
         Ok(Self {
             tracer: Tracer::new(scene, plan),
+            path_tracer: plan.global_illumination.map(|gi| PathTracer::new(scene, gi)),
             view: ViewPlane::new(camera, width, height)?,
             spp,
+            seed: 0,
             color_space: scene.color_space,
         })
+    }
+
+    /// The same renderer drawing its random numbers for seed `seed`
+    /// ([`SampleRng::seeded`]): an independent estimate of the same image.
+    /// Seed 0 is the default.
+    pub fn with_seed(self, seed: u64) -> Self {
+        Self { seed, ..self }
     }
 
     /// The view plane rays are generated from.
@@ -124,16 +137,20 @@ impl<'s> Renderer<'s> {
         self.color_space
     }
 
-    /// Sample `k` of pixel (x, y): one primary ray through SPEC.md's
-    /// sub-pixel offset (the centre when spp = 1), traced.
+    /// Sample `k` of pixel (x, y): one primary ray through its sub-pixel
+    /// offset ([`crate::sampler::subpixel_offset`]; the centre when spp = 1), traced.
     pub fn sample(&self, x: u32, y: u32, k: u32, counts: &mut RayCounts) -> Color {
         let ray = if self.spp == 1 {
             self.view.center_ray(x, y)
         } else {
-            let (sx, sy) = subpixel_offset(x, y, k, self.spp);
+            let (sx, sy) = subpixel_offset(x, y, k, self.spp, self.seed);
             self.view.primary_ray(x, y, sx, sy)
         };
-        self.tracer.trace_primary(&ray, &mut SampleRng::new(x, y, k), counts)
+        let rng = &mut SampleRng::seeded(x, y, k, self.seed);
+        match &self.path_tracer {
+            Some(path_tracer) => path_tracer.trace_primary(&ray, rng, counts),
+            None => self.tracer.trace_primary(&ray, rng, counts),
+        }
     }
 
     /// The mean colour of pixel (x, y) over its samples, summed in order
@@ -251,10 +268,7 @@ mod tests {
     fn the_image_is_the_same_for_one_and_for_two_threads() {
         let s = scene();
         let r = Renderer::new(&s, 32, 24, 4).unwrap();
-        let run = |threads| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            pool.install(|| r.render(|_| {}))
-        };
+        let run = |threads| crate::test_support::render_on_threads(&r, threads);
         assert_eq!(run(1), run(2));
     }
 

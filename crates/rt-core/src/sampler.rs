@@ -4,36 +4,56 @@
 //! ([`SampleRng`]), never by thread or row, so an image is the same bit for
 //! bit whatever the thread count or the order rows finish in.
 //!
-//! SPEC.md's sub-pixel offset (sx, sy) ∈ [0,1)²: one sample per pixel is the
+//! The sub-pixel offset (sx, sy) ∈ [0,1)² of the view plane's pixel formula
+//! (`docs/conventions.md`): one sample per pixel is the
 //! pixel centre (0.5, 0.5). For n > 1 samples the pixel is split into a grid
-//! of `cols × rows` cells (`cols = ⌈√n⌉`, `rows = ⌈n / cols⌉`), sample k goes
-//! to cell (k mod cols, k div cols), and is jittered inside its cell: stratified
-//! jitter ([`stratified`]). Area-light and ambient-occlusion samples are
+//! of n cells of equal area (an m × m grid when n = m²), sample k goes to
+//! cell k, and is jittered inside its cell: stratified jitter
+//! ([`stratified`]). Area-light and ambient-occlusion samples are
 //! stratified the same way.
 
 use crate::real::{Real, Vec3};
 
-/// The sub-pixel offset of sample `sample` of `spp` at pixel (`x`, `y`).
-pub fn subpixel_offset(x: u32, y: u32, sample: u32, spp: u32) -> (Real, Real) {
+/// Largest accepted samples-per-pixel count, 2¹⁶.
+pub const MAX_SAMPLES_PER_PIXEL: u32 = 1 << 16;
+
+/// The sub-pixel offset of sample `sample` of `spp` at pixel (`x`, `y`), in
+/// the image of seed `seed` ([`SampleRng::seeded`]).
+pub fn subpixel_offset(x: u32, y: u32, sample: u32, spp: u32, seed: u64) -> (Real, Real) {
     if spp <= 1 {
         return (0.5, 0.5);
     }
-    let h = hash(x, y, sample);
+    let h = hash(x, y, sample) ^ seed_bits(seed);
     stratified(sample, spp, (unit_float(h as u32), unit_float((h >> 32) as u32)))
 }
 
-/// Point `k` of `n` stratified over [0,1)²: cell (k mod cols, k div cols) of a
-/// `cols × rows` grid (`cols = ⌈√n⌉`, `rows = ⌈n / cols⌉`), at `jitter` ∈
-/// [0,1)² inside the cell.
+/// Point `k` of `n` stratified over [0,1)²: the square is cut into `n`
+/// cells of equal area, one per point, and the point is placed at `jitter`
+/// ∈ [0,1)² inside its cell.
+///
+/// The cells lie in `rows = ⌊√n⌋` rows; the first `n mod rows` rows hold
+/// `⌊n/rows⌋ + 1` cells, the others `⌊n/rows⌋`, and each row's height is its
+/// number of cells over n, so every cell has area exactly 1/n and a uniform
+/// `jitter` gives a uniform point (a grid with empty cells would not). For
+/// n = m² this is the m × m grid, cell (k mod m, k div m).
 pub fn stratified(k: u32, n: u32, jitter: (Real, Real)) -> (Real, Real) {
-    let cols = (n.max(1) as f64).sqrt().ceil() as u32;
-    let rows = n.max(1).div_ceil(cols);
-    let (cx, cy) = (k % cols, k / cols);
+    let n = n.max(1);
+    let k = k.min(n - 1);
+    let rows = (n as f64).sqrt().floor().max(1.0) as u32;
+    let (base, extra) = (n / rows, n % rows);
+    // Cells before row `row`, the row, the cell in it and the row's width.
+    let wide = extra * (base + 1);
+    let (row, col, count) = if k < wide {
+        (k / (base + 1), k % (base + 1), base + 1)
+    } else {
+        (extra + (k - wide) / base, (k - wide) % base, base)
+    };
+    let before = if row < extra { row * (base + 1) } else { wide + (row - extra) * base };
     // `(c + j) / n < 1` for j < 1 in exact arithmetic; `min` keeps it so after rounding.
     let below_one = 1.0 - Real::EPSILON / 2.0;
     (
-        ((cx as Real + jitter.0) / cols as Real).min(below_one),
-        ((cy as Real + jitter.1) / rows as Real).min(below_one),
+        ((col as Real + jitter.0) / count as Real).min(below_one),
+        ((before as Real + jitter.1 * count as Real) / n as Real).min(below_one),
     )
 }
 
@@ -68,7 +88,14 @@ pub struct SampleRng(u64);
 impl SampleRng {
     /// The stream of sample `sample` of pixel (`x`, `y`).
     pub fn new(x: u32, y: u32, sample: u32) -> Self {
-        Self(hash(x, y, sample) ^ 0x5851_F42D_4C95_7F2D)
+        Self::seeded(x, y, sample, 0)
+    }
+
+    /// The stream of sample `sample` of pixel (`x`, `y`) in the image of seed
+    /// `seed`: images with different seeds are independent estimates (their
+    /// noise can be measured by comparing them); seed 0 is the default image.
+    pub fn seeded(x: u32, y: u32, sample: u32, seed: u64) -> Self {
+        Self(hash(x, y, sample) ^ 0x5851_F42D_4C95_7F2D ^ seed_bits(seed))
     }
 
     /// The next pair of numbers in [0, 1).
@@ -91,6 +118,12 @@ fn hash(x: u32, y: u32, sample: u32) -> u64 {
     mix(z.wrapping_add(0x9E37_79B9_7F4A_7C15))
 }
 
+/// What a seed changes in every hash: 0 for seed 0 (SplitMix64's output
+/// function maps 0 to 0), well mixed bits otherwise.
+fn seed_bits(seed: u64) -> u64 {
+    mix(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15))
+}
+
 /// SplitMix64's output function.
 fn mix(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -104,24 +137,51 @@ mod tests {
 
     #[test]
     fn one_sample_is_the_pixel_centre() {
-        assert_eq!(subpixel_offset(7, 3, 0, 1), (0.5, 0.5));
+        assert_eq!(subpixel_offset(7, 3, 0, 1, 0), (0.5, 0.5));
     }
 
     #[test]
     fn four_samples_fall_one_in_each_quadrant() {
         let mut quadrants: Vec<(bool, bool)> =
-            (0..4).map(|k| subpixel_offset(5, 9, k, 4)).map(|(x, y)| (x >= 0.5, y >= 0.5)).collect();
+            (0..4).map(|k| subpixel_offset(5, 9, k, 4, 0)).map(|(x, y)| (x >= 0.5, y >= 0.5)).collect();
         quadrants.sort();
         assert_eq!(quadrants, vec![(false, false), (false, true), (true, false), (true, true)]);
+    }
+
+    #[test]
+    fn every_stratum_has_the_same_area_for_any_count() {
+        // Uniform jitter must give a uniform point: the strata of n points
+        // tile the square with cells of area 1/n, for square and other n.
+        for n in [1, 2, 3, 5, 8, 9, 12, 16, 17, 32, 1000] {
+            let mut area = 0.0;
+            let mut cells = Vec::new();
+            for k in 0..n {
+                let lo = stratified(k, n, (0.0, 0.0));
+                let hi = stratified(k, n, (1.0, 1.0));
+                let cell = (hi.0 - lo.0) * (hi.1 - lo.1);
+                assert!((cell - 1.0 / n as Real).abs() < 1e-5, "n = {n}, cell {k}: {cell}");
+                area += cell;
+                cells.push((lo, hi));
+            }
+            assert!((area - 1.0).abs() < 1e-4, "n = {n}: {area}");
+            // No two cells overlap: a point in one is in no other.
+            for (i, (lo, hi)) in cells.iter().enumerate() {
+                let mid = ((lo.0 + hi.0) / 2.0, (lo.1 + hi.1) / 2.0);
+                let inside = |(l, h): &((Real, Real), (Real, Real))| {
+                    mid.0 >= l.0 && mid.0 < h.0 && mid.1 >= l.1 && mid.1 < h.1
+                };
+                assert_eq!(cells.iter().filter(|c| inside(c)).count(), 1, "n = {n}, cell {i}");
+            }
+        }
     }
 
     #[test]
     fn offsets_stay_in_the_half_open_unit_square_and_are_reproducible() {
         for spp in [2, 3, 5, 16, 17] {
             for k in 0..spp {
-                let (sx, sy) = subpixel_offset(1234, 567, k, spp);
+                let (sx, sy) = subpixel_offset(1234, 567, k, spp, 7);
                 assert!((0.0..1.0).contains(&sx) && (0.0..1.0).contains(&sy));
-                assert_eq!((sx, sy), subpixel_offset(1234, 567, k, spp));
+                assert_eq!((sx, sy), subpixel_offset(1234, 567, k, spp, 7));
             }
         }
     }
@@ -147,7 +207,14 @@ mod tests {
 
     #[test]
     fn neighbouring_pixels_get_different_jitter() {
-        assert_ne!(subpixel_offset(0, 0, 0, 4), subpixel_offset(1, 0, 0, 4));
-        assert_ne!(subpixel_offset(0, 0, 0, 4), subpixel_offset(0, 1, 0, 4));
+        assert_ne!(subpixel_offset(0, 0, 0, 4, 0), subpixel_offset(1, 0, 0, 4, 0));
+        assert_ne!(subpixel_offset(0, 0, 0, 4, 0), subpixel_offset(0, 1, 0, 4, 0));
+    }
+
+    #[test]
+    fn seed_zero_is_the_default_stream_and_other_seeds_differ() {
+        assert_eq!(SampleRng::seeded(3, 4, 5, 0).next_pair(), SampleRng::new(3, 4, 5).next_pair());
+        assert_ne!(SampleRng::seeded(3, 4, 5, 1).next_pair(), SampleRng::new(3, 4, 5).next_pair());
+        assert_ne!(subpixel_offset(3, 4, 5, 16, 1), subpixel_offset(3, 4, 5, 16, 0));
     }
 }

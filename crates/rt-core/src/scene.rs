@@ -1,29 +1,29 @@
-//! A loaded, validated scene: camera, image size, background, materials and
-//! objects, and the closest-hit query over all of them.
+//! A loaded, validated scene: camera, image size, background, materials,
+//! objects and lighting, and the ray queries over all of them.
+//!
+//! A scene is made once, by [`crate::scene_file`] from a RON file or by a
+//! [`SceneBuilder`] in code, and is read-only afterwards: its BVH is built
+//! when it is made, so its objects can be read but not changed.
+
+use thiserror::Error;
 
 use crate::bvh::{Bvh, BvhStats};
 use crate::camera::Camera;
-use crate::effects::Lighting;
+use crate::effects::{EffectPlan, Lighting};
+use crate::emitter::{Emitter, EmitterError};
 use crate::hit::Hit;
+use crate::light_sampler::LightSampler;
 use crate::material::{Color, ColorSpace, Material};
 use crate::method::Methods;
+use crate::object::Object;
 use crate::primitive::Primitive;
 use crate::ray::{Interval, Ray, rescale_t};
 use crate::real::{Real, cast_min_t, scale_pow2};
-use crate::view_plane::{ViewPlane, ViewPlaneError};
+use crate::sampler::MAX_SAMPLES_PER_PIXEL;
+use crate::view_plane::{ViewPlane, ViewPlaneError, check_image_size};
 
-/// One entry of the scene file's object list.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Object {
-    /// Its geometry.
-    pub primitive: Primitive,
-    /// Index into [`Scene::materials`].
-    pub material: usize,
-}
-
-/// A scene ready to render. Built by [`crate::scene_file`] from a RON file;
-/// every field is already validated. The objects sit behind a BVH built once
-/// here, so they can be read ([`Scene::objects`]) but not changed.
+/// A scene ready to render. Every field is validated; the plain settings are
+/// public, the objects and materials are read through methods.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
     /// The camera.
@@ -36,58 +36,214 @@ pub struct Scene {
     pub background: Color,
     /// Samples per pixel; 1 means one ray through each pixel centre.
     pub samples_per_pixel: u32,
-    /// Materials, in the file's (sorted by name) order.
-    pub materials: Vec<Material>,
-    /// Material names, parallel to `materials`.
-    pub material_names: Vec<String>,
     /// Lights and effect settings; none by default (pure ray casting).
     pub lighting: Lighting,
     /// How rendered colours are encoded into 8-bit pixels.
     pub color_space: ColorSpace,
     /// The intersection routines (the careful ones by default).
     pub methods: Methods,
+    materials: Vec<Material>,
+    material_names: Vec<String>,
     objects: Vec<Object>,
     bvh: Bvh,
+    /// The emissive objects, as lights for global illumination.
+    emitters: Vec<Emitter>,
+    /// Index into `emitters` of each object's emitter.
+    emitter_of: Vec<Option<u32>>,
+    light_sampler: LightSampler,
 }
 
-impl Scene {
-    /// A scene from validated parts; builds the BVH over `objects`.
-    pub fn new(
-        camera: Camera,
-        (width, height): (u32, u32),
-        background: Color,
-        samples_per_pixel: u32,
-        materials: Vec<Material>,
-        material_names: Vec<String>,
-        objects: Vec<Object>,
-    ) -> Self {
-        let bvh = Bvh::build(&objects);
+/// Why a [`SceneBuilder`] cannot make a scene.
+#[derive(Clone, Debug, Error, PartialEq)]
+pub enum SceneBuildError {
+    /// The image size is out of range.
+    #[error(transparent)]
+    ImageSize(#[from] ViewPlaneError),
+    /// Samples per pixel out of range.
+    #[error("samples_per_pixel must be 1 to {MAX_SAMPLES_PER_PIXEL}, got {0}")]
+    SamplesPerPixel(u32),
+    /// Two materials share a name.
+    #[error("material \"{0}\" is defined twice")]
+    DuplicateMaterial(String),
+    /// An object names a material that was not added.
+    #[error("objects[{index}] ({kind}): unknown material \"{name}\" (defined: {defined})")]
+    UnknownMaterial {
+        /// 0-based object index.
+        index: usize,
+        /// The object's variant ([`Primitive::kind`]).
+        kind: &'static str,
+        /// The missing name.
+        name: String,
+        /// The names that exist, comma-separated.
+        defined: String,
+    },
+    /// An emissive object cannot be a light.
+    #[error("objects[{index}] ({kind}): {reason}")]
+    Emitter {
+        /// 0-based object index.
+        index: usize,
+        /// The object's variant ([`Primitive::kind`]).
+        kind: &'static str,
+        /// Why.
+        reason: EmitterError,
+    },
+}
+
+/// Builds a [`Scene`] step by step: a camera, then any of the settings,
+/// materials by name and objects that name them, then [`SceneBuilder::build`].
+///
+/// ```
+/// use rt_core::{Camera, Material, Primitive, Projection, SceneBuilder, Vec3};
+/// use rt_core::sphere::Sphere;
+///
+/// let camera = Camera::new(Vec3::new(0.0, 0.0, -5.0), Vec3::ZERO, Vec3::Y, 40.0, 1.0,
+///     Projection::Perspective).unwrap();
+/// let scene = SceneBuilder::new(camera)
+///     .image_size(64, 48)
+///     .material("red", Material::flat(glam::Vec3::new(1.0, 0.0, 0.0)))
+///     .object(Primitive::Sphere(Sphere::new(Vec3::ZERO, 1.0).unwrap()), "red")
+///     .build()
+///     .unwrap();
+/// assert_eq!(scene.objects().len(), 1);
+/// ```
+#[derive(Clone, Debug)]
+pub struct SceneBuilder {
+    camera: Camera,
+    width: u32,
+    height: u32,
+    background: Color,
+    samples_per_pixel: u32,
+    lighting: Lighting,
+    color_space: ColorSpace,
+    methods: Methods,
+    materials: Vec<(String, Material)>,
+    objects: Vec<(Primitive, String)>,
+}
+
+impl SceneBuilder {
+    /// A scene seen by `camera`: 640×480 pixels, 1 sample per pixel, a black
+    /// background, no materials, objects or lights, linear colours and the
+    /// default intersection methods until set otherwise.
+    pub fn new(camera: Camera) -> Self {
         Self {
             camera,
-            width,
-            height,
-            background,
-            samples_per_pixel,
-            materials,
-            material_names,
+            width: 640,
+            height: 480,
+            background: Color::ZERO,
+            samples_per_pixel: 1,
             lighting: Lighting::default(),
             color_space: ColorSpace::default(),
             methods: Methods::default(),
-            objects,
-            bvh,
+            materials: Vec::new(),
+            objects: Vec::new(),
         }
     }
 
-    /// The same scene lit by `lighting`.
-    pub fn with_lighting(self, lighting: Lighting) -> Self {
+    /// The image size in pixels.
+    pub fn image_size(self, width: u32, height: u32) -> Self {
+        Self { width, height, ..self }
+    }
+
+    /// The colour of rays that hit nothing.
+    pub fn background(self, background: Color) -> Self {
+        Self { background, ..self }
+    }
+
+    /// Samples per pixel.
+    pub fn samples_per_pixel(self, samples_per_pixel: u32) -> Self {
+        Self { samples_per_pixel, ..self }
+    }
+
+    /// Lights and effect settings.
+    pub fn lighting(self, lighting: Lighting) -> Self {
         Self { lighting, ..self }
     }
 
-    /// The same scene traced with the intersection routines `methods`.
-    pub fn with_methods(self, methods: Methods) -> Self {
+    /// How colours are encoded into 8-bit pixels.
+    pub fn color_space(self, color_space: ColorSpace) -> Self {
+        Self { color_space, ..self }
+    }
+
+    /// The intersection routines.
+    pub fn methods(self, methods: Methods) -> Self {
         Self { methods, ..self }
     }
 
+    /// Adds a material called `name`; materials keep the order they are added in.
+    pub fn material(mut self, name: impl Into<String>, material: Material) -> Self {
+        self.materials.push((name.into(), material));
+        self
+    }
+
+    /// Adds an object drawn with the material called `material`; objects
+    /// keep the order they are added in (a hit's `object` index).
+    pub fn object(mut self, primitive: Primitive, material: impl Into<String>) -> Self {
+        self.objects.push((primitive, material.into()));
+        self
+    }
+
+    /// Checks the parts and builds the scene's BVH.
+    pub fn build(self) -> Result<Scene, SceneBuildError> {
+        check_image_size(self.width, self.height)?;
+        if !(1..=MAX_SAMPLES_PER_PIXEL).contains(&self.samples_per_pixel) {
+            return Err(SceneBuildError::SamplesPerPixel(self.samples_per_pixel));
+        }
+        let (material_names, materials): (Vec<String>, Vec<Material>) = self.materials.into_iter().unzip();
+        for (i, name) in material_names.iter().enumerate() {
+            if material_names[..i].contains(name) {
+                return Err(SceneBuildError::DuplicateMaterial(name.clone()));
+            }
+        }
+        let objects = self
+            .objects
+            .into_iter()
+            .enumerate()
+            .map(|(index, (primitive, name))| match material_names.iter().position(|n| *n == name) {
+                Some(material) => Ok(Object { primitive, material }),
+                None => Err(SceneBuildError::UnknownMaterial {
+                    index,
+                    kind: primitive.kind(),
+                    name,
+                    defined: material_names.join(", "),
+                }),
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut emitters = Vec::new();
+        let mut emitter_of = vec![None; objects.len()];
+        for (index, o) in objects.iter().enumerate() {
+            let m = &materials[o.material];
+            if m.is_emissive() {
+                let e = Emitter::new(index, &o.primitive, m.emission)
+                    .map_err(|reason| SceneBuildError::Emitter { index, kind: o.primitive.kind(), reason })?;
+                emitter_of[index] = Some(emitters.len() as u32);
+                emitters.push(e);
+            }
+        }
+        let bvh = Bvh::build(&objects);
+        let radius = bvh.bounds().map_or(1.0, |b| (0.5 * b.size().length()).max(1.0));
+        let light_sampler =
+            LightSampler::new(&self.lighting.lights, &emitters, self.background, objects.len(), radius);
+        Ok(Scene {
+            camera: self.camera,
+            width: self.width,
+            height: self.height,
+            background: self.background,
+            samples_per_pixel: self.samples_per_pixel,
+            lighting: self.lighting,
+            color_space: self.color_space,
+            methods: self.methods,
+            materials,
+            material_names,
+            objects,
+            bvh,
+            emitters,
+            emitter_of,
+            light_sampler,
+        })
+    }
+}
+
+impl Scene {
     /// Objects in file order: a hit's `object` indexes this list.
     pub fn objects(&self) -> &[Object] {
         &self.objects
@@ -117,7 +273,8 @@ impl Scene {
 
     /// The same query by testing every object in order: the reference the
     /// BVH is tested against.
-    pub fn closest_hit_brute_force(&self, ray: &Ray, range: Interval) -> Option<Hit> {
+    #[cfg(test)]
+    pub(crate) fn closest_hit_brute_force(&self, ray: &Ray, range: Interval) -> Option<Hit> {
         let (unit, mut range, k) = rescaled_query(ray, range)?;
         let mut closest = None;
         for (index, object) in self.objects.iter().enumerate() {
@@ -161,6 +318,47 @@ impl Scene {
         self.materials[self.objects[hit.object].material].color
     }
 
+    /// Material `index` ([`Object::material`]).
+    pub fn material(&self, index: usize) -> &Material {
+        &self.materials[index]
+    }
+
+    /// The material of object `object`.
+    pub fn object_material(&self, object: usize) -> &Material {
+        &self.materials[self.objects[object].material]
+    }
+
+    /// All materials, in the order they were defined (a scene file's: sorted by name).
+    pub fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
+    /// The materials' names, parallel to [`Scene::materials`].
+    pub fn material_names(&self) -> &[String] {
+        &self.material_names
+    }
+
+    /// The emissive objects, as lights for global illumination.
+    pub fn emitters(&self) -> &[Emitter] {
+        &self.emitters
+    }
+
+    /// The emitter of object `object`, if it is emissive.
+    pub fn emitter_of(&self, object: usize) -> Option<&Emitter> {
+        self.emitter_of.get(object).copied().flatten().map(|i| &self.emitters[i as usize])
+    }
+
+    /// How global illumination chooses among the scene's lights.
+    pub fn light_sampler(&self) -> &LightSampler {
+        &self.light_sampler
+    }
+
+    /// The effects this scene asks for: its lighting, and the materials its
+    /// objects use.
+    pub fn effect_plan(&self) -> EffectPlan {
+        EffectPlan::new(&self.lighting, self.objects.iter().map(|o| &self.materials[o.material]))
+    }
+
     /// The view plane of the scene's camera for a `width`×`height` image.
     pub fn view_plane(&self, width: u32, height: u32) -> Result<ViewPlane, ViewPlaneError> {
         ViewPlane::new(self.camera, width, height)
@@ -181,10 +379,6 @@ mod tests {
     use crate::sphere::Sphere;
     use crate::test_support::{primitives_of, random_parts, scene_of, v};
     use proptest::prelude::*;
-
-    fn scene(objects: Vec<Object>) -> Scene {
-        scene_of(objects.into_iter().map(|o| o.primitive).collect())
-    }
 
     proptest! {
         /// Random scenes and rays (including axis-parallel ones with ±0
@@ -218,10 +412,7 @@ mod tests {
     #[test]
     fn the_first_listed_object_wins_an_exact_tie() {
         let sphere = Primitive::Sphere(Sphere::new(Vec3::new(0.0, 0.0, 5.0), 1.0).unwrap());
-        let s = scene(vec![
-            Object { primitive: sphere.clone(), material: 0 },
-            Object { primitive: sphere, material: 0 },
-        ]);
+        let s = scene_of(vec![sphere.clone(), sphere]);
         assert_eq!(s.cast(&Ray::new(Vec3::ZERO, Vec3::Z)).unwrap().object, 0);
     }
 
@@ -229,7 +420,7 @@ mod tests {
     fn direction_magnitude_changes_t_but_not_the_hit() {
         // Unit sphere at z = 5: from the origin along +z the hit is at distance 4.
         let sphere = Primitive::Sphere(Sphere::new(Vec3::new(0.0, 0.0, 5.0), 1.0).unwrap());
-        let s = scene(vec![Object { primitive: sphere, material: 0 }]);
+        let s = scene_of(vec![sphere]);
         for scale in [1e-30 as Real, 1e-20, 1e-3, 1.0, 7.0, 1e15, 1e20, 1e30] {
             let hit = s.cast(&Ray::new(Vec3::ZERO, Vec3::new(0.0, 0.0, scale)));
             let hit = hit.unwrap_or_else(|| panic!("direction {scale}: miss"));
@@ -241,7 +432,7 @@ mod tests {
     #[test]
     fn zero_and_non_finite_rays_hit_nothing() {
         let sphere = Primitive::Sphere(Sphere::new(Vec3::ZERO, 100.0).unwrap());
-        let s = scene(vec![Object { primitive: sphere, material: 0 }]);
+        let s = scene_of(vec![sphere]);
         assert_eq!(s.cast(&Ray::new(Vec3::ZERO, Vec3::ZERO)), None);
         assert_eq!(s.cast(&Ray::new(Vec3::ZERO, Vec3::new(Real::NAN, 0.0, 1.0))), None);
         assert_eq!(s.cast(&Ray::new(Vec3::splat(Real::INFINITY), Vec3::Z)), None);

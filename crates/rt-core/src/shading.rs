@@ -1,31 +1,12 @@
-//! The shading formulas: Lambert, Blinn–Phong, mirror reflection, Snell's
-//! law and the Fresnel equations. Pure functions of unit vectors.
+//! The optics of smooth surfaces: mirror reflection, Snell's law and the
+//! Fresnel equations. Pure functions of unit vectors, used by the BSDFs
+//! ([`crate::bsdf`]) and the direct-lighting tracer.
 //!
 //! Conventions: `n` is a unit normal on the side the light or viewer is on
 //! (face-forwarded), `l` points from the surface to the light, `v` from the
 //! surface to the viewer, `d` is a direction of travel (towards the surface).
 
 use crate::real::{Real, Vec3};
-
-/// Lambert's cosine law: the fraction of a light's irradiance that a surface
-/// with normal `n` receives from direction `l`, `max(0, n·l)`.
-pub fn lambert(n: Vec3, l: Vec3) -> Real {
-    n.dot(l).max(0.0)
-}
-
-/// The Blinn–Phong specular lobe `(n·h)^shininess` with the half vector
-/// `h = normalize(l + v)` (Blinn, "Models of Light Reflection for Computer
-/// Synthesized Pictures", 1977); zero when the light is behind the surface.
-/// It peaks, at 1, when `l` is `v` mirrored about `n`.
-pub fn blinn_phong(n: Vec3, l: Vec3, v: Vec3, shininess: Real) -> Real {
-    if n.dot(l) <= 0.0 {
-        return 0.0;
-    }
-    match (l + v).try_normalize() {
-        Some(h) => n.dot(h).max(0.0).powf(shininess),
-        None => 0.0,
-    }
-}
 
 /// `d` mirrored about the plane with normal `n`: `d − 2(d·n)n`. Either side
 /// of `n` gives the same result.
@@ -73,31 +54,6 @@ mod tests {
 
     fn close(a: Real, b: Real, tolerance: Real) -> bool {
         (a - b).abs() <= tolerance
-    }
-
-    #[test]
-    fn lambert_falls_off_with_the_cosine_of_the_angle_to_the_light() {
-        let n = Vec3::Y;
-        for degrees in [0.0 as Real, 30.0, 60.0, 89.0] {
-            let a = degrees.to_radians();
-            let l = Vec3::new(a.sin(), a.cos(), 0.0);
-            assert!(close(lambert(n, l), a.cos(), 1e-6), "{degrees}°");
-        }
-        assert_eq!(lambert(n, Vec3::new(0.6, -0.8, 0.0)), 0.0, "light behind the surface");
-    }
-
-    #[test]
-    fn the_specular_peak_is_at_the_mirror_direction() {
-        let n = Vec3::Y;
-        let l = Vec3::new(-0.6, 0.8, 0.0);
-        let mirror = reflect(-l, n);
-        assert!(close(blinn_phong(n, l, mirror, 50.0), 1.0, 1e-5));
-        // Any other viewing direction sees less.
-        for degrees in [2.0 as Real, 10.0, 40.0] {
-            let a = (36.87 as Real + degrees).to_radians();
-            let v = Vec3::new(a.sin(), a.cos(), 0.0);
-            assert!(blinn_phong(n, l, v, 50.0) < blinn_phong(n, l, mirror, 50.0), "{degrees}°");
-        }
     }
 
     #[test]

@@ -1,8 +1,8 @@
 //! Spheres: centre and radius; inside/on/outside test and ray intersection.
 
 use crate::aabb::Aabb;
+use crate::geometry_error::GeometryError;
 use crate::hit::PrimitiveHit;
-use crate::primitive::GeometryError;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, gamma};
 use crate::surface::SurfacePoint;

@@ -8,7 +8,7 @@ use crate::plane::Plane;
 use crate::polygon::Polygon;
 use crate::primitive::Primitive;
 use crate::real::{Real, Vec3};
-use crate::scene::{Object, Scene};
+use crate::scene::{Scene, SceneBuilder};
 use crate::sphere::Sphere;
 use crate::triangle::Triangle;
 use proptest::prelude::*;
@@ -42,16 +42,14 @@ pub fn random_primitive(kind: u8, p: [f32; 3], q: [f32; 3], r: [f32; 3]) -> Opti
 /// A scene of `primitives`, one white material, camera at the origin looking along +z.
 pub fn scene_of(primitives: Vec<Primitive>) -> Scene {
     let camera = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 60.0, 1.0, Projection::Perspective).unwrap();
-    let objects = primitives.into_iter().map(|primitive| Object { primitive, material: 0 }).collect();
-    Scene::new(
-        camera,
-        (8, 8),
-        Color::ZERO,
-        1,
-        vec![Material::flat(Color::ONE)],
-        vec!["white".into()],
-        objects,
-    )
+    let builder = SceneBuilder::new(camera).image_size(8, 8).material("white", Material::flat(Color::ONE));
+    primitives.into_iter().fold(builder, |b, p| b.object(p, "white")).build().unwrap()
+}
+
+/// `renderer`'s image, rendered on a rayon pool of `threads` threads.
+pub fn render_on_threads(renderer: &crate::render::Renderer, threads: usize) -> crate::render::Frame {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    pool.install(|| renderer.render(|_| {}))
 }
 
 /// The parameters of one random primitive: kind and three points.

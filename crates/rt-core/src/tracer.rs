@@ -1,19 +1,23 @@
-//! Hits → colours: a Whitted-style recursive ray tracer (Whitted, "An
-//! Improved Illumination Model for Shaded Display", 1980), with area lights
-//! and ambient occlusion, that casts only the rays its [`EffectPlan`] allows.
+//! Hits → colours, without global illumination: a Whitted-style recursive
+//! ray tracer (Whitted, "An Improved Illumination Model for Shaded Display",
+//! 1980) with area lights and ambient occlusion, that casts only the rays its
+//! [`EffectPlan`] allows. With global illumination the
+//! [`crate::path_tracer`] takes over.
 //!
 //! Without lights the colour of a primary ray is its hit's flat material
-//! colour, exactly as in pure ray casting. With lights a hit with material
-//! `m` at point p, unit normal n facing the incoming ray and direction v
-//! back to the viewer gets (see [`crate::material::Material`]):
+//! colour, exactly as in pure ray casting. With lights it is the
+//! direct-lighting part of the radiometric model of [`crate::bsdf`]: a hit
+//! with material `m`, BSDF f, seen from direction ω_o, gets
 //!
-//! - `m.emission`;
-//! - diffuse: `(1 − kr − kt)·kd·color·(ambient·ao + Σ vis·E·max(0, n·l))`,
-//!   summed over every light sample, `vis` 0 or 1 from a shadow ray;
-//! - specular: `ks·Σ vis·E·(n·h)^shininess` (Blinn–Phong);
-//! - reflection: `(kr + kt·F)·trace(reflected ray)`;
-//! - refraction: `kt·(1 − F)·color·trace(refracted ray)`, nothing on total
-//!   internal reflection (F = 1 then).
+//! - `m.emission`, if ω_o is on the side the geometric normal points to;
+//! - ambient: `ambient·ao·ρ`, with ρ the albedo of the Lambert lobe
+//!   (`(1 − kr − kt)·(1 − ks)·kd·color`): uniform radiance `ambient` from
+//!   every unblocked direction, reflected by a Lambert surface;
+//! - direct light: `Σ vis·f(ω_o, ω_i)·cos θ_i·E` over every light sample
+//!   ([`crate::light::LightSample`]), `vis` 0 or 1 from a shadow ray;
+//! - reflection: `(kr + kt·F)·L(reflected ray)`;
+//! - refraction: `kt·(1 − F)·color·η²·L(refracted ray)` (η = ηᵢ/ηₜ, see
+//!   [`crate::bsdf`]), nothing on total internal reflection (F = 1 then).
 //!
 //! A reflected or refracted ray is cast only while the recursion depth is
 //! below `max_depth` and its weight in the pixel (the product of the
@@ -30,6 +34,7 @@
 //! object as opaque, glass too. Secondary rays start at the hit point pushed
 //! off the surface by its error bound ([`crate::surface`]).
 
+use crate::bsdf::Bsdf;
 use crate::effects::{EffectPlan, RayCounts};
 use crate::hit::Hit;
 use crate::material::Color;
@@ -37,7 +42,7 @@ use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, normalize_robust, to_f32};
 use crate::sampler::{SampleRng, cosine_hemisphere, stratified};
 use crate::scene::Scene;
-use crate::shading::{blinn_phong, fresnel_dielectric, lambert, reflect, refract};
+use crate::shading::{fresnel_dielectric, reflect, refract};
 use crate::surface::SurfacePoint;
 
 /// Smallest weight a secondary ray may have in its pixel: under half an
@@ -85,29 +90,32 @@ impl<'s> Tracer<'s> {
 
     fn shade(&self, ray: &Ray, hit: &Hit, path: Path, rng: &mut SampleRng, counts: &mut RayCounts) -> Color {
         let object = &self.scene.objects()[hit.object];
-        let m = &self.scene.materials[object.material];
+        let m = self.scene.material(object.material);
         let Some(d) = normalize_robust(ray.dir) else {
             return self.scene.background;
         };
         let sp = object.primitive.surface_point(hit.primitive, hit.normal, ray.at(hit.t));
-        let front = d.dot(sp.normal) < 0.0;
+        let wo = -d;
+        let front = wo.dot(sp.normal) > 0.0;
         let n = if front { sp.normal } else { -sp.normal };
         let lighting = &self.scene.lighting;
 
-        let mut color = m.emission;
-        let diffuse = (1.0 - m.reflectivity - m.transparency).max(0.0) * m.diffuse;
-        if diffuse > 0.0 && lighting.ambient != Color::ZERO {
-            let ao = self.ambient_occlusion(&sp, n, rng, counts);
-            color += lighting.ambient * m.color * (diffuse * ao);
-        }
-        if diffuse > 0.0 || m.specular > 0.0 {
+        let mut color = if front { m.emission } else { Color::ZERO };
+        let bsdf = Bsdf::new(m, sp.normal, wo);
+        if bsdf.has_smooth_lobes() {
+            let lambert =
+                m.color * ((1.0 - m.reflectivity - m.transparency) * (1.0 - m.specular) * m.diffuse);
+            if lambert != Color::ZERO && lighting.ambient != Color::ZERO {
+                let ao = self.ambient_occlusion(&sp, n, rng, counts);
+                color += lighting.ambient * lambert * ao;
+            }
             for light in &lighting.lights {
                 let samples = light.sample_count();
                 for k in 0..samples {
                     let jitter = if samples > 1 { rng.next_pair() } else { (0.5, 0.5) };
                     let Some(s) = light.sample(sp.p, k, jitter) else { continue };
-                    let cos = lambert(n, s.to_light);
-                    if cos <= 0.0 {
+                    let f = bsdf.eval(wo, s.to_light);
+                    if f == Color::ZERO {
                         continue;
                     }
                     if self.plan.shadows && light.shadows {
@@ -117,9 +125,7 @@ impl<'s> Tracer<'s> {
                             continue;
                         }
                     }
-                    let specular = blinn_phong(n, s.to_light, -d, m.shininess as Real);
-                    color +=
-                        s.irradiance * (m.color * (diffuse * to_f32(cos)) + m.specular * to_f32(specular));
+                    color += f * s.irradiance * to_f32(n.dot(s.to_light));
                 }
             }
         }
@@ -137,7 +143,11 @@ impl<'s> Tracer<'s> {
                 color += reflected * self.trace_secondary(&ray, next, rng, counts);
             }
             let transmitted = m.color * (m.transparency * (1.0 - fresnel));
+            // The η² factors of entering and leaving cancel along a path, so
+            // they do not count towards a ray's weight in the pixel.
             let next = path.then(transmitted.max_element());
+            let eta = to_f32(eta_i / eta_t);
+            let transmitted = transmitted * (eta * eta);
             if self.plan.refraction
                 && next.weight >= MIN_WEIGHT
                 && let Some(t) = refract(d, n, eta_i, eta_t)
@@ -227,7 +237,8 @@ mod tests {
             // Light travelling into the wall (+z) tilted by `a`.
             let light = format!("Directional(direction: ({}, 0, {}), intensity: 2)", a.sin(), a.cos());
             let f = render(&wall("", "", &light, ""), 1);
-            let expected = 0.5 * 2.0 * to_f32(a.cos());
+            // Radiance (ρ/π)·E·cos θ with ρ = 0.5, E = 2.
+            let expected = 0.5 / std::f32::consts::PI * 2.0 * to_f32(a.cos());
             for c in &f.pixels {
                 assert!((c.x - expected).abs() < 1e-5, "{degrees}°: {c} vs {expected}");
             }
@@ -249,7 +260,9 @@ mod tests {
             let r = Renderer::new(&s, 15, 11, 1).unwrap();
             r.pixel(7, 5, &mut RayCounts::default()).x
         };
-        assert_eq!((at(-1.0), at(-2.0)), (0.5 * 4.0, 0.5 * 4.0 / 4.0));
+        let lambert = 0.5 / std::f32::consts::PI;
+        assert!((at(-1.0) - lambert * 4.0).abs() < 1e-6);
+        assert!((at(-2.0) - lambert * 4.0 / 4.0).abs() < 1e-6);
     }
 
     #[test]
@@ -365,9 +378,11 @@ mod tests {
         // although max_depth (5) would allow more.
         assert_eq!((counts.refraction, counts.reflection), (3, 2));
         let transmitted = (1.0 - 0.04) * (1.0 - 0.04);
-        // The wall's colour 0.5 is reached through the sphere, plus a little
-        // reflected background (black here).
-        assert!((through.x - 0.5 * transmitted).abs() < 1e-3, "{through}");
+        // The wall's radiance (0.5/π lit head-on by E = 1) is reached through
+        // the sphere (the η² factors of entering and leaving cancel), plus a
+        // little reflected background (black here).
+        let wall = 0.5 / std::f32::consts::PI;
+        assert!((through.x - wall * transmitted).abs() < 1e-3, "{through}");
     }
 
     #[test]
@@ -379,10 +394,7 @@ mod tests {
             "ambient: (0.2, 0.2, 0.2), effects: (ambient_occlusion: (samples: 4, radius: 1)),",
         );
         let r = Renderer::new(&s, 48, 36, 4).unwrap();
-        let run = |threads| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            pool.install(|| r.render(|_| {}))
-        };
+        let run = |threads| crate::test_support::render_on_threads(&r, threads);
         let one = run(1);
         assert_eq!(one, run(2));
         let c = one.rays;
@@ -429,7 +441,8 @@ mod tests {
                 if cos < 0.05 || shadowed {
                     continue;
                 }
-                let shade = r.pixel(x, y, &mut RayCounts::default()).x;
+                // A white Lambert surface lit by E = 1: cos θ/π.
+                let shade = r.pixel(x, y, &mut RayCounts::default()).x * std::f32::consts::PI;
                 if shade < to_f32(cos) - 0.02 {
                     dark += 1;
                 }

@@ -2,9 +2,9 @@
 //! watertight one (the default), Möller–Trumbore, and the course's area ratios.
 
 use crate::aabb::Aabb;
+use crate::geometry_error::GeometryError;
 use crate::hit::PrimitiveHit;
 use crate::method::TriangleMethod;
-use crate::primitive::GeometryError;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, difference_of_products, gamma, normalize_robust};
 use crate::surface::{SurfacePoint, project_onto_plane};

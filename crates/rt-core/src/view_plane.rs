@@ -2,7 +2,7 @@
 //! 3D point of any pixel, and the primary ray through it.
 //!
 //! The plane sits `near` units in front of C along cam_z, parallel to cam_x and
-//! cam_y, with the image's proportions (SPEC.md):
+//! cam_y, with the image's proportions (`docs/conventions.md`):
 //!
 //! ```text
 //! plane_h = 2 · near · tan(fov_y / 2)          plane_w = plane_h · W / H

@@ -10,8 +10,8 @@
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use egui::{Color32, ColorImage, TextureOptions};
-use rt_view::canvas::Canvas;
-use rt_view::render_job::Row;
+use rt_view::viewer::canvas::Canvas;
+use rt_view::viewer::render_job::Row;
 
 const WIDTH: u32 = 1280;
 const HEIGHT: u32 = 960;

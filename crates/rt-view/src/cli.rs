@@ -2,7 +2,12 @@
 
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Parser, Subcommand};
+
+use crate::commands::{
+    self, accuracy::AccuracyArgs, bench::BenchArgs, cast::CastArgs, export::ExportArgs, render::RenderArgs,
+};
+use crate::viewer;
 
 /// A CPU ray tracer: view RON scene files live, render them to PNG, or query rays against them.
 ///
@@ -72,105 +77,20 @@ pub enum Command {
     /// against time) to --out. With --with-f64, an f64 build's geometry rows
     /// are measured in the same run.
     Accuracy(AccuracyArgs),
-}
-
-/// `rt-view accuracy`.
-#[derive(Debug, Args)]
-pub struct AccuracyArgs {
-    /// Folder for accuracy.csv, accuracy.md and accuracy.png.
-    #[arg(long, default_value = "accuracy-out")]
-    pub out: PathBuf,
-    /// Timed runs per measurement; the median is reported.
-    #[arg(long, default_value_t = 3)]
-    pub runs: usize,
-    /// Smaller images and fewer samples (a quick run).
-    #[arg(long)]
-    pub quick: bool,
-    /// An rt-view built with `--features f64`, whose geometry rows are added.
-    #[arg(long, value_name = "RT_VIEW_F64")]
-    pub with_f64: Option<PathBuf>,
-    /// Only the geometry part, written as accuracy-f32.csv or accuracy-f64.csv
-    /// (what --with-f64 runs in the other build).
-    #[arg(long)]
-    pub geometry_only: bool,
-    /// Folder of the measured scene files.
-    #[arg(long, default_value = "scenes")]
-    pub scenes: PathBuf,
-}
-
-/// `rt-view bench`.
-#[derive(Debug, Args)]
-pub struct BenchArgs {
-    /// Folder for the generated OBJ files, cameras and bench.csv.
-    #[arg(long, default_value = "bench-out")]
-    pub out: PathBuf,
-    /// Timed runs per measurement; the median is reported.
-    #[arg(long, default_value_t = 5)]
-    pub runs: usize,
-    /// Thread counts to measure throughput with, comma-separated.
-    #[arg(long, value_delimiter = ',', default_values_t = [1, 2])]
-    pub threads: Vec<usize>,
-    /// Only the 10k and 100k meshes (a quick run).
-    #[arg(long)]
-    pub quick: bool,
-    /// Scene whose full render is timed too.
-    #[arg(long, default_value = "scenes/showcase.ron")]
-    pub showcase: PathBuf,
-}
-
-/// `rt-view render`.
-#[derive(Debug, Args)]
-pub struct RenderArgs {
-    /// The scene file (RON).
-    pub scene: PathBuf,
-    /// Output file: .png, or .exr for linear HDR.
-    #[arg(short, long, value_name = "OUT.png")]
-    pub output: PathBuf,
-    /// Image width in pixels (default: the scene's).
-    #[arg(long, value_name = "W")]
-    pub width: Option<u32>,
-    /// Image height in pixels (default: the scene's).
-    #[arg(long, value_name = "H")]
-    pub height: Option<u32>,
-    /// Samples per pixel, for anti-aliasing (default: the scene's, else 1).
-    #[arg(long, value_name = "N")]
-    pub spp: Option<u32>,
-    /// Print to stderr: scene load and BVH build times, the effects
-    /// simulated, the rays cast by kind (primary, shadow, reflection,
-    /// refraction, ambient occlusion), tracing time and Mrays/s (all rays).
-    #[arg(long)]
-    pub stats: bool,
-}
-
-/// `rt-view cast`.
-#[derive(Debug, Args)]
-pub struct CastArgs {
-    /// The scene file (RON).
-    pub scene: PathBuf,
-    /// File of rays, one `ox,oy,oz,dx,dy,dz` a line; `-` or absent: standard input.
-    #[arg(long, value_name = "FILE", conflicts_with = "pixels")]
-    pub rays: Option<PathBuf>,
-    /// Instead of reading rays, cast the camera's primary ray through every
-    /// pixel centre (row-major, top row first); rows start with `px,py`.
-    #[arg(long)]
-    pub pixels: bool,
-    /// With --pixels: image width (default: the scene's).
-    #[arg(long, value_name = "W", requires = "pixels")]
-    pub width: Option<u32>,
-    /// With --pixels: image height (default: the scene's).
-    #[arg(long, value_name = "H", requires = "pixels")]
-    pub height: Option<u32>,
+    /// Write the scene as rt-view reads it, every default filled in, as JSON
+    /// (with OBJ files for its triangle objects) for outside tools such as
+    /// `bench/mitsuba_compare.py`.
+    Export(ExportArgs),
 }
 
 /// Runs the parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        Some(Command::Render(args)) => crate::render_cmd::run(&args),
-        Some(Command::Cast(args)) => crate::cast_cmd::run(&args),
-        Some(Command::Bench(args)) => crate::bench_cmd::run(&args),
-        Some(Command::Accuracy(args)) => crate::accuracy_cmd::run(&args),
-        None => {
-            crate::viewer::run(crate::viewer::ViewerOptions { scene: cli.scene, screenshot: cli.screenshot })
-        }
+        Some(Command::Render(args)) => commands::render::run(&args),
+        Some(Command::Cast(args)) => commands::cast::run(&args),
+        Some(Command::Bench(args)) => commands::bench::run(&args),
+        Some(Command::Accuracy(args)) => commands::accuracy::run(&args),
+        Some(Command::Export(args)) => commands::export::run(&args),
+        None => viewer::run(viewer::ViewerOptions { scene: cli.scene, screenshot: cli.screenshot }),
     }
 }

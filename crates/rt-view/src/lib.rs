@@ -1,19 +1,16 @@
-//! The `rt-view` binary's commands, as a library so they can be tested
-//! directly: [`cli`] parses the command line, [`render_cmd`] renders a scene
-//! to PNG, [`cast_cmd`] answers ray queries, [`bench_cmd`] and [`accuracy_cmd`]
-//! measure speed and what accuracy costs, [`image_out`] writes images
-//! atomically, and [`viewer`] is the interactive window, built from
-//! [`render_job`] (background rows), [`canvas`] (rows → texture),
-//! [`camera_controls`] (sliders, orbit, pan, zoom) and [`scene_watch`].
+//! `rt-view`: two programs in one binary, as a library so they can be tested
+//! directly.
+//!
+//! - [`commands`]: the headless commands — `render` (a scene to PNG or EXR),
+//!   `cast` (ray queries as CSV), `bench` and `accuracy` (what speed and
+//!   accuracy cost) — with [`image_out`] writing images atomically and
+//!   [`timing`] the medians they report.
+//! - [`viewer`]: the interactive window, whose image streams in row by row.
+//!
+//! [`cli`] parses the command line and hands it to one or the other.
 
-pub mod accuracy_cmd;
-pub mod bench_cmd;
-pub mod camera_controls;
-pub mod canvas;
-pub mod cast_cmd;
 pub mod cli;
+pub mod commands;
 pub mod image_out;
-pub mod render_cmd;
-pub mod render_job;
-pub mod scene_watch;
+pub mod timing;
 pub mod viewer;

@@ -10,7 +10,11 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            if e.is::<rt_view::render_cmd::Interrupted>() { ExitCode::from(130) } else { ExitCode::FAILURE }
+            if e.is::<rt_view::commands::render::Interrupted>() {
+                ExitCode::from(130)
+            } else {
+                ExitCode::FAILURE
+            }
         }
     }
 }

@@ -1,4 +1,4 @@
-//! `rt-view cast`: the CSV contract of SPEC.md, round-tripping numbers, and
+//! `rt-view cast`: the CSV contract of `docs/command-line.md`, round-tripping numbers, and
 //! agreement between `cast --pixels` and `render` on every scene.
 
 mod common;
@@ -55,7 +55,7 @@ fn printed_numbers_round_trip_to_the_values_the_library_computes() {
     let out = stdout(&o);
     let mut hits = 0;
     for (line, row) in input.lines().zip(out.lines().skip(1)) {
-        let ray = rt_view::cast_cmd::parse_ray_line(line).unwrap().unwrap();
+        let ray = rt_view::commands::cast::parse_ray_line(line).unwrap().unwrap();
         let cols: Vec<&str> = row.split(',').collect();
         assert_eq!(cols.len(), 13, "{row}");
         let num = |i: usize| cols[i].parse::<rt_core::Real>().unwrap();
@@ -156,12 +156,13 @@ fn cast_pixels_works_on_every_scene_and_agrees_with_render() {
             let (px, py) = ((i as u32) % w, (i as u32) / w);
             assert_eq!((cols[0], cols[1]), (px.to_string().as_str(), py.to_string().as_str()), "{name}");
             // Without lights a hit shows its material's flat colour; with
-            // lights it is shaded, so only misses are predictable.
-            let lit = !scene.lighting.lights.is_empty();
+            // lights or global illumination it is shaded, so only misses are
+            // predictable.
+            let lit = scene.effect_plan().shading;
             let expected = if cols[8] == "1" {
                 hits += 1;
                 let object: usize = cols[10].parse().unwrap();
-                (!lit).then(|| to_rgb8(scene.materials[scene.objects()[object].material].color))
+                (!lit).then(|| to_rgb8(scene.object_material(object).color))
             } else {
                 Some(scene.color_space.encode(scene.background))
             };

@@ -1,6 +1,6 @@
 //! Scenes rendered by the CLI, compared with committed references: small
 //! golden images of the showcase (flat colours) and of the every-effect
-//! scene, and the README's pictures at their scenes' own sizes.
+//! scene, and the docs' pictures at their scenes' own sizes.
 //!
 //! Tolerance: a pixel "differs" when any channel is off by more than 2/255; at
 //! most 0.5% of the pixels may differ. With flat colours every difference is
@@ -43,16 +43,28 @@ fn readme_picture_is_the_current_showcase_render() {
     compare_render("showcase", &picture, &[]);
 }
 
-/// Likewise for the README's effect pictures, docs/effects/SCENE.png, each
-/// rendered by `rt-view render scenes/SCENE.ron` at the scene's own settings
-/// (and the 1-spp anti-aliasing comparison with `--spp 1`).
+/// Likewise for the effect pictures of docs/effects.md, docs/effects/SCENE.png,
+/// each rendered by `rt-view render scenes/SCENE.ron` at the scene's own
+/// settings (and the 1-spp anti-aliasing comparison with `--spp 1`).
 #[test]
-fn readme_effect_pictures_are_current_renders() {
+fn docs_effect_pictures_are_current_renders() {
     let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/effects");
     for scene in ["shadows", "soft_shadows", "mirrors", "glass", "ao", "antialiasing", "effects"] {
         compare_render(scene, &docs.join(format!("{scene}.png")), &[]);
     }
     compare_render("antialiasing", &docs.join("antialiasing_1spp.png"), &["--spp", "1"]);
+}
+
+/// And for the global-illumination pictures of docs/effects.md,
+/// docs/gi/SCENE.png: many samples each, so this is the slowest test (about
+/// 30 s on two cores), but the sampling is deterministic, so the picture is
+/// checked like the others, not merely in the mean.
+#[test]
+fn docs_global_illumination_pictures_are_current_renders() {
+    let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/gi");
+    for scene in ["cornell_box", "caustic", "interreflection", "sky"] {
+        compare_render(scene, &docs.join(format!("{scene}.png")), &[]);
+    }
 }
 
 /// Renders scenes/`name`.ron with `extra` arguments and compares the result

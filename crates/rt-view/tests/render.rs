@@ -202,8 +202,10 @@ fn ctrl_c_stops_a_render_cleanly_and_keeps_the_old_output() {
     std::fs::write(&out, b"previous image").unwrap();
     let child = spawn_long_render(&out);
     std::thread::sleep(std::time::Duration::from_millis(500));
-    let kill = std::process::Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
-    assert!(kill.success());
+    // SAFETY: `kill` only sends a signal; the child is ours and still running
+    // (it is waited for below, so its pid cannot have been reused).
+    let sent = unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) };
+    assert_eq!(sent, 0, "kill: {}", std::io::Error::last_os_error());
     let o = child.wait_with_output().unwrap();
     assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
     assert!(stderr(&o).contains("error: interrupted: nothing was written"), "{}", stderr(&o));
@@ -235,25 +237,15 @@ fn stats_report_load_bvh_and_tracing_separately() {
 
 #[test]
 fn stats_count_every_kind_of_ray_a_lit_scene_asks_for() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("e.png");
-    let scene = scenes_dir().join("effects.ron");
-    let args =
-        ["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--width", "64", "--height", "36"];
-    let o = rt_view(&[&args[..], &["--spp", "2", "--stats"]].concat(), "");
-    assert!(o.status.success(), "{}", stderr(&o));
-    let err = stderr(&o);
+    let err = stats_of("effects", 64, 36, 2);
     assert!(
         err.contains("effects: shading, shadows, reflection, refraction, max depth 5, ambient occlusion (4 samples, radius 1)"),
         "{err}"
     );
-    let counts = err.lines().find_map(|l| l.strip_prefix("rays: ")).expect("rays line");
-    let count = |kind: &str| -> u64 {
-        counts.split(", ").find_map(|c| c.strip_prefix(kind)).unwrap().trim().parse().unwrap()
-    };
+    let count = |kind: &str| ray_count(&err, kind);
     assert_eq!(count("primary "), 64 * 36 * 2);
     for kind in ["shadow ", "reflection ", "refraction ", "ambient occlusion "] {
-        assert!(count(kind) > 0, "{kind}: {counts}");
+        assert!(count(kind) > 0, "{kind}: {err}");
     }
 }
 
@@ -315,4 +307,87 @@ fn bench_runs_and_writes_meshes_cameras_and_csv() {
     );
     assert_eq!(rows.len(), 3, "{csv}");
     assert!(rows[1].starts_with("10k,10082,") && rows[2].starts_with("100k,100352,"), "{csv}");
+}
+
+#[test]
+fn stats_count_bounce_and_next_event_rays_under_global_illumination_and_nothing_else() {
+    let err = stats_of("cornell_box", 32, 32, 4);
+    assert!(
+        err.contains("effects: global illumination (path tracing, at most 8 bounces, Russian roulette)"),
+        "{err}"
+    );
+    let count = |kind: &str| ray_count(&err, kind);
+    assert_eq!(count("primary "), 32 * 32 * 4);
+    for kind in ["shadow ", "reflection ", "refraction ", "ambient occlusion "] {
+        assert_eq!(count(kind), 0, "{kind}: {err}");
+    }
+    assert!(count("bounce ") > 0 && count("next event ") > 0, "{err}");
+}
+
+/// `render --stats` of scenes/`name`.ron at `width`×`height` and `spp`: its stderr.
+fn stats_of(name: &str, width: u32, height: u32, spp: u32) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s.png");
+    let scene = scenes_dir().join(format!("{name}.ron"));
+    let (w, h, n) = (width.to_string(), height.to_string(), spp.to_string());
+    let args =
+        ["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--width", &w, "--height", &h];
+    let o = rt_view(&[&args[..], &["--spp", &n, "--stats"]].concat(), "");
+    assert!(o.status.success(), "{}", stderr(&o));
+    stderr(&o)
+}
+
+/// The count of rays of `kind` ("primary ", "bounce ", …) in `--stats` output.
+fn ray_count(stats: &str, kind: &str) -> u64 {
+    let counts = stats.lines().find_map(|l| l.strip_prefix("rays: ")).expect("rays line");
+    counts.split(", ").find_map(|c| c.strip_prefix(kind)).unwrap().trim().parse().unwrap()
+}
+
+#[test]
+fn a_global_illumination_scene_with_nothing_that_glows_says_why_it_is_black() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("dark.ron");
+    std::fs::write(
+        &scene,
+        r#"(
+        camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1),
+        image: (width: 8, height: 6),
+        materials: { "m": (color: (0.5, 0.5, 0.5)) },
+        objects: [ Sphere(center: (0, 0, 0), radius: 1, material: "m") ],
+        effects: (global_illumination: ()),
+    )"#,
+    )
+    .unwrap();
+    let out = dir.path().join("dark.png");
+    let o = rt_view(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--stats"], "");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("note: nothing gives off light"), "{}", stderr(&o));
+    assert!(read_png(&out).pixels().all(|p| p.0 == [0, 0, 0]));
+}
+
+#[test]
+fn seeds_give_independent_images_and_seed_zero_is_the_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scenes_dir().join("cornell_box.ron");
+    let render = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let args = [
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "--spp",
+            "2",
+        ];
+        let o = rt_view(&[&args[..], extra].concat(), "");
+        assert!(o.status.success(), "{}", stderr(&o));
+        read_png(&out)
+    };
+    let default = render("a.png", &[]);
+    assert_eq!(default, render("b.png", &["--seed", "0"]));
+    assert_ne!(default, render("c.png", &["--seed", "1"]));
 }

@@ -3,17 +3,35 @@
 //! showcase scene. Every figure is the median of `--runs` timed runs.
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
-use rt_core::material::{Color, Material};
+use clap::Args;
 use rt_core::mesh::Mesh;
-use rt_core::primitive::Primitive;
-use rt_core::scene::Object;
-use rt_core::{Camera, Projection, Real, Renderer, Scene, Vec3};
+use rt_core::{Camera, Color, Material, Primitive, Projection, Real, Renderer, Scene, SceneBuilder, Vec3};
 
-use crate::cli::BenchArgs;
+use crate::timing::median;
+
+/// `rt-view bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Folder for the generated OBJ files, cameras and bench.csv.
+    #[arg(long, default_value = "bench-out")]
+    pub out: PathBuf,
+    /// Timed runs per measurement; the median is reported.
+    #[arg(long, default_value_t = 5)]
+    pub runs: usize,
+    /// Thread counts to measure throughput with, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [1, 2])]
+    pub threads: Vec<usize>,
+    /// Only the 10k and 100k meshes (a quick run).
+    #[arg(long)]
+    pub quick: bool,
+    /// Scene whose full render is timed too.
+    #[arg(long, default_value = "scenes/showcase.ron")]
+    pub showcase: PathBuf,
+}
 
 /// Image size of the throughput measurement.
 const WIDTH: u32 = 1280;
@@ -51,23 +69,18 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         let mesh = Mesh::new(positions, triangles).context("generated mesh")?;
         let mesh_bytes = mesh.memory_bytes();
         let scene_of = |mesh: Mesh| {
-            let object = Object { primitive: Primitive::Mesh(mesh), material: 0 };
-            let material = Material::flat(Color::new(0.4, 0.6, 0.3));
-            Scene::new(
-                camera,
-                (WIDTH, HEIGHT),
-                Color::ONE,
-                1,
-                vec![material],
-                vec!["ground".into()],
-                vec![object],
-            )
+            SceneBuilder::new(camera)
+                .image_size(WIDTH, HEIGHT)
+                .background(Color::ONE)
+                .material("ground", Material::flat(Color::new(0.4, 0.6, 0.3)))
+                .object(Primitive::Mesh(mesh), "ground")
+                .build()
         };
         let mut builds = Vec::new();
         for _ in 0..runs {
-            builds.push(scene_of(mesh.clone()).bvh_stats().build_time);
+            builds.push(scene_of(mesh.clone())?.bvh_stats().build_time);
         }
-        let scene = scene_of(mesh);
+        let scene = scene_of(mesh)?;
         let stats = scene.bvh_stats();
         let renderer = Renderer::new(&scene, WIDTH, HEIGHT, 1)?;
         let rays = WIDTH as f64 * HEIGHT as f64;
@@ -267,12 +280,6 @@ fn write_camera(path: &Path, c: &Camera) -> anyhow::Result<()> {
         c.near()
     );
     std::fs::write(path, json).with_context(|| format!("cannot write {}", path.display()))
-}
-
-/// The median of `times` (the upper one of the middle two for an even count).
-pub(crate) fn median(mut times: Vec<Duration>) -> Duration {
-    times.sort();
-    times[times.len() / 2]
 }
 
 /// The process's peak resident memory (Linux `VmHWM`), in MiB.

@@ -1,19 +1,38 @@
-//! `rt-view cast SCENE [--rays FILE | --pixels]`: ray queries as CSV (SPEC.md).
+//! `rt-view cast SCENE [--rays FILE | --pixels]`: ray queries as CSV (`docs/command-line.md`).
 //!
 //! All input is read and checked before anything is cast, and the whole CSV is
 //! built before it is written, so a bad line produces an error and no output.
 
 use std::fmt::Write as _;
 use std::io::{Read, Write as _};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
+use clap::Args;
 use rayon::prelude::*;
 use rt_core::{Ray, Scene};
 
 pub use rt_core::ray_text::{LineError, parse_ray_line, parse_rays};
 
-use crate::cli::CastArgs;
+/// `rt-view cast`.
+#[derive(Debug, Args)]
+pub struct CastArgs {
+    /// The scene file (RON).
+    pub scene: PathBuf,
+    /// File of rays, one `ox,oy,oz,dx,dy,dz` a line; `-` or absent: standard input.
+    #[arg(long, value_name = "FILE", conflicts_with = "pixels")]
+    pub rays: Option<PathBuf>,
+    /// Instead of reading rays, cast the camera's primary ray through every
+    /// pixel centre (row-major, top row first); rows start with `px,py`.
+    #[arg(long)]
+    pub pixels: bool,
+    /// With --pixels: image width (default: the scene's).
+    #[arg(long, value_name = "W", requires = "pixels")]
+    pub width: Option<u32>,
+    /// With --pixels: image height (default: the scene's).
+    #[arg(long, value_name = "H", requires = "pixels")]
+    pub height: Option<u32>,
+}
 
 /// The CSV header of ray queries.
 pub const HEADER: &str = "ox,oy,oz,dx,dy,dz,hit,t,object,primitive,nx,ny,nz";

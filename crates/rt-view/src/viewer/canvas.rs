@@ -8,7 +8,7 @@
 
 use egui::{Color32, ColorImage, TextureHandle, TextureOptions};
 
-use crate::render_job::Row;
+use super::render_job::Row;
 
 /// The image being assembled for one job generation.
 #[derive(Clone, Debug)]

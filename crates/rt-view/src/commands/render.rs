@@ -1,16 +1,46 @@
 //! `rt-view render SCENE -o OUT.png|OUT.exr`: a headless render with a progress bar.
 
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use anyhow::Context;
+use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rt_core::Renderer;
 use rt_core::effects::{EffectPlan, RayCounts};
 
-use crate::cli::RenderArgs;
 use crate::image_out::PendingImage;
+
+/// `rt-view render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// The scene file (RON).
+    pub scene: PathBuf,
+    /// Output file: .png, or .exr for linear HDR.
+    #[arg(short, long, value_name = "OUT.png")]
+    pub output: PathBuf,
+    /// Image width in pixels (default: the scene's).
+    #[arg(long, value_name = "W")]
+    pub width: Option<u32>,
+    /// Image height in pixels (default: the scene's).
+    #[arg(long, value_name = "H")]
+    pub height: Option<u32>,
+    /// Samples per pixel, for anti-aliasing (default: the scene's, else 1).
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
+    /// Seed of the random numbers: renders with different seeds are
+    /// independent estimates of the same image (0 is the default image).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Print to stderr: scene load and BVH build times, the effects
+    /// simulated, the rays cast by kind (primary, shadow, reflection,
+    /// refraction, ambient occlusion, and under global illumination bounce
+    /// and next-event rays), tracing time and Mrays/s (all rays).
+    #[arg(long)]
+    pub stats: bool,
+}
 
 /// The render was stopped by Ctrl-C (SIGINT); nothing was written. `main`
 /// exits with status 130, as shells expect after SIGINT.
@@ -30,7 +60,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let height = args.height.unwrap_or(scene.height);
     let spp = args.spp.unwrap_or(scene.samples_per_pixel);
     let renderer = Renderer::new(&scene, width, height, spp)
-        .with_context(|| format!("{}: cannot render", args.scene.display()))?;
+        .with_context(|| format!("{}: cannot render", args.scene.display()))?
+        .with_seed(args.seed);
 
     let stop = Arc::new(AtomicBool::new(false));
     let handler_stop = stop.clone();
@@ -68,6 +99,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             bvh.bytes as f64 / bvh.primitives.max(1) as f64
         );
         eprintln!("effects: {}", describe_plan(renderer.plan()));
+        if renderer.plan().global_illumination.is_some() && scene.light_sampler().is_empty() {
+            eprintln!(
+                "note: nothing gives off light (no lights, no emissive objects, black background): the image is black"
+            );
+        }
         eprintln!("rays: {}", describe_counts(&frame.rays));
         eprintln!(
             "tracing: {:.3} s, {} rays, {:.3} Mrays/s on {} threads",
@@ -84,6 +120,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
 pub fn describe_plan(plan: &EffectPlan) -> String {
     if !plan.shading {
         return "none (no lights: pure ray casting, flat colours)".into();
+    }
+    if let Some(gi) = plan.global_illumination {
+        let roulette = if gi.russian_roulette { ", Russian roulette" } else { "" };
+        return format!("global illumination (path tracing, at most {} bounces{roulette})", gi.max_bounces);
     }
     let mut on = vec!["shading".to_owned()];
     if plan.shadows {
@@ -107,7 +147,7 @@ pub fn describe_plan(plan: &EffectPlan) -> String {
 /// The ray counts by kind: "primary 345600, shadow 0, …".
 pub fn describe_counts(c: &RayCounts) -> String {
     format!(
-        "primary {}, shadow {}, reflection {}, refraction {}, ambient occlusion {}",
-        c.primary, c.shadow, c.reflection, c.refraction, c.ambient_occlusion
+        "primary {}, shadow {}, reflection {}, refraction {}, ambient occlusion {}, bounce {}, next event {}",
+        c.primary, c.shadow, c.reflection, c.refraction, c.ambient_occlusion, c.bounce, c.next_event
     )
 }

@@ -16,16 +16,14 @@
 //!
 //! Cancelling (or dropping the job, or dropping its receiver) stops the
 //! workers after the row each is on; rows already in the channel keep their
-//! old generation, and [`crate::canvas::Canvas`] refuses them.
-
-use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
-use std::sync::mpsc::{self, Receiver, TryIter};
-use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+//! old generation, and [`super::canvas::Canvas`] refuses them.
 
 use std::ops::Range;
-use std::sync::atomic::AtomicU64;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
+use std::sync::mpsc::{self, Receiver, Sender, TryIter};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 use egui::Color32;
 use rt_core::effects::{EffectPlan, RayCounts};
@@ -96,12 +94,29 @@ pub struct Row {
 /// A running (or finished, or cancelled) render.
 pub struct RenderJob {
     spec: JobSpec,
-    cancel: Arc<AtomicBool>,
     rows: Receiver<Row>,
-    elapsed: Arc<Mutex<Option<Duration>>>,
-    failure: Arc<Mutex<Option<String>>>,
-    rays: Arc<AtomicU64>,
-    rows_rendered: Arc<AtomicU32>,
+    shared: Arc<Shared>,
+}
+
+/// What the workers report to the job's handle.
+#[derive(Default)]
+struct Shared {
+    /// Set to stop the workers after their current row.
+    cancel: AtomicBool,
+    /// Rays cast so far, all kinds.
+    rays: AtomicU64,
+    /// Rows finished so far, over all passes.
+    rows_rendered: AtomicU32,
+    /// Wall time from start to the last row, once every row is rendered.
+    elapsed: Mutex<Option<Duration>>,
+    /// "row Y: message" of the first row that panicked.
+    failure: Mutex<Option<String>>,
+}
+
+impl Shared {
+    fn cancelled(&self) -> bool {
+        self.cancel.load(Ordering::Relaxed)
+    }
 }
 
 /// The text of a panic's payload (`panic!` gives a `&str` or a `String`).
@@ -140,103 +155,27 @@ impl RenderJob {
     ) -> Result<Self, RenderError> {
         // Validate on the caller's thread, so errors are returned, not lost.
         spec.renderer()?;
-        let cancel = Arc::new(AtomicBool::new(false));
-        let elapsed = Arc::new(Mutex::new(None));
-        let failure = Arc::new(Mutex::new(None));
-        let rays = Arc::new(AtomicU64::new(0));
-        let rows_rendered = Arc::new(AtomicU32::new(0));
+        let shared = Arc::new(Shared::default());
         let (tx, rows) = mpsc::channel();
-        let worker_spec = spec.clone();
-        let (worker_cancel, worker_elapsed, worker_failure, worker_rays, worker_rows) =
-            (cancel.clone(), elapsed.clone(), failure.clone(), rays.clone(), rows_rendered.clone());
+        let worker =
+            Worker { spec: spec.clone(), generation, shared: shared.clone(), tx, on_row, render_row };
         std::thread::Builder::new()
             .name(format!("render-job-{generation}"))
-            .spawn(move || {
-                let s = worker_spec;
-                let renderer = s.renderer().expect("validated before the thread started");
-                let passes = sample_passes(s.spp);
-                let color_space = renderer.color_space();
-                let sums: Vec<Mutex<RowSums>> = (0..s.height)
-                    .map(|_| Mutex::new(RowSums { samples: 0, sums: vec![Color::ZERO; s.width as usize] }))
-                    .collect();
-                let start = Instant::now();
-                let tasks = passes.len() as u64 * s.height as u64;
-                let next_task = AtomicU64::new(0);
-                rayon::broadcast(|_| {
-                    while !worker_cancel.load(Ordering::Relaxed) {
-                        let task = next_task.fetch_add(1, Ordering::Relaxed);
-                        if task >= tasks {
-                            break;
-                        }
-                        let (pass, y) = ((task / s.height as u64) as usize, (task % s.height as u64) as u32);
-                        let samples = passes[pass].clone();
-                        // This row's previous pass may still be running on another thread.
-                        let mut row = loop {
-                            let row = sums[y as usize].lock().unwrap_or_else(|e| e.into_inner());
-                            if row.samples == samples.start || worker_cancel.load(Ordering::Relaxed) {
-                                break row;
-                            }
-                            drop(row);
-                            std::thread::yield_now();
-                        };
-                        if row.samples != samples.start {
-                            break; // Cancelled while waiting.
-                        }
-                        let rendered = catch_unwind(AssertUnwindSafe(|| {
-                            render_row(&renderer, y, samples.clone(), &mut row.sums)
-                        }));
-                        let counts = match rendered {
-                            Ok(counts) => counts,
-                            Err(payload) => {
-                                let mut failure = worker_failure.lock().unwrap_or_else(|e| e.into_inner());
-                                failure
-                                    .get_or_insert_with(|| format!("row {y}: {}", panic_message(&*payload)));
-                                worker_cancel.store(true, Ordering::Relaxed);
-                                on_row(); // Wake the UI so it shows the failure.
-                                break;
-                            }
-                        };
-                        row.samples = samples.end;
-                        // The mean exactly as `Renderer::pixel` computes it.
-                        let count = samples.end as f32;
-                        let pixels = row
-                            .sums
-                            .iter()
-                            .map(|&sum| {
-                                let [r, g, b] = color_space.encode(sum / count);
-                                Color32::from_rgb(r, g, b)
-                            })
-                            .collect();
-                        drop(row);
-                        worker_rays.fetch_add(counts.total(), Ordering::Relaxed);
-                        worker_rows.fetch_add(1, Ordering::Relaxed);
-                        let row = Row { generation, y, samples: samples.end, pixels };
-                        if worker_cancel.load(Ordering::Relaxed) || tx.send(row).is_err() {
-                            worker_cancel.store(true, Ordering::Relaxed);
-                            break;
-                        }
-                        on_row();
-                    }
-                });
-                if !worker_cancel.load(Ordering::Relaxed) {
-                    *worker_elapsed.lock().unwrap() = Some(start.elapsed());
-                    on_row();
-                }
-            })
+            .spawn(move || worker.run())
             .expect("the OS can start a thread");
-        Ok(Self { spec, cancel, rows, elapsed, failure, rays, rows_rendered })
+        Ok(Self { spec, rows, shared })
     }
 
     /// Rays cast so far, all kinds together.
     pub fn rays(&self) -> u64 {
-        self.rays.load(Ordering::Relaxed)
+        self.shared.rays.load(Ordering::Relaxed)
     }
 
     /// Samples per pixel of the pass in progress (the last one's when done),
     /// and how many of its rows are finished.
     pub fn progress(&self) -> (u32, u32) {
         let passes = sample_passes(self.spec.spp);
-        let done = self.rows_rendered.load(Ordering::Relaxed);
+        let done = self.shared.rows_rendered.load(Ordering::Relaxed);
         let pass = ((done / self.spec.height) as usize).min(passes.len() - 1);
         let rows = done - pass as u32 * self.spec.height;
         (passes[pass].end, rows)
@@ -244,7 +183,7 @@ impl RenderJob {
 
     /// Why the job stopped on its own, if a row panicked: "row Y: message".
     pub fn failure(&self) -> Option<String> {
-        self.failure.lock().unwrap_or_else(|e| e.into_inner()).clone()
+        self.shared.failure.lock().unwrap_or_else(|e| e.into_inner()).clone()
     }
 
     /// What this job renders.
@@ -254,7 +193,7 @@ impl RenderJob {
 
     /// Asks the workers to stop after their current row.
     pub fn cancel(&self) {
-        self.cancel.store(true, Ordering::Relaxed);
+        self.shared.cancel.store(true, Ordering::Relaxed);
     }
 
     /// Rows that have arrived since the last call, without waiting.
@@ -271,7 +210,99 @@ impl RenderJob {
     /// Wall time from start to the last row, once every row is rendered
     /// (`None` while running or if cancelled).
     pub fn elapsed(&self) -> Option<Duration> {
-        *self.elapsed.lock().unwrap()
+        *self.shared.elapsed.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+/// The job's background thread: hands (pass, row) tasks to every rayon
+/// thread in order, so rows finish roughly top to bottom, pass after pass.
+struct Worker<F> {
+    spec: JobSpec,
+    generation: u64,
+    shared: Arc<Shared>,
+    tx: Sender<Row>,
+    on_row: F,
+    render_row: Box<RowFn>,
+}
+
+impl<F: Fn() + Send + Sync> Worker<F> {
+    fn run(self) {
+        let s = &self.spec;
+        let renderer = s.renderer().expect("validated before the thread started");
+        let passes = sample_passes(s.spp);
+        let sums: Vec<Mutex<RowSums>> = (0..s.height)
+            .map(|_| Mutex::new(RowSums { samples: 0, sums: vec![Color::ZERO; s.width as usize] }))
+            .collect();
+        let start = Instant::now();
+        let tasks = passes.len() as u64 * s.height as u64;
+        let next_task = AtomicU64::new(0);
+        rayon::broadcast(|_| {
+            while !self.shared.cancelled() {
+                let task = next_task.fetch_add(1, Ordering::Relaxed);
+                if task >= tasks {
+                    break;
+                }
+                let (pass, y) = ((task / s.height as u64) as usize, (task % s.height as u64) as u32);
+                if !self.render(&renderer, &sums[y as usize], y, passes[pass].clone()) {
+                    break;
+                }
+            }
+        });
+        if !self.shared.cancelled() {
+            *self.shared.elapsed.lock().unwrap_or_else(|e| e.into_inner()) = Some(start.elapsed());
+            (self.on_row)();
+        }
+    }
+
+    /// Adds `samples` to row `y`'s sums and sends the row's new mean; false
+    /// when the job is to stop (cancelled, the receiver gone, or a panic).
+    fn render(&self, renderer: &Renderer, sums: &Mutex<RowSums>, y: u32, samples: Range<u32>) -> bool {
+        // This row's previous pass may still be running on another thread.
+        let mut row = loop {
+            let row = sums.lock().unwrap_or_else(|e| e.into_inner());
+            if row.samples == samples.start || self.shared.cancelled() {
+                break row;
+            }
+            drop(row);
+            std::thread::yield_now();
+        };
+        if row.samples != samples.start {
+            return false; // Cancelled while waiting.
+        }
+        let rendered =
+            catch_unwind(AssertUnwindSafe(|| (self.render_row)(renderer, y, samples.clone(), &mut row.sums)));
+        let counts = match rendered {
+            Ok(counts) => counts,
+            Err(payload) => {
+                let mut failure = self.shared.failure.lock().unwrap_or_else(|e| e.into_inner());
+                failure.get_or_insert_with(|| format!("row {y}: {}", panic_message(&*payload)));
+                self.shared.cancel.store(true, Ordering::Relaxed);
+                (self.on_row)(); // Wake the UI so it shows the failure.
+                return false;
+            }
+        };
+        row.samples = samples.end;
+        // The mean exactly as `Renderer::pixel` computes it.
+        let count = samples.end as f32;
+        let color_space = renderer.color_space();
+        let pixels = row
+            .sums
+            .iter()
+            .map(|&sum| {
+                let [r, g, b] = color_space.encode(sum / count);
+                Color32::from_rgb(r, g, b)
+            })
+            .collect();
+        drop(row);
+        self.shared.rays.fetch_add(counts.total(), Ordering::Relaxed);
+        self.shared.rows_rendered.fetch_add(1, Ordering::Relaxed);
+        let row = Row { generation: self.generation, y, samples: samples.end, pixels };
+        if self.shared.cancelled() || self.tx.send(row).is_err() {
+            self.shared.cancel.store(true, Ordering::Relaxed);
+            return false;
+        }
+        (self.on_row)();
+        true
     }
 }
 
@@ -289,7 +320,7 @@ mod tests {
     fn spec(width: u32, height: u32) -> JobSpec {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/showcase.ron");
         let scene = Arc::new(rt_core::load_scene(&path).unwrap());
-        let plan = EffectPlan::for_scene(&scene);
+        let plan = scene.effect_plan();
         JobSpec { camera: scene.camera, scene, width, height, spp: 1, plan }
     }
 
@@ -364,7 +395,7 @@ mod tests {
 
     #[test]
     fn after_a_restart_no_row_of_the_old_job_reaches_the_new_canvas() {
-        use crate::canvas::Canvas;
+        use crate::viewer::canvas::Canvas;
         let old = RenderJob::start(spec(400, 300), 1, || {}).unwrap();
         // Let some old rows arrive, as they would while the user drags.
         let first = old.next_row_blocking().unwrap();

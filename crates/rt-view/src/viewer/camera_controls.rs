@@ -1,8 +1,8 @@
 //! The viewer's camera edits: sliders, orbit, pan and zoom, as pure functions.
 //!
 //! Every edit goes through [`CameraSettings::accept`]: an edit that would make
-//! the camera degenerate (SPEC.md) is refused and the previous camera kept, so
-//! the viewer can never produce NaN or a flipped image. Orbiting also keeps
+//! the camera degenerate (`docs/conventions.md`) is refused and the previous
+//! camera kept, so the viewer can never produce NaN or a flipped image. Orbiting also keeps
 //! the view direction at least [`MIN_POLAR_DEGREES`] away from the up vector.
 
 use std::ops::RangeInclusive;

@@ -1,39 +1,37 @@
 //! Scene files: RON text → description types (serde) → a validated [`Scene`].
 //!
 //! Values are checked where they are read, so RON can point at them: every
-//! number must be finite (a [`Finite`] reads it), and each camera, image size
+//! number must be finite (a `values::Finite` reads it), and each camera, image size
 //! and object is validated as soon as it is parsed (`#[serde(try_from)]`), so
 //! its error carries the line and column where the value ends. What needs the
 //! whole file (material names) or the disk (OBJ files) is checked afterwards
 //! and names the object by its index.
 
+mod camera;
+mod effects;
+mod light;
+mod material;
+mod object;
+mod values;
+
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::Deserialize;
 use thiserror::Error;
 
-use crate::aabb::Aabb;
-use crate::camera::{Camera, CameraError, Projection};
-use crate::effects::{AmbientOcclusion, Lighting, MAX_DEPTH};
-use crate::light::{Light, LightKind};
-use crate::material::{Color, ColorSpace, Material};
+use crate::effects::Lighting;
+use crate::material::ColorSpace;
 use crate::mesh::{Mesh, MeshError};
 use crate::method::Methods;
-use crate::plane::Plane;
-use crate::polygon::Polygon;
-use crate::primitive::{GeometryError, Primitive};
-use crate::real::{Real, Vec3, normalize_robust, to_f32};
-use crate::scene::{Object, Scene};
-use crate::sphere::Sphere;
-use crate::triangle::Triangle;
-use crate::view_plane::{ViewPlaneError, check_image_size};
-
-/// Largest accepted samples-per-pixel count.
-pub const MAX_SAMPLES_PER_PIXEL: u32 = 1 << 16;
-
-/// Largest accepted sample count of an area light or of ambient occlusion.
-pub const MAX_EFFECT_SAMPLES: u32 = 4096;
+use crate::primitive::Primitive;
+use crate::scene::{Scene, SceneBuildError, SceneBuilder};
+use camera::{CameraDesc, ImageDesc, SamplesDesc};
+use effects::EffectsDesc;
+use light::LightDesc;
+use material::MaterialDesc;
+use object::{ObjectEntry, Shape};
+use values::ColorDesc;
 
 /// Why a scene file cannot be loaded. `file` is the path as given.
 #[derive(Debug, Error)]
@@ -59,19 +57,14 @@ pub enum SceneError {
         /// What is wrong.
         message: String,
     },
-    /// An object names a material the file does not define.
-    #[error("{file}: objects[{index}] ({kind}): unknown material \"{name}\" (defined: {defined})")]
-    UnknownMaterial {
+    /// The parts do not make a scene: an object names a material the file
+    /// does not define.
+    #[error("{file}: {reason}")]
+    Invalid {
         /// The scene file.
         file: String,
-        /// 0-based object index.
-        index: usize,
-        /// The object's variant.
-        kind: &'static str,
-        /// The missing name.
-        name: String,
-        /// The names that exist, comma-separated.
-        defined: String,
+        /// What is wrong (in the message, so not also a `source()`).
+        reason: SceneBuildError,
     },
     /// A mesh's OBJ file cannot be used.
     #[error("{file}: objects[{index}] (Mesh): {reason}")]
@@ -105,101 +98,34 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<Scene, Sce
         message: e.code.to_string(),
     })?;
 
-    let material_names: Vec<String> = desc.materials.keys().cloned().collect();
-    let materials = desc.materials.values().map(|m| m.0).collect();
-    let objects = desc
-        .objects
-        .into_iter()
-        .enumerate()
-        .map(|(index, entry)| {
-            let kind = entry.shape.kind();
-            let material =
-                material_names.binary_search(&entry.material).map_err(|_| SceneError::UnknownMaterial {
-                    file: file.to_owned(),
-                    index,
-                    kind,
-                    name: entry.material.clone(),
-                    defined: material_names.join(", "),
-                })?;
-            let primitive = match entry.shape {
-                Shape::Ready(p) => p,
-                Shape::Mesh { file: obj, scale, translate } => {
-                    let mesh = Mesh::load_obj(&base_dir.join(obj), scale, translate)
-                        .map_err(|reason| SceneError::Mesh { file: file.to_owned(), index, reason })?;
-                    Primitive::Mesh(mesh)
-                }
-            };
-            Ok(Object { primitive, material })
-        })
-        .collect::<Result<_, _>>()?;
-
-    let lighting = Lighting {
-        lights: desc.lights.into_iter().map(|l| l.0).collect(),
-        ambient: desc.ambient.0,
-        max_depth: desc.effects.max_depth.0,
-        ambient_occlusion: desc.effects.ambient_occlusion,
-    };
-    let mut scene = Scene::new(
-        desc.camera.0,
-        (desc.image.width, desc.image.height),
-        desc.background.0,
-        desc.samples_per_pixel.0,
-        materials,
-        material_names,
-        objects,
-    )
-    .with_lighting(lighting)
-    .with_methods(desc.methods);
-    scene.color_space = desc.color_space;
-    Ok(scene)
-}
-
-/// A number that must be finite (RON also reads `NaN` and `inf`); 0 by default.
-#[derive(Clone, Copy, Debug, Default)]
-struct Finite(Real);
-
-impl<'de> Deserialize<'de> for Finite {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let v = Real::deserialize(d)?;
-        if v.is_finite() {
-            Ok(Self(v))
-        } else {
-            Err(serde::de::Error::custom(format!("expected a finite number, found {v}")))
-        }
+    let mut scene = SceneBuilder::new(desc.camera.0)
+        .image_size(desc.image.width, desc.image.height)
+        .background(desc.background.0)
+        .samples_per_pixel(desc.samples_per_pixel.0)
+        .color_space(desc.color_space)
+        .methods(desc.methods)
+        .lighting(Lighting {
+            lights: desc.lights.into_iter().map(|l| l.0).collect(),
+            ambient: desc.ambient.0,
+            max_depth: desc.effects.max_depth.0,
+            ambient_occlusion: desc.effects.ambient_occlusion.map(|a| a.0),
+            global_illumination: desc.effects.global_illumination.map(|g| g.0),
+        });
+    for (name, material) in desc.materials {
+        scene = scene.material(name, material.0);
     }
-}
-
-/// A point or vector written `(x, y, z)`.
-#[derive(Clone, Copy, Debug, Deserialize)]
-struct V3(Finite, Finite, Finite);
-
-impl From<V3> for Vec3 {
-    fn from(v: V3) -> Self {
-        Vec3::new(v.0.0, v.1.0, v.2.0)
+    for (index, entry) in desc.objects.into_iter().enumerate() {
+        let primitive = match entry.shape {
+            Shape::Ready(p) => p,
+            Shape::Mesh { file: obj, scale, translate } => {
+                let mesh = Mesh::load_obj(&base_dir.join(obj), scale, translate)
+                    .map_err(|reason| SceneError::Mesh { file: file.to_owned(), index, reason })?;
+                Primitive::Mesh(mesh)
+            }
+        };
+        scene = scene.object(primitive, entry.material);
     }
-}
-
-impl Default for V3 {
-    fn default() -> Self {
-        V3(Finite(0.0), Finite(0.0), Finite(0.0))
-    }
-}
-
-/// A colour written `(r, g, b)`, each finite and ≥ 0.
-#[derive(Clone, Copy, Debug, Default, Deserialize)]
-#[serde(try_from = "V3")]
-struct ColorDesc(Color);
-
-impl TryFrom<V3> for ColorDesc {
-    type Error = String;
-    #[allow(clippy::unnecessary_cast)] // `Real` is f64 with the `f64` feature.
-    fn try_from(v: V3) -> Result<Self, String> {
-        let c = Vec3::from(v);
-        if c.cmplt(Vec3::ZERO).any() {
-            return Err(format!("colour components must not be negative, got {c}"));
-        }
-        Ok(Self(Color::new(c.x as f32, c.y as f32, c.z as f32)))
-    }
+    scene.build().map_err(|reason| SceneError::Invalid { file: file.to_owned(), reason })
 }
 
 #[derive(Deserialize)]
@@ -251,394 +177,15 @@ fn unique_materials<'de, D: serde::Deserializer<'de>>(
     d.deserialize_map(Unique)
 }
 
-/// Samples per pixel, 1 to [`MAX_SAMPLES_PER_PIXEL`]; 1 when absent.
-#[derive(Deserialize)]
-#[serde(try_from = "u32")]
-struct SamplesDesc(u32);
-
-impl Default for SamplesDesc {
-    fn default() -> Self {
-        Self(1)
-    }
-}
-
-impl TryFrom<u32> for SamplesDesc {
-    type Error = String;
-    fn try_from(n: u32) -> Result<Self, String> {
-        check_count("samples_per_pixel", 1..=MAX_SAMPLES_PER_PIXEL, n).map(Self)
-    }
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields, rename = "Camera")]
-struct CameraFields {
-    position: V3,
-    center_of_interest: V3,
-    up: V3,
-    fov_y: Finite,
-    near: Finite,
-    #[serde(default)]
-    projection: Projection,
-}
-
-#[derive(Deserialize)]
-#[serde(try_from = "CameraFields")]
-struct CameraDesc(Camera);
-
-impl TryFrom<CameraFields> for CameraDesc {
-    type Error = CameraError;
-    fn try_from(c: CameraFields) -> Result<Self, CameraError> {
-        let camera = Camera::new(
-            c.position.into(),
-            c.center_of_interest.into(),
-            c.up.into(),
-            c.fov_y.0,
-            c.near.0,
-            c.projection,
-        )?;
-        Ok(Self(camera))
-    }
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields, rename = "Image")]
-struct ImageFields {
-    width: u32,
-    height: u32,
-}
-
-#[derive(Deserialize)]
-#[serde(try_from = "ImageFields")]
-struct ImageDesc {
-    width: u32,
-    height: u32,
-}
-
-impl TryFrom<ImageFields> for ImageDesc {
-    type Error = ViewPlaneError;
-    fn try_from(f: ImageFields) -> Result<Self, ViewPlaneError> {
-        check_image_size(f.width, f.height)?;
-        Ok(Self { width: f.width, height: f.height })
-    }
-}
-
-/// A material as written: only `color` is required; the defaults make a
-/// plain diffuse surface ([`Material::flat`]).
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields, rename = "Material")]
-struct MaterialFields {
-    color: ColorDesc,
-    #[serde(default = "unit_scale")]
-    diffuse: Finite,
-    #[serde(default)]
-    specular: Finite,
-    #[serde(default = "default_shininess")]
-    shininess: Finite,
-    #[serde(default)]
-    reflectivity: Finite,
-    #[serde(default)]
-    transparency: Finite,
-    #[serde(default = "default_ior")]
-    ior: Finite,
-    #[serde(default)]
-    emission: ColorDesc,
-}
-
-#[derive(Deserialize)]
-#[serde(try_from = "MaterialFields")]
-struct MaterialDesc(Material);
-
-impl TryFrom<MaterialFields> for MaterialDesc {
-    type Error = String;
-    fn try_from(f: MaterialFields) -> Result<Self, String> {
-        let number = |Finite(v): Finite, name: &str, ok: fn(Real) -> bool, rule: &str| {
-            if ok(v) { Ok(to_f32(v)) } else { Err(format!("material {name} must be {rule}, got {v}")) }
-        };
-        let unit = |v: Real| (0.0..=1.0).contains(&v);
-        let m = Material {
-            color: f.color.0,
-            diffuse: number(f.diffuse, "diffuse", |v| v >= 0.0, "≥ 0")?,
-            specular: number(f.specular, "specular", |v| v >= 0.0, "≥ 0")?,
-            shininess: number(f.shininess, "shininess", |v| (0.0..=1e4).contains(&v), "0 to 10000")?,
-            reflectivity: number(f.reflectivity, "reflectivity", unit, "0 to 1")?,
-            transparency: number(f.transparency, "transparency", unit, "0 to 1")?,
-            ior: number(f.ior, "ior", |v| v > 0.0 && v <= 100.0, "above 0 and at most 100")?,
-            emission: f.emission.0,
-        };
-        if m.reflectivity + m.transparency > 1.0 {
-            return Err(format!(
-                "material reflectivity + transparency must not exceed 1, got {} + {}",
-                m.reflectivity, m.transparency
-            ));
-        }
-        Ok(Self(m))
-    }
-}
-
-/// The lights exactly as written in a scene file.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields, rename = "Light")]
-enum LightFields {
-    Point {
-        position: V3,
-        #[serde(default = "white")]
-        color: ColorDesc,
-        #[serde(default = "unit_scale")]
-        intensity: Finite,
-        #[serde(default = "yes")]
-        shadows: bool,
-    },
-    Directional {
-        direction: V3,
-        #[serde(default = "white")]
-        color: ColorDesc,
-        #[serde(default = "unit_scale")]
-        intensity: Finite,
-        #[serde(default = "yes")]
-        shadows: bool,
-    },
-    Sphere {
-        center: V3,
-        radius: Finite,
-        #[serde(default = "white")]
-        color: ColorDesc,
-        #[serde(default = "unit_scale")]
-        intensity: Finite,
-        #[serde(default = "sixteen")]
-        samples: u32,
-        #[serde(default = "yes")]
-        shadows: bool,
-    },
-}
-
-fn default_shininess() -> Finite {
-    Finite(Material::flat(Color::ZERO).shininess as Real)
-}
-fn default_ior() -> Finite {
-    Finite(Material::flat(Color::ZERO).ior as Real)
-}
-fn white() -> ColorDesc {
-    ColorDesc(Color::ONE)
-}
-fn yes() -> bool {
-    true
-}
-fn sixteen() -> u32 {
-    16
-}
-
-#[derive(Deserialize)]
-#[serde(try_from = "LightFields")]
-struct LightDesc(Light);
-
-impl TryFrom<LightFields> for LightDesc {
-    type Error = String;
-    fn try_from(f: LightFields) -> Result<Self, String> {
-        let power = |color: ColorDesc, intensity: Finite| {
-            if intensity.0 >= 0.0 {
-                Ok(color.0 * to_f32(intensity.0))
-            } else {
-                Err(format!("light intensity must not be negative, got {}", intensity.0))
-            }
-        };
-        let light = match f {
-            LightFields::Point { position, color, intensity, shadows } => Light {
-                kind: LightKind::Point { position: position.into() },
-                power: power(color, intensity)?,
-                shadows,
-            },
-            LightFields::Directional { direction, color, intensity, shadows } => {
-                let direction = normalize_robust(direction.into())
-                    .ok_or("directional light direction must not be zero")?;
-                Light { kind: LightKind::Directional { direction }, power: power(color, intensity)?, shadows }
-            }
-            LightFields::Sphere { center, radius, color, intensity, samples, shadows } => {
-                if radius.0 <= 0.0 {
-                    return Err(format!("sphere light radius must be positive, got {}", radius.0));
-                }
-                check_count("sphere light samples", 1..=MAX_EFFECT_SAMPLES, samples)?;
-                Light {
-                    kind: LightKind::Sphere { center: center.into(), radius: radius.0, samples },
-                    power: power(color, intensity)?,
-                    shadows,
-                }
-            }
-        };
-        Ok(Self(light))
-    }
-}
-
-/// `n` if it is in `range`, else "`what` must be LO to HI, got N".
-fn check_count(what: &str, range: std::ops::RangeInclusive<u32>, n: u32) -> Result<u32, String> {
-    if range.contains(&n) {
-        Ok(n)
-    } else {
-        Err(format!("{what} must be {} to {}, got {n}", range.start(), range.end()))
-    }
-}
-
-/// `effects: (max_depth: 5, ambient_occlusion: (samples: 16, radius: 1.5))`;
-/// every field optional.
-#[derive(Default, Deserialize)]
-#[serde(deny_unknown_fields, rename = "Effects")]
-struct EffectsDesc {
-    #[serde(default)]
-    max_depth: DepthDesc,
-    #[serde(default, deserialize_with = "present")]
-    ambient_occlusion: Option<AmbientOcclusion>,
-}
-
-/// A field that is `None` when absent and read as its plain value (no
-/// `Some(…)`) when present.
-fn present<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<AmbientOcclusion>, D::Error> {
-    AoDesc::deserialize(d).map(|a| Some(a.0))
-}
-
-/// Reflection/refraction recursion depth, 0 to [`MAX_DEPTH`]; 5 when absent.
-#[derive(Deserialize)]
-#[serde(try_from = "u32")]
-struct DepthDesc(u32);
-
-impl Default for DepthDesc {
-    fn default() -> Self {
-        Self(5)
-    }
-}
-
-impl TryFrom<u32> for DepthDesc {
-    type Error = String;
-    fn try_from(n: u32) -> Result<Self, String> {
-        check_count("effects.max_depth", 0..=MAX_DEPTH, n).map(Self)
-    }
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields, rename = "AmbientOcclusion")]
-struct AoFields {
-    samples: u32,
-    radius: Finite,
-}
-
-#[derive(Deserialize)]
-#[serde(try_from = "AoFields")]
-struct AoDesc(AmbientOcclusion);
-
-impl TryFrom<AoFields> for AoDesc {
-    type Error = String;
-    fn try_from(f: AoFields) -> Result<Self, String> {
-        let samples = check_count("ambient_occlusion.samples", 1..=MAX_EFFECT_SAMPLES, f.samples)?;
-        if f.radius.0 <= 0.0 {
-            return Err(format!("ambient_occlusion.radius must be positive, got {}", f.radius.0));
-        }
-        Ok(Self(AmbientOcclusion { samples, radius: f.radius.0 }))
-    }
-}
-
-/// The object variants exactly as written in a scene file.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields, rename = "Object")]
-enum ObjectDesc {
-    Sphere {
-        center: V3,
-        radius: Finite,
-        material: String,
-    },
-    Plane {
-        normal: V3,
-        d: Finite,
-        material: String,
-    },
-    Aabb {
-        min: V3,
-        max: V3,
-        material: String,
-    },
-    Triangle {
-        a: V3,
-        b: V3,
-        c: V3,
-        material: String,
-    },
-    Polygon {
-        points: Vec<V3>,
-        material: String,
-    },
-    Mesh {
-        file: PathBuf,
-        material: String,
-        #[serde(default = "unit_scale")]
-        scale: Finite,
-        #[serde(default)]
-        translate: V3,
-    },
-}
-
-fn unit_scale() -> Finite {
-    Finite(1.0)
-}
-
-/// An object whose geometry is validated, except a mesh's file, which is read later.
-#[derive(Deserialize)]
-#[serde(try_from = "ObjectDesc")]
-struct ObjectEntry {
-    shape: Shape,
-    material: String,
-}
-
-enum Shape {
-    Ready(Primitive),
-    Mesh { file: PathBuf, scale: Real, translate: Vec3 },
-}
-
-impl Shape {
-    fn kind(&self) -> &'static str {
-        match self {
-            Shape::Ready(p) => p.kind(),
-            Shape::Mesh { .. } => "Mesh",
-        }
-    }
-}
-
-impl TryFrom<ObjectDesc> for ObjectEntry {
-    type Error = String;
-    fn try_from(o: ObjectDesc) -> Result<Self, String> {
-        let ready = |p: Result<Primitive, GeometryError>, material| {
-            p.map(|p| Self { shape: Shape::Ready(p), material }).map_err(|e| e.to_string())
-        };
-        match o {
-            ObjectDesc::Sphere { center, radius, material } => {
-                ready(Sphere::new(center.into(), radius.0).map(Primitive::Sphere), material)
-            }
-            ObjectDesc::Plane { normal, d, material } => {
-                ready(Plane::new(normal.into(), d.0).map(Primitive::Plane), material)
-            }
-            ObjectDesc::Aabb { min, max, material } => {
-                ready(Aabb::new(min.into(), max.into()).map(Primitive::Aabb), material)
-            }
-            ObjectDesc::Triangle { a, b, c, material } => {
-                ready(Triangle::new(a.into(), b.into(), c.into()).map(Primitive::Triangle), material)
-            }
-            ObjectDesc::Polygon { points, material } => {
-                let points = points.into_iter().map(Vec3::from).collect();
-                ready(Polygon::new(points).map(Primitive::Polygon), material)
-            }
-            ObjectDesc::Mesh { file, material, scale, translate } => {
-                if scale.0 <= 0.0 {
-                    return Err(format!("mesh scale must be positive, got {}", scale.0));
-                }
-                Ok(Self {
-                    shape: Shape::Mesh { file, scale: scale.0, translate: translate.into() },
-                    material,
-                })
-            }
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::camera::Projection;
+    use crate::effects::{AmbientOcclusion, GlobalIllumination};
+    use crate::light::{Light, LightKind};
+    use crate::material::{Color, Material};
     use crate::method::{BoxMethod, SphereMethod, TriangleMethod};
+    use crate::real::Vec3;
 
     const GOOD: &str = r#"Scene(
     camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1),
@@ -665,7 +212,7 @@ mod tests {
         let s = parse(GOOD).unwrap();
         assert_eq!((s.width, s.height, s.samples_per_pixel), (32, 24, 1));
         assert_eq!(s.background, Color::ZERO);
-        assert_eq!(s.material_names, ["grey", "red"]);
+        assert_eq!(s.material_names(), ["grey", "red"]);
         assert_eq!(s.objects().len(), 2);
         assert_eq!(s.objects()[0].material, 1);
         assert_eq!(s.camera.projection(), Projection::Perspective);
@@ -790,7 +337,7 @@ mod tests {
     fn a_flat_scene_has_no_lights_and_plain_materials() {
         let s = parse(GOOD).unwrap();
         assert_eq!(s.lighting, Lighting { max_depth: 5, ..Lighting::default() });
-        assert_eq!(s.materials[1], Material::flat(Color::new(1.0, 0.0, 0.0)));
+        assert_eq!(s.materials()[1], Material::flat(Color::new(1.0, 0.0, 0.0)));
         assert_eq!(s.color_space, ColorSpace::Linear);
     }
 
@@ -814,7 +361,7 @@ mod tests {
             );
         let s = parse(&text).unwrap();
         assert_eq!(s.color_space, ColorSpace::Srgb);
-        let grey = s.materials[0];
+        let grey = s.materials()[0];
         assert_eq!((grey.specular, grey.shininess, grey.transparency, grey.ior), (0.4, 64.0, 0.5, 1.33));
         assert_eq!((grey.diffuse, grey.reflectivity, grey.emission), (1.0, 0.0, Color::ZERO));
         let l = &s.lighting;
@@ -846,6 +393,12 @@ mod tests {
         );
         assert!(material("ior: 0").contains("material ior must be above 0"));
         assert!(material("shininess: -1").contains("material shininess must be 0 to 10000, got -1"));
+        // Energy conservation: every weight and colour component at most 1.
+        assert!(material("diffuse: 1.5").contains("material diffuse must be 0 to 1, got 1.5"));
+        assert!(material("specular: 2").contains("material specular must be 0 to 1, got 2"));
+        let e = error_after(grey, "\"grey\": (color: (0.5, 1.2, 0.5))");
+        assert!(e.starts_with("bad.ron:4:") && e.contains("material color is a reflectance"), "{e}");
+        assert!(material("emission: (1, -1, 0)").contains("colour components must not be negative"));
         assert!(material("glow: 1").contains("Unexpected field named `glow`"));
         let lights = |l: &str| error_after("objects: [", &format!("lights: [{l}], objects: ["));
         let e = lights("Point(position: (0, 1, 0), intensity: -2)");
@@ -868,10 +421,50 @@ mod tests {
             "{e}"
         );
         assert!(effects("ambient_occlusion: (samples: 4, radius: -1)").contains("radius must be positive"));
+        let e = effects("global_illumination: (max_bounces: 5000)");
+        assert!(
+            e.starts_with("bad.ron:5:")
+                && e.ends_with("global_illumination.max_bounces must be 0 to 1024, got 5000"),
+            "{e}"
+        );
+        assert!(effects("global_illumination: (bounces: 3)").contains("Unexpected field named `bounces`"));
         assert!(
             error_after("objects: [", "color_space: Gamma, objects: [")
                 .contains("Unexpected variant named `Gamma`")
         );
+    }
+
+    #[test]
+    fn global_illumination_is_read_with_its_defaults() {
+        let gi = |fields: &str| {
+            let text = GOOD
+                .replace("objects: [", &format!("effects: (global_illumination: ({fields})), objects: ["));
+            parse(&text).unwrap().lighting.global_illumination.unwrap()
+        };
+        assert_eq!(gi(""), GlobalIllumination { max_bounces: 8, russian_roulette: true });
+        assert_eq!(
+            gi("max_bounces: 3, russian_roulette: false"),
+            GlobalIllumination { max_bounces: 3, russian_roulette: false }
+        );
+        assert_eq!(parse(GOOD).unwrap().lighting.global_illumination, None);
+    }
+
+    #[test]
+    fn a_glowing_polygon_whose_edges_cross_is_refused_naming_it() {
+        let star = "Polygon(points: [(0, 1, 0), (0.59, -0.81, 0), (-0.95, 0.31, 0), (0.95, 0.31, 0), (-0.59, -0.81, 0)], material: \"lamp\")";
+        let text = GOOD
+            .replace(
+                "\"grey\": (color: (0.5, 0.5, 0.5))",
+                "\"grey\": (color: (0.5, 0.5, 0.5)), \"lamp\": (color: (1, 1, 1), emission: (2, 2, 2))",
+            )
+            .replace("Sphere(center: (0, 0, 0), radius: 1, material: \"red\")", star);
+        let e = parse(&text).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "bad.ron: objects[0] (Polygon): an emissive polygon must be simple (its edges must not cross)"
+        );
+        // The same star that does not glow is fine (the even–odd rule fills it).
+        assert!(parse(&text.replace("emission: (2, 2, 2)", "")).is_ok());
     }
 
     #[test]

@@ -16,18 +16,42 @@
 //! `accuracy.png` (error against time) to `--out`.
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use anyhow::{Context, bail};
+use clap::Args;
 use plotters::prelude::*;
 use rt_core::hard_cases::{CaseKind, all_cases};
 use rt_core::method::{BoxMethod, Methods, SphereMethod, TriangleMethod};
 use rt_core::{Renderer, Scene, load_scene};
 
-use crate::bench_cmd::median;
-use crate::cli::AccuracyArgs;
+use crate::timing::median_time;
+
+/// `rt-view accuracy`.
+#[derive(Debug, Args)]
+pub struct AccuracyArgs {
+    /// Folder for accuracy.csv, accuracy.md and accuracy.png.
+    #[arg(long, default_value = "accuracy-out")]
+    pub out: PathBuf,
+    /// Timed runs per measurement; the median is reported.
+    #[arg(long, default_value_t = 3)]
+    pub runs: usize,
+    /// Smaller images and fewer samples (a quick run).
+    #[arg(long)]
+    pub quick: bool,
+    /// An rt-view built with `--features f64`, whose geometry rows are added.
+    #[arg(long, value_name = "RT_VIEW_F64")]
+    pub with_f64: Option<PathBuf>,
+    /// Only the geometry part, written as accuracy-f32.csv or accuracy-f64.csv
+    /// (what --with-f64 runs in the other build).
+    #[arg(long)]
+    pub geometry_only: bool,
+    /// Folder of the measured scene files.
+    #[arg(long, default_value = "scenes")]
+    pub scenes: PathBuf,
+}
 
 /// The geometry's precision in this build.
 const PRECISION: &str = if cfg!(feature = "f64") { "f64" } else { "f32" };
@@ -218,6 +242,9 @@ struct Sweep {
     scene: &'static str,
     settings: Vec<Setting>,
     reference: Setting,
+    /// Samples per pixel of every render of the sweep (`None`: the scene's,
+    /// or the setting's own).
+    spp: Option<u32>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -225,6 +252,10 @@ enum Setting {
     Spp(u32),
     Depth(u32),
     Methods(Methods),
+    /// Global illumination's `max_bounces`.
+    Bounces(u32),
+    /// Global illumination with Russian roulette on or off, at a sample count.
+    Roulette(bool, u32),
 }
 
 impl Setting {
@@ -237,6 +268,8 @@ impl Setting {
             Self::Methods(m) if m.sphere != d.sphere => format!("sphere={:?}", m.sphere),
             Self::Methods(m) if m.aabb != d.aabb => format!("box={:?}", m.aabb),
             Self::Methods(_) => "default methods".into(),
+            Self::Bounces(n) => format!("max_bounces={n}"),
+            Self::Roulette(on, n) => format!("roulette={} spp={n}", if on { "on" } else { "off" }),
         }
     }
 }
@@ -251,12 +284,34 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         scene,
         settings: spps.iter().map(|&n| Setting::Spp(n)).collect(),
         reference: Setting::Spp(reference_spp),
+        spp: None,
     };
     let depth_sweep = |experiment, scene| Sweep {
         experiment,
         scene,
         settings: depths.iter().map(|&n| Setting::Depth(n)).collect(),
         reference: Setting::Depth(rt_core::effects::MAX_DEPTH),
+        spp: None,
+    };
+    // Global illumination on the Cornell box: noise against samples; bias
+    // against the bounce limit (same samples, so the same random numbers for
+    // the first bounces: the difference is what the later bounces add); and
+    // Russian roulette, whose time saving and extra noise both show against
+    // a many-sample reference without it.
+    let gi_spp = if args.quick { 4 } else { 64 };
+    let bounce_sweep = Sweep {
+        experiment: "global illumination (bounces)",
+        scene: "cornell_box.ron",
+        settings: [0, 1, 2, 3, 4, 6, 8].iter().map(|&n| Setting::Bounces(n)).collect(),
+        reference: Setting::Bounces(64),
+        spp: Some(gi_spp),
+    };
+    let roulette_sweep = Sweep {
+        experiment: "global illumination (roulette)",
+        scene: "cornell_box.ron",
+        settings: vec![Setting::Roulette(true, gi_spp), Setting::Roulette(false, gi_spp)],
+        reference: Setting::Roulette(false, reference_spp),
+        spp: None,
     };
     let d = Methods::default();
     let method_sweep = Sweep {
@@ -269,6 +324,7 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
             Setting::Methods(Methods { aabb: BoxMethod::SixPlane, ..d }),
         ],
         reference: Setting::Methods(d),
+        spp: None,
     };
     let sweeps = [
         spp_sweep("edges (spp)", "antialiasing.ron"),
@@ -277,6 +333,9 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         depth_sweep("mirrors (depth)", "mirrors.ron"),
         depth_sweep("glass (depth)", "glass.ron"),
         method_sweep,
+        spp_sweep("global illumination (spp)", "cornell_box.ron"),
+        bounce_sweep,
+        roulette_sweep,
     ];
     let mut rows = Vec::new();
     for sweep in sweeps {
@@ -286,9 +345,15 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         // The method sweep renders at the scene's own size: its differences are single pixels.
         let size = if sweep.experiment.starts_with("methods") && !args.quick {
             (scene.width, scene.height)
+        } else if sweep.experiment.starts_with("global") {
+            if args.quick { (32, 32) } else { (128, 128) }
         } else {
             size
         };
+        let mut scene = scene;
+        if let Some(spp) = sweep.spp {
+            scene.samples_per_pixel = spp;
+        }
         let mut renders = Vec::new();
         for &setting in &sweep.settings {
             renders.push((setting, render(&scene, setting, size, runs)?));
@@ -328,10 +393,14 @@ fn render(
 ) -> anyhow::Result<(Image, Duration)> {
     let mut scene = scene.clone();
     let mut spp = scene.samples_per_pixel;
-    match setting {
-        Setting::Spp(n) => spp = n,
-        Setting::Depth(n) => scene.lighting.max_depth = n,
-        Setting::Methods(m) => scene.methods = m,
+    let gi = scene.lighting.global_illumination.as_mut();
+    match (setting, gi) {
+        (Setting::Spp(n), _) => spp = n,
+        (Setting::Depth(n), _) => scene.lighting.max_depth = n,
+        (Setting::Methods(m), _) => scene.methods = m,
+        (Setting::Bounces(n), Some(gi)) => gi.max_bounces = n,
+        (Setting::Roulette(on, n), Some(gi)) => (gi.russian_roulette, spp) = (on, n),
+        (_, None) => bail!("{setting:?} needs a scene with global illumination"),
     }
     let renderer = Renderer::new(&scene, w, h, spp)?;
     let mut frame = None;
@@ -351,19 +420,6 @@ fn image_error(image: &[[u8; 3]], reference: &[[u8; 3]]) -> (f64, f64) {
         }
     }
     ((sum / (3 * image.len()) as f64).sqrt(), max)
-}
-
-/// The median wall time of `runs` calls of `f`.
-fn median_time(runs: usize, mut f: impl FnMut()) -> Duration {
-    median(
-        (0..runs.max(1))
-            .map(|_| {
-                let start = Instant::now();
-                f();
-                start.elapsed()
-            })
-            .collect(),
-    )
 }
 
 /// The README's tables: images, then geometry (one line per case and method,

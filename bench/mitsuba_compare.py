@@ -1,0 +1,386 @@
+#!/usr/bin/env python3
+"""rt-view beside Mitsuba 3 on the same scene: are the two images the same,
+up to noise?
+
+    pip install mitsuba numpy
+    cargo build --release -p rt-view
+    python3 bench/mitsuba_compare.py scenes/cornell_box.ron --spp 1024 --batches 8
+
+The scene is exported by `rt-view export` (every default resolved, triangle
+objects as OBJ files) and converted to a Mitsuba 3 scene:
+
+- rt-view's world is left-handed, Mitsuba's right-handed: every position and
+  direction has its x negated, and every triangle's winding is reversed, so
+  that each surface keeps the side its normal points to. The camera is built
+  with `look_at` from the mirrored eye, centre of interest and up vector.
+- the camera is Mitsuba's `perspective` with the same vertical field of view,
+  an `hdrfilm` of the same size with a box pixel filter (rt-view's samples are
+  spread uniformly over each pixel), and the `independent` sampler;
+- the integrator is `path` with `max_depth = max_bounces + 1` (Mitsuba counts
+  the camera segment);
+- a material is the mixture of `docs/effects.md`:
+  `(1 − kr − kt)·[(1 − ks)·diffuse + ks·ggx] + kr·mirror + kt·glass`, built
+  from nested `blendbsdf`s of `diffuse` (reflectance kd·color),
+  `roughconductor` (GGX, α from the shininess, `material = "none"`),
+  `conductor` (`material = "none"`) and `dielectric` (`int_ior = ior`,
+  `specular_transmittance = color`). rt-view's reflection lobes are
+  two-sided, so they are wrapped in `twosided`.
+- an emissive object gets an `area` emitter of the same radiance (one-sided,
+  on the side its normal points to, as in rt-view); the background becomes a
+  `constant` emitter; point and directional lights become `point` and
+  `directional` emitters with the same intensity and irradiance.
+- infinite planes become rectangles `--plane-size` units wide centred below
+  the centre of interest (Mitsuba's rectangles are float32: a huge one makes
+  its shading points drift).
+
+Both renderers render `--batches` independent images of `--spp / --batches`
+samples (rt-view with `--seed k`, Mitsuba with `seed=k`). For each 16×16
+block of pixels the mean over each image is taken; the spread of the batch
+means gives the standard error of a block's mean. A block agrees when, in
+every colour channel,
+
+    |rt − mi| ≤ Z·√(se_rt² + se_mi²) + rel·max(|rt|, |mi|)
+
+(Z = `--z`, rel = `--rel`). Noise alone makes about 0.27 % of
+channel tests fail at Z = 3. The whole-image means are compared too.
+"""
+
+import argparse
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+
+def parse_args():
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("scene", help="rt-view scene file (.ron)")
+    p.add_argument("--spp", type=int, default=1024, help="samples per pixel in all, each renderer")
+    p.add_argument("--batches", type=int, default=16, help="independent images the samples are split into")
+    p.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant (llvm_ad_rgb or scalar_rgb)")
+    p.add_argument("--rt-view", default="target/release/rt-view", help="the rt-view binary")
+    p.add_argument("--out", default="mitsuba-out", help="folder for images, exports and the report")
+    p.add_argument("--threads", type=int, default=os.cpu_count(), help="threads for both renderers")
+    p.add_argument("--block", type=int, default=16, help="block side in pixels")
+    p.add_argument("--z", type=float, default=3.0, help="standard errors a block may differ by")
+    p.add_argument("--rel", type=float, default=0.01, help="relative tolerance added to the noise bound")
+    p.add_argument("--plane-size", type=float, default=400.0, help="width of the rectangle an infinite plane becomes")
+    p.add_argument("--width", type=int, help="override the image width")
+    p.add_argument("--height", type=int, help="override the image height")
+    return p.parse_args()
+
+
+def mirror(v):
+    return [-v[0], v[1], v[2]]
+
+
+def rgb(mi, c):
+    return {"type": "rgb", "value": [float(x) for x in c]}
+
+
+def mirrored_obj(src, dst):
+    """Copies an OBJ of rt-view's export with x negated and windings reversed."""
+    out = []
+    with open(src) as f:
+        for line in f:
+            parts = line.split()
+            if not parts:
+                continue
+            if parts[0] == "v":
+                x, y, z = (float(t) for t in parts[1:4])
+                out.append(f"v {-x!r} {y!r} {z!r}")
+            elif parts[0] == "f":
+                a, b, c = parts[1:4]
+                out.append(f"f {a} {c} {b}")
+    with open(dst, "w") as f:
+        f.write("\n".join(out) + "\n")
+
+
+def bsdf(m):
+    """The Mitsuba BSDF of an rt-view material (see the module comment)."""
+    kr, kt, ks, kd = m["reflectivity"], m["transparency"], m["specular"], m["diffuse"]
+    color = m["color"]
+    rest_black = kd * max(color) <= 0 and ks <= 0
+    delta = kr + kt
+    if delta > 0:
+        # The δ lobes, each scaled by the sum of their weights so that a
+        # blend of the two gives kr·mirror + kt·glass.
+        mirror_bsdf = {
+            "type": "twosided",
+            "bsdf": {
+                "type": "conductor",
+                "material": "none",
+                "specular_reflectance": {"type": "rgb", "value": [delta] * 3},
+            },
+        }
+        glass = {
+            "type": "dielectric",
+            "int_ior": m["ior"],
+            "ext_ior": 1.0,
+            "specular_reflectance": {"type": "rgb", "value": [delta] * 3},
+            "specular_transmittance": {"type": "rgb", "value": [delta * c for c in color]},
+        }
+        if kt <= 0:
+            deltas = mirror_bsdf
+        elif kr <= 0:
+            deltas = glass
+        else:
+            deltas = {"type": "blendbsdf", "weight": kt / delta, "bsdf_0": mirror_bsdf, "bsdf_1": glass}
+        if rest_black or delta >= 1:
+            return deltas
+        # Mitsuba's blendbsdf divides a δ sample's weight by the mixture's
+        # density, in which the smooth lobe's density is added to the δ lobe's
+        # selection probability: the δ lobe comes out darker than its weight.
+        print(
+            f"warning: material {m['name']!r} mixes smooth and δ lobes, which Mitsuba's blendbsdf "
+            "does not weight exactly: the reference is biased where it is seen",
+            file=sys.stderr,
+        )
+    diffuse = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [kd * c for c in color]}}
+    glossy = {
+        "type": "roughconductor",
+        "distribution": "ggx",
+        "alpha": m["roughness"],
+        "material": "none",
+    }
+    if ks <= 0:
+        rest = diffuse
+    elif ks >= 1:
+        rest = glossy
+    else:
+        rest = {"type": "blendbsdf", "weight": ks, "bsdf_0": diffuse, "bsdf_1": glossy}
+    rest = {"type": "twosided", "bsdf": rest}
+    if delta <= 0:
+        return rest
+    # The δ lobes were scaled by kr + kt; the blend's weight kr + kt scales
+    # them once more: undo it.
+    for part in [deltas] + ([deltas["bsdf_0"], deltas["bsdf_1"]] if deltas["type"] == "blendbsdf" else []):
+        inner = part.get("bsdf", part)
+        for key in ("specular_reflectance", "specular_transmittance"):
+            if key in inner:
+                inner[key]["value"] = [v / delta for v in inner[key]["value"]]
+    return {"type": "blendbsdf", "weight": delta, "bsdf_0": rest, "bsdf_1": deltas}
+
+
+def mitsuba_scene(mi, desc, folder, width, height, plane_size):
+    """The Mitsuba scene dictionary of an rt-view export."""
+    T = mi.ScalarTransform4f
+    cam = desc["camera"]
+    if cam["projection"] != "Perspective":
+        sys.exit("only perspective cameras are converted")
+    gi = desc["global_illumination"]
+    if gi is None:
+        sys.exit("the scene has no global_illumination: nothing to compare with a path tracer")
+    scene = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": gi["max_bounces"] + 1, "hide_emitters": False},
+        "sensor": {
+            "type": "perspective",
+            "fov": cam["fov_y"],
+            "fov_axis": "y",
+            "near_clip": 1e-3,
+            "to_world": T().look_at(
+                origin=mirror(cam["position"]), target=mirror(cam["center_of_interest"]), up=mirror(cam["up"])
+            ),
+            "film": {
+                "type": "hdrfilm",
+                "width": width,
+                "height": height,
+                "rfilter": {"type": "box"},
+                "pixel_format": "rgb",
+            },
+            "sampler": {"type": "independent", "sample_count": 1},
+        },
+    }
+    if max(desc["background"]) > 0:
+        scene["background"] = {"type": "constant", "radiance": rgb(mi, desc["background"])}
+    materials = {m["name"]: m for m in desc["materials"]}
+    coi = np.array(cam["center_of_interest"])
+    for i, o in enumerate(desc["objects"]):
+        m = materials[o["material"]]
+        if o["kind"] == "Sphere":
+            shape = {"type": "sphere", "center": mirror(o["center"]), "radius": o["radius"]}
+        elif o["kind"] == "Plane":
+            n = np.array(o["normal"])
+            centre = coi - (coi.dot(n) - o["d"]) * n
+            helper = [0.0, 0.0, 1.0] if abs(n[1]) > 0.9 or abs(n[0]) > 0.9 else [0.0, 1.0, 0.0]
+            to_world = T().look_at(
+                origin=mirror(centre.tolist()), target=mirror((centre + n).tolist()), up=mirror(helper)
+            ) @ T().scale([plane_size / 2, plane_size / 2, 1])
+            shape = {"type": "rectangle", "to_world": to_world}
+        else:
+            path = os.path.join(folder, f"mitsuba-{i}.obj")
+            mirrored_obj(os.path.join(folder, o["file"]), path)
+            shape = {"type": "obj", "filename": path, "face_normals": True}
+        shape["bsdf"] = bsdf(m)
+        if max(m["emission"]) > 0:
+            shape["emitter"] = {"type": "area", "radiance": rgb(mi, m["emission"])}
+        scene[f"object-{i}"] = shape
+    for i, light in enumerate(desc["lights"]):
+        if not light["shadows"]:
+            sys.exit(f"lights[{i}] has shadows: false, which Mitsuba cannot render")
+        if light["kind"] == "Point":
+            scene[f"light-{i}"] = {"type": "point", "position": mirror(light["position"]), "intensity": rgb(mi, light["power"])}
+        elif light["kind"] == "Directional":
+            scene[f"light-{i}"] = {
+                "type": "directional",
+                "direction": mirror(light["direction"]),
+                "irradiance": rgb(mi, light["power"]),
+            }
+        else:
+            sys.exit(f"lights[{i}] is a sphere light, invisible to rays in rt-view: no Mitsuba equivalent")
+    return scene
+
+
+def use_llvm19():
+    """Points Dr.Jit at Debian's LLVM 19 unless told otherwise: older LLVMs
+    fail on the `path` integrator's kernels."""
+    llvm = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
+    if "DRJIT_LIBLLVM_PATH" not in os.environ and os.path.exists(llvm):
+        os.environ["DRJIT_LIBLLVM_PATH"] = llvm
+
+
+def export_scene(rt_view, scene, folder):
+    """Empties `folder` and exports `scene` into it with `rt-view export`;
+    returns the scene's description."""
+    shutil.rmtree(folder, ignore_errors=True)
+    os.makedirs(folder)
+    export = os.path.join(folder, "scene.json")
+    subprocess.run([rt_view, "export", scene, "-o", export], check=True)
+    with open(export) as f:
+        return json.load(f)
+
+
+def read_exr(mi, path):
+    return np.array(mi.Bitmap(path), dtype=np.float64)[:, :, :3]
+
+
+def block_means(image, block):
+    h, w, _ = image.shape
+    bh, bw = h // block, w // block
+    cut = image[: bh * block, : bw * block]
+    return cut.reshape(bh, block, bw, block, 3).mean(axis=(1, 3))
+
+
+def srgb(image):
+    x = np.clip(image, 0, 1)
+    x = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+    return (x * 255 + 0.5).astype(np.uint8)
+
+
+def main():
+    args = parse_args()
+    import drjit as dr
+    import mitsuba as mi
+
+    use_llvm19()
+    mi.set_variant(args.variant)
+    dr.set_thread_count(args.threads)
+
+    name = os.path.splitext(os.path.basename(args.scene))[0]
+    folder = os.path.join(args.out, name)
+    desc = export_scene(args.rt_view, args.scene, folder)
+    width = args.width or desc["width"]
+    height = args.height or desc["height"]
+    per_batch = max(1, args.spp // args.batches)
+    scene = mi.load_dict(mitsuba_scene(mi, desc, folder, width, height, args.plane_size))
+
+    env = dict(os.environ, RAYON_NUM_THREADS=str(args.threads))
+    rt_images, mi_images = [], []
+    rt_time = mi_time = 0.0
+    for k in range(args.batches):
+        out = os.path.join(folder, f"rt-{k}.exr")
+        command = [args.rt_view, "render", args.scene, "-o", out, "--spp", str(per_batch), "--seed", str(k)]
+        command += ["--width", str(width), "--height", str(height)]
+        start = time.perf_counter()
+        subprocess.run(command, check=True, env=env, stderr=subprocess.DEVNULL)
+        rt_time += time.perf_counter() - start
+        rt_images.append(read_exr(mi, out))
+        start = time.perf_counter()
+        image = mi.render(scene, spp=per_batch, seed=k)
+        pixels = np.array(image, dtype=np.float64)[:, :, :3]
+        mi_time += time.perf_counter() - start
+        mi_images.append(pixels)
+        print(f"batch {k + 1}/{args.batches}: rt-view {rt_time:.1f} s, Mitsuba {mi_time:.1f} s so far", flush=True)
+
+    rt_blocks = np.stack([block_means(im, args.block) for im in rt_images])
+    mi_blocks = np.stack([block_means(im, args.block) for im in mi_images])
+    n = args.batches
+    rt_mean, mi_mean = rt_blocks.mean(0), mi_blocks.mean(0)
+    rt_se = rt_blocks.std(0, ddof=1) / math.sqrt(n)
+    mi_se = mi_blocks.std(0, ddof=1) / math.sqrt(n)
+    bound = args.z * np.sqrt(rt_se**2 + mi_se**2) + args.rel * np.maximum(np.abs(rt_mean), np.abs(mi_mean))
+    agree_channel = np.abs(rt_mean - mi_mean) <= bound
+    agree = agree_channel.all(axis=2)
+    fraction = agree.mean()
+
+    rt_image = np.mean(rt_images, axis=0)
+    mi_image = np.mean(mi_images, axis=0)
+    rt_total, mi_total = rt_image.mean(axis=(0, 1)), mi_image.mean(axis=(0, 1))
+    ratio = rt_total / np.maximum(mi_total, 1e-30)
+    rt_total_se = np.array([im.mean(axis=(0, 1)) for im in rt_images]).std(0, ddof=1) / math.sqrt(n)
+    mi_total_se = np.array([im.mean(axis=(0, 1)) for im in mi_images]).std(0, ddof=1) / math.sqrt(n)
+    total_z = (rt_total - mi_total) / np.maximum(np.sqrt(rt_total_se**2 + mi_total_se**2), 1e-30)
+    z_scores = (rt_mean - mi_mean) / np.maximum(np.sqrt(rt_se**2 + mi_se**2), 1e-30)
+
+    lines = [
+        f"# {name}: rt-view against Mitsuba 3 ({args.variant})",
+        "",
+        f"- {width}×{height}, {per_batch * n} samples per pixel each, in {n} independent batches;"
+        f" {args.threads} threads",
+        f"- blocks of {args.block}×{args.block}: {agree.sum()} of {agree.size} agree"
+        f" ({100 * fraction:.1f} %) within {args.z} standard errors + {100 * args.rel:g} %",
+        f"- |z| of the block means (all channels): median {np.median(np.abs(z_scores)):.2f},"
+        f" 99th percentile {np.percentile(np.abs(z_scores), 99):.2f}, max {np.abs(z_scores).max():.2f}",
+        f"- whole-image mean, rt-view / Mitsuba: R {ratio[0]:.4f}, G {ratio[1]:.4f}, B {ratio[2]:.4f}"
+        f" (rt-view {rt_total.round(5).tolist()}, Mitsuba {mi_total.round(5).tolist()};"
+        f" z {total_z.round(1).tolist()})",
+        f"- render time: rt-view {rt_time:.2f} s, Mitsuba {mi_time:.2f} s",
+    ]
+    passed = fraction >= 0.99 and np.all(np.abs(ratio - 1) <= 0.01)
+    worst = np.argsort(-np.abs(z_scores).max(axis=2), axis=None)[:5]
+    for index in worst:
+        by, bx = np.unravel_index(index, agree.shape)
+        lines.append(
+            f"  - block ({bx}, {by}): rt-view {rt_mean[by, bx].round(4).tolist()} ± {rt_se[by, bx].round(4).tolist()},"
+            f" Mitsuba {mi_mean[by, bx].round(4).tolist()} ± {mi_se[by, bx].round(4).tolist()}"
+        )
+    lines.append(f"- verdict: {'AGREE' if passed else 'DIFFER'} (needs ≥ 99 % of blocks and image means within 1 %)")
+    report = "\n".join(lines) + "\n"
+    print(report)
+    with open(os.path.join(folder, "report.md"), "w") as f:
+        f.write(report)
+
+    # Pictures: rt-view | Mitsuba | blocks that disagree (red).
+    side = np.concatenate([srgb(rt_image), srgb(mi_image)], axis=1)
+    marks = srgb(mi_image).copy()
+    for by, bx in zip(*np.nonzero(~agree)):
+        y0, x0 = by * args.block, bx * args.block
+        marks[y0 : y0 + args.block, x0 : x0 + args.block] = (marks[y0 : y0 + args.block, x0 : x0 + args.block] // 2) + [
+            127,
+            0,
+            0,
+        ]
+    # The signed z-score of each block's luminance: red where rt-view is
+    # brighter, blue where Mitsuba is, full colour at 5 standard errors.
+    zl = z_scores.mean(axis=2)
+    heat = np.zeros(zl.shape + (3,), dtype=np.uint8)
+    heat[..., 0] = np.clip(zl / 5, 0, 1) * 255
+    heat[..., 2] = np.clip(-zl / 5, 0, 1) * 255
+    heat = np.kron(heat, np.ones((args.block, args.block, 1), dtype=np.uint8))
+    full = np.zeros_like(marks)
+    full[: heat.shape[0], : heat.shape[1]] = heat
+    picture = np.concatenate([side, marks, full], axis=1)
+    mi.Bitmap(picture).write(os.path.join(folder, "compare.png"))
+    mi.Bitmap(rt_image.astype(np.float32)).write(os.path.join(folder, "rt-view.exr"))
+    mi.Bitmap(mi_image.astype(np.float32)).write(os.path.join(folder, "mitsuba.exr"))
+    sys.exit(0 if passed else 1)
+
+
+if __name__ == "__main__":
+    main()

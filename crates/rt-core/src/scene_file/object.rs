@@ -1,0 +1,104 @@
+//! The `objects` list: each primitive as written, validated where it stands.
+
+use std::path::PathBuf;
+
+use serde::Deserialize;
+
+use super::values::{Finite, V3, unit_scale};
+use crate::aabb::Aabb;
+use crate::geometry_error::GeometryError;
+use crate::plane::Plane;
+use crate::polygon::Polygon;
+use crate::primitive::Primitive;
+use crate::real::{Real, Vec3};
+use crate::sphere::Sphere;
+use crate::triangle::Triangle;
+
+/// The object variants exactly as written in a scene file.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, rename = "Object")]
+pub(super) enum ObjectDesc {
+    Sphere {
+        center: V3,
+        radius: Finite,
+        material: String,
+    },
+    Plane {
+        normal: V3,
+        d: Finite,
+        material: String,
+    },
+    Aabb {
+        min: V3,
+        max: V3,
+        material: String,
+    },
+    Triangle {
+        a: V3,
+        b: V3,
+        c: V3,
+        material: String,
+    },
+    Polygon {
+        points: Vec<V3>,
+        material: String,
+    },
+    Mesh {
+        file: PathBuf,
+        material: String,
+        #[serde(default = "unit_scale")]
+        scale: Finite,
+        #[serde(default)]
+        translate: V3,
+    },
+}
+
+/// An object whose geometry is validated, except a mesh's file, which is read later.
+#[derive(Deserialize)]
+#[serde(try_from = "ObjectDesc")]
+pub(super) struct ObjectEntry {
+    pub(super) shape: Shape,
+    pub(super) material: String,
+}
+
+/// An object's geometry: ready, or an OBJ file still to be read.
+pub(super) enum Shape {
+    Ready(Primitive),
+    Mesh { file: PathBuf, scale: Real, translate: Vec3 },
+}
+
+impl TryFrom<ObjectDesc> for ObjectEntry {
+    type Error = String;
+    fn try_from(o: ObjectDesc) -> Result<Self, String> {
+        let ready = |p: Result<Primitive, GeometryError>, material| {
+            p.map(|p| Self { shape: Shape::Ready(p), material }).map_err(|e| e.to_string())
+        };
+        match o {
+            ObjectDesc::Sphere { center, radius, material } => {
+                ready(Sphere::new(center.into(), radius.0).map(Primitive::Sphere), material)
+            }
+            ObjectDesc::Plane { normal, d, material } => {
+                ready(Plane::new(normal.into(), d.0).map(Primitive::Plane), material)
+            }
+            ObjectDesc::Aabb { min, max, material } => {
+                ready(Aabb::new(min.into(), max.into()).map(Primitive::Aabb), material)
+            }
+            ObjectDesc::Triangle { a, b, c, material } => {
+                ready(Triangle::new(a.into(), b.into(), c.into()).map(Primitive::Triangle), material)
+            }
+            ObjectDesc::Polygon { points, material } => {
+                let points = points.into_iter().map(Vec3::from).collect();
+                ready(Polygon::new(points).map(Primitive::Polygon), material)
+            }
+            ObjectDesc::Mesh { file, material, scale, translate } => {
+                if scale.0 <= 0.0 {
+                    return Err(format!("mesh scale must be positive, got {}", scale.0));
+                }
+                Ok(Self {
+                    shape: Shape::Mesh { file, scale: scale.0, translate: translate.into() },
+                    material,
+                })
+            }
+        }
+    }
+}

@@ -1,0 +1,225 @@
+//! `rt-view export SCENE -o OUT.json`: the scene as rt-view reads it, every
+//! default filled in, as JSON for outside tools (the Mitsuba 3 comparison
+//! script, `bench/mitsuba_compare.py`).
+//!
+//! Spheres and planes are written as such. Boxes, triangles, polygons and
+//! meshes are written as triangle lists in world space, each in an OBJ file
+//! beside the JSON (`OUT.object-N.obj`), wound so that `(b − a) × (c − a)`
+//! is the normal rt-view uses: outward for boxes, the winding normal for
+//! polygons and triangles. Positions are in rt-view's left-handed world
+//! (`docs/conventions.md`); converting to a right-handed renderer is the
+//! reader's job. Materials and lights are in the units of `docs/effects.md`.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use clap::Args;
+use rt_core::emitter::Emitter;
+use rt_core::light::LightKind;
+use rt_core::{Color, Primitive, Vec3};
+use serde::Serialize;
+
+use crate::image_out::PendingFile;
+
+/// `rt-view export`.
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    /// The scene file (RON).
+    pub scene: PathBuf,
+    /// Output file (.json); OBJ files for triangle objects go beside it.
+    #[arg(short, long, value_name = "OUT.json")]
+    pub output: PathBuf,
+}
+
+#[derive(Serialize)]
+struct SceneJson {
+    camera: CameraJson,
+    width: u32,
+    height: u32,
+    samples_per_pixel: u32,
+    background: [f32; 3],
+    color_space: &'static str,
+    ambient: [f32; 3],
+    max_depth: u32,
+    global_illumination: Option<GiJson>,
+    materials: Vec<MaterialJson>,
+    objects: Vec<ObjectJson>,
+    lights: Vec<LightJson>,
+}
+
+#[derive(Serialize)]
+struct CameraJson {
+    position: [f64; 3],
+    center_of_interest: [f64; 3],
+    up: [f64; 3],
+    fov_y: f64,
+    near: f64,
+    projection: &'static str,
+}
+
+#[derive(Serialize)]
+struct GiJson {
+    max_bounces: u32,
+    russian_roulette: bool,
+}
+
+#[derive(Serialize)]
+struct MaterialJson {
+    name: String,
+    color: [f32; 3],
+    diffuse: f32,
+    specular: f32,
+    shininess: f32,
+    /// The GGX α the glossy lobe uses.
+    roughness: f32,
+    reflectivity: f32,
+    transparency: f32,
+    ior: f32,
+    emission: [f32; 3],
+}
+
+#[derive(Serialize)]
+#[serde(tag = "kind")]
+enum ObjectJson {
+    Sphere { center: [f64; 3], radius: f64, material: String },
+    Plane { normal: [f64; 3], d: f64, material: String },
+    Triangles { file: String, triangles: usize, material: String },
+}
+
+#[derive(Serialize)]
+#[serde(tag = "kind")]
+enum LightJson {
+    /// Intensity `power` (W/sr) from a point.
+    Point { position: [f64; 3], power: [f32; 3], shadows: bool },
+    /// Irradiance `power` (W/m²) travelling along `direction`.
+    Directional { direction: [f64; 3], power: [f32; 3], shadows: bool },
+    /// A sphere of radiance `power/(π·radius²)`.
+    Sphere { center: [f64; 3], radius: f64, power: [f32; 3], shadows: bool },
+}
+
+fn v3(v: Vec3) -> [f64; 3] {
+    let d = rt_core::real::widen(v);
+    [d.x, d.y, d.z]
+}
+
+fn c3(c: Color) -> [f32; 3] {
+    c.to_array()
+}
+
+/// Writes the scene's JSON and its OBJ files.
+pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
+    let scene = rt_core::load_scene(&args.scene)?;
+    let json = PendingFile::create(&args.output)?;
+    let stem = args.output.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let dir = args.output.parent().unwrap_or(Path::new("."));
+    let names = scene.material_names();
+    let mut objects = Vec::new();
+    for (i, object) in scene.objects().iter().enumerate() {
+        let material = names[object.material].clone();
+        let json_object = match &object.primitive {
+            Primitive::Sphere(s) => {
+                ObjectJson::Sphere { center: v3(s.center()), radius: s.radius() as f64, material }
+            }
+            Primitive::Plane(p) => ObjectJson::Plane { normal: v3(p.normal()), d: p.d() as f64, material },
+            other => {
+                let triangles = triangles_of(other)?;
+                let file = format!("{stem}.object-{i}.obj");
+                write_obj(&dir.join(&file), &triangles)?;
+                ObjectJson::Triangles { file, triangles: triangles.len(), material }
+            }
+        };
+        objects.push(json_object);
+    }
+    let materials = scene
+        .materials()
+        .iter()
+        .zip(names)
+        .map(|(m, name)| MaterialJson {
+            name: name.clone(),
+            color: c3(m.color),
+            diffuse: m.diffuse,
+            specular: m.specular,
+            shininess: m.shininess,
+            roughness: m.roughness(),
+            reflectivity: m.reflectivity,
+            transparency: m.transparency,
+            ior: m.ior,
+            emission: c3(m.emission),
+        })
+        .collect();
+    let lights = scene
+        .lighting
+        .lights
+        .iter()
+        .map(|l| {
+            let (power, shadows) = (c3(l.power), l.shadows);
+            match l.kind {
+                LightKind::Point { position } => LightJson::Point { position: v3(position), power, shadows },
+                LightKind::Directional { direction } => {
+                    LightJson::Directional { direction: v3(direction), power, shadows }
+                }
+                LightKind::Sphere { center, radius, .. } => {
+                    LightJson::Sphere { center: v3(center), radius: radius as f64, power, shadows }
+                }
+            }
+        })
+        .collect();
+    let c = &scene.camera;
+    let out = SceneJson {
+        camera: CameraJson {
+            position: v3(c.position()),
+            center_of_interest: v3(c.center_of_interest()),
+            up: v3(c.up()),
+            fov_y: c.fov_y() as f64,
+            near: c.near() as f64,
+            projection: match c.projection() {
+                rt_core::Projection::Perspective => "Perspective",
+                rt_core::Projection::Orthographic => "Orthographic",
+            },
+        },
+        width: scene.width,
+        height: scene.height,
+        samples_per_pixel: scene.samples_per_pixel,
+        background: c3(scene.background),
+        color_space: match scene.color_space {
+            rt_core::material::ColorSpace::Linear => "Linear",
+            rt_core::material::ColorSpace::Srgb => "Srgb",
+        },
+        ambient: c3(scene.lighting.ambient),
+        max_depth: scene.lighting.max_depth,
+        global_illumination: scene
+            .lighting
+            .global_illumination
+            .map(|g| GiJson { max_bounces: g.max_bounces, russian_roulette: g.russian_roulette }),
+        materials,
+        objects,
+        lights,
+    };
+    let text = serde_json::to_string_pretty(&out)?;
+    json.write_bytes(text.as_bytes())?;
+    eprintln!("wrote {}", args.output.display());
+    Ok(())
+}
+
+/// The triangles of a bounded, flat-faced primitive, wound like its normals.
+fn triangles_of(p: &Primitive) -> anyhow::Result<Vec<[Vec3; 3]>> {
+    // The emitter's triangulation is exactly what rt-view samples lights on.
+    let emitter = Emitter::new(0, p, Color::ONE).context("cannot cut the object into triangles")?;
+    Ok(emitter.triangles().to_vec())
+}
+
+/// Writes triangles as an OBJ file (three vertices each, faces in order).
+fn write_obj(path: &Path, triangles: &[[Vec3; 3]]) -> anyhow::Result<()> {
+    let mut text = String::new();
+    for t in triangles {
+        for p in t {
+            let p = v3(*p);
+            writeln!(text, "v {} {} {}", p[0], p[1], p[2])?;
+        }
+    }
+    for i in 0..triangles.len() {
+        writeln!(text, "f {} {} {}", 3 * i + 1, 3 * i + 2, 3 * i + 3)?;
+    }
+    PendingFile::create(path)?.write_bytes(text.as_bytes())
+}

@@ -1,0 +1,92 @@
+//! The image section of the side panel: resolution scale, samples per pixel
+//! and the effects the user has switched off.
+
+use rt_core::Scene;
+use rt_core::effects::{EffectPlan, EffectToggles};
+use rt_core::view_plane::MAX_IMAGE_SIDE;
+
+use super::interaction::Interaction;
+
+/// What the full-resolution render is made of, besides the camera.
+pub(super) struct ImageSettings {
+    /// The image size is the scene's times this, 0.25 to 2.
+    resolution_scale: f32,
+    /// Samples per pixel of full renders (the scene's until the user changes it).
+    spp: u32,
+    /// Effects the user has switched off.
+    toggles: EffectToggles,
+}
+
+impl ImageSettings {
+    /// The settings for `scene`: its size and samples, every effect on.
+    pub fn new(scene: &Scene) -> Self {
+        Self { resolution_scale: 1.0, spp: scene.samples_per_pixel, toggles: EffectToggles::default() }
+    }
+
+    /// A new scene was loaded: its sample count is taken if `reset` or if the
+    /// file's count changed (otherwise the user's choice stays).
+    pub fn scene_loaded(&mut self, scene: &Scene, previous: &Scene, reset: bool) {
+        if reset || scene.samples_per_pixel != previous.samples_per_pixel {
+            self.spp = scene.samples_per_pixel;
+        }
+    }
+
+    /// Samples per pixel of full renders.
+    pub fn spp(&self) -> u32 {
+        self.spp
+    }
+
+    /// Full-resolution image size: the scene's, times the resolution scale.
+    pub fn full_size(&self, scene: &Scene) -> (u32, u32) {
+        let scale = |n: u32| ((n as f32 * self.resolution_scale).round() as u32).clamp(1, MAX_IMAGE_SIDE);
+        (scale(scene.width), scale(scene.height))
+    }
+
+    /// The effects to simulate: what `scene` asks for, less what is switched off.
+    pub fn plan(&self, scene: &Scene) -> EffectPlan {
+        scene.effect_plan().restricted(self.toggles)
+    }
+
+    /// The resolution, sample and effect controls.
+    pub fn ui(&mut self, ui: &mut egui::Ui, scene: &Scene) -> Interaction {
+        ui.heading("Image");
+        let r = ui.add(egui::Slider::new(&mut self.resolution_scale, 0.25..=2.0).text("resolution scale"));
+        let mut interaction = Interaction { changed: r.changed(), dragging: r.dragged() };
+        let (w, h) = self.full_size(scene);
+        ui.label(format!("{w} × {h} pixels"));
+        let r = ui
+            .add(egui::Slider::new(&mut self.spp, 1..=1024).logarithmic(true).text("samples per pixel"))
+            .on_hover_text("Anti-aliasing and soft-shadow quality: shows 1 sample first, then refines");
+        interaction = interaction | Interaction { changed: r.changed(), dragging: r.dragged() };
+        interaction.changed |= self.effects_ui(ui, &scene.effect_plan());
+        interaction
+    }
+
+    /// Checkboxes for the effects the scene asks for (the others are shown
+    /// disabled). Returns whether one changed.
+    fn effects_ui(&mut self, ui: &mut egui::Ui, asked: &EffectPlan) -> bool {
+        let before = self.toggles;
+        let t = &mut self.toggles;
+        // Path tracing does all of the direct tracer's effects its own way:
+        // their boxes only matter with global illumination off.
+        let direct = asked.global_illumination.is_none() || !t.global_illumination;
+        ui.horizontal_wrapped(|ui| {
+            ui.add_enabled(
+                asked.global_illumination.is_some(),
+                egui::Checkbox::new(&mut t.global_illumination, "global illumination"),
+            )
+            .on_hover_text("Path tracing: light bounces between surfaces, glass lets light through, emissive objects and the background light the scene");
+            ui.add_enabled(direct && asked.shadows, egui::Checkbox::new(&mut t.shadows, "shadows"));
+            ui.add_enabled(direct && asked.reflection, egui::Checkbox::new(&mut t.reflection, "reflection"));
+            ui.add_enabled(direct && asked.refraction, egui::Checkbox::new(&mut t.refraction, "refraction"));
+            ui.add_enabled(
+                direct && asked.ambient_occlusion.is_some(),
+                egui::Checkbox::new(&mut t.ambient_occlusion, "ambient occlusion"),
+            );
+        });
+        if !asked.shading {
+            ui.small("No lights: flat colours (pure ray casting).");
+        }
+        self.toggles != before
+    }
+}

@@ -1,0 +1,72 @@
+//! The progressive viewer: `rt-view [SCENE]`.
+//!
+//! The window is composed of parts that each own their state and draw their
+//! own piece of the UI, in the spirit of egui's demo app (`app::Viewer`
+//! composes them):
+//!
+//! - `scene_source`: the scene file (or the built-in scene), Open and
+//!   Reload, watching the file ([`scene_watch`]) and load errors;
+//! - `camera_panel`: the camera controls, on top of the pure camera
+//!   functions of [`camera_controls`];
+//! - `image_settings`: resolution scale, samples per pixel, effect toggles;
+//! - `scheduler`: which render job runs (preview while dragging, full
+//!   resolution once still), and the image it streams into: each job
+//!   ([`render_job`]) renders rows in the background and sends them to a
+//!   [`canvas`], from where they reach an egui texture;
+//! - `image_view`: the image on screen, and orbit, pan and zoom with the
+//!   mouse;
+//! - `screenshot`: `--screenshot`, saving the window once the frame is done.
+//!
+//! Rows flow one way: scene → job spec → render job (worker threads) →
+//! rows over a channel → canvas (UI thread) → texture. The UI thread never
+//! waits for a worker.
+
+mod app;
+pub mod camera_controls;
+mod camera_panel;
+pub mod canvas;
+mod image_settings;
+mod image_view;
+mod interaction;
+pub mod render_job;
+mod scene_source;
+pub mod scene_watch;
+mod scheduler;
+mod screenshot;
+
+use std::sync::{Arc, Mutex};
+
+use anyhow::anyhow;
+
+pub use app::ViewerOptions;
+pub use scene_source::{DEFAULT_SCENE, DEFAULT_SCENE_NAME, load};
+
+use crate::image_out::PendingImage;
+
+/// Opens the window and runs until it is closed.
+pub fn run(options: ViewerOptions) -> anyhow::Result<()> {
+    // A scene that cannot be read at start-up is an error on the command line;
+    // later reloads show their errors in the window instead.
+    let scene = load(options.scene.as_deref())?;
+    if let Some(out) = &options.screenshot {
+        // Check the output path now, not after the window has run.
+        drop(PendingImage::png(out)?);
+    }
+    let outcome = Arc::new(Mutex::new(None));
+    let native = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_inner_size([1180.0, 720.0])
+            .with_min_inner_size([640.0, 400.0])
+            .with_title("rt-view"),
+        ..Default::default()
+    };
+    let app_outcome = outcome.clone();
+    eframe::run_native(
+        "rt-view",
+        native,
+        Box::new(move |cc| Ok(Box::new(app::Viewer::new(&cc.egui_ctx, scene, options, app_outcome)))),
+    )
+    .map_err(|e| anyhow!("cannot open the viewer window: {e}"))?;
+    let result = outcome.lock().unwrap().take();
+    result.unwrap_or(Ok(())).map_err(|e: String| anyhow!(e))
+}
