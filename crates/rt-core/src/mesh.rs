@@ -22,7 +22,15 @@ pub const MAX_OBJ_BYTES: u64 = 1 << 31;
 /// Why an OBJ file cannot be used as a mesh.
 #[derive(Debug, Error)]
 pub enum MeshError {
-    /// The file is missing, unreadable or not valid OBJ (tobj's reason).
+    /// The file cannot be opened (the OS's reason).
+    #[error("cannot open OBJ file {path}: {reason}")]
+    Open {
+        /// The OBJ file.
+        path: PathBuf,
+        /// Why (in the message, so not also a `source()`).
+        reason: std::io::Error,
+    },
+    /// The file is not valid OBJ (tobj's reason).
     #[error("cannot load OBJ file {path}: {reason}")]
     Load {
         /// The OBJ file.
@@ -102,11 +110,14 @@ impl Mesh {
     }
 
     fn load_obj_limited(path: &Path, scale: Real, translate: Vec3, limit: u64) -> Result<Self, MeshError> {
-        // A missing file falls through to tobj, which reports it.
-        if let Ok(meta) = std::fs::metadata(path)
-            && meta.len() > limit
-        {
-            return Err(MeshError::FileTooLarge { path: path.to_owned(), bytes: meta.len(), limit });
+        // Opened here rather than by tobj, whose error says only "open file
+        // failed": the OS's reason (no such file, permission denied) goes
+        // into the message.
+        let open = |reason| MeshError::Open { path: path.to_owned(), reason };
+        let file = std::fs::File::open(path).map_err(open)?;
+        let bytes = file.metadata().map_err(open)?.len();
+        if bytes > limit {
+            return Err(MeshError::FileTooLarge { path: path.to_owned(), bytes, limit });
         }
         let options = tobj::LoadOptions {
             triangulate: false, // We fan faces ourselves, in the order docs/conventions.md fixes.
@@ -114,8 +125,11 @@ impl Mesh {
             ignore_points: true,
             ignore_lines: true,
         };
-        let (models, _materials) = tobj::load_obj(path, &options)
-            .map_err(|reason| MeshError::Load { path: path.to_owned(), reason })?;
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let mut reader = std::io::BufReader::new(file);
+        let (models, _materials) =
+            tobj::load_obj_buf(&mut reader, &options, |mtl| tobj::load_mtl(dir.join(mtl)))
+                .map_err(|reason| MeshError::Load { path: path.to_owned(), reason })?;
 
         let mut positions = Vec::new();
         let mut triangles = Vec::new();
@@ -330,8 +344,11 @@ mod tests {
 
     #[test]
     fn missing_empty_and_out_of_range_files_are_errors() {
-        let missing = Mesh::load_obj(Path::new("/nonexistent/x.obj"), 1.0, Vec3::ZERO);
-        assert!(matches!(missing, Err(MeshError::Load { .. })));
+        let missing = Mesh::load_obj(Path::new("/nonexistent/x.obj"), 1.0, Vec3::ZERO).unwrap_err();
+        assert!(matches!(missing, MeshError::Open { .. }));
+        // The OS's reason and the path, not tobj's "open file failed".
+        let message = missing.to_string();
+        assert!(message.starts_with("cannot open OBJ file /nonexistent/x.obj: No such file"), "{message}");
         let empty = obj("# nothing\nv 0 0 0\n");
         assert!(matches!(Mesh::load_obj(empty.path(), 1.0, Vec3::ZERO), Err(MeshError::Empty(_))));
         let bad = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n");

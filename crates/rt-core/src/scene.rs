@@ -5,6 +5,8 @@
 //! [`SceneBuilder`] in code, and is read-only afterwards: its BVH is built
 //! when it is made, so its objects can be read but not changed.
 
+use std::path::PathBuf;
+
 use thiserror::Error;
 
 use crate::bvh::{Bvh, BvhStats};
@@ -51,6 +53,7 @@ pub struct Scene {
     /// Index into `emitters` of each object's emitter.
     emitter_of: Vec<Option<u32>>,
     light_sampler: LightSampler,
+    source_files: Vec<PathBuf>,
 }
 
 /// Why a [`SceneBuilder`] cannot make a scene.
@@ -118,6 +121,7 @@ pub struct SceneBuilder {
     methods: Methods,
     materials: Vec<(String, Material)>,
     objects: Vec<(Primitive, String)>,
+    source_files: Vec<PathBuf>,
 }
 
 impl SceneBuilder {
@@ -136,6 +140,7 @@ impl SceneBuilder {
             methods: Methods::default(),
             materials: Vec::new(),
             objects: Vec::new(),
+            source_files: Vec::new(),
         }
     }
 
@@ -179,6 +184,13 @@ impl SceneBuilder {
     /// keep the order they are added in (a hit's `object` index).
     pub fn object(mut self, primitive: Primitive, material: impl Into<String>) -> Self {
         self.objects.push((primitive, material.into()));
+        self
+    }
+
+    /// Records a file the scene was read from besides the scene file (an
+    /// OBJ mesh), for whoever watches the scene for changes.
+    pub fn source_file(mut self, path: impl Into<PathBuf>) -> Self {
+        self.source_files.push(path.into());
         self
     }
 
@@ -239,6 +251,7 @@ impl SceneBuilder {
             emitters,
             emitter_of,
             light_sampler,
+            source_files: self.source_files,
         })
     }
 }
@@ -336,6 +349,12 @@ impl Scene {
     /// The materials' names, parallel to [`Scene::materials`].
     pub fn material_names(&self) -> &[String] {
         &self.material_names
+    }
+
+    /// The files besides the scene file that the scene was read from (OBJ
+    /// meshes), as given to [`SceneBuilder::source_file`].
+    pub fn source_files(&self) -> &[PathBuf] {
+        &self.source_files
     }
 
     /// The emissive objects, as lights for global illumination.

@@ -29,7 +29,7 @@ fn apply_rows(c: &mut Criterion) {
                 pixels: vec![Color32::from_rgb(200, 40, 30); WIDTH as usize],
             })
             .collect();
-        let mut canvas = Canvas::replacing(None, 1, WIDTH, HEIGHT);
+        let mut canvas = Canvas::new(1, WIDTH, HEIGHT, 4096);
         let mut texture = canvas.to_texture(&ctx, options);
         group.throughput(Throughput::Elements(rows_per_frame as u64));
         group.bench_with_input(BenchmarkId::new("partial", rows_per_frame), &rows, |b, rows| {

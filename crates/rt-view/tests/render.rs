@@ -102,7 +102,7 @@ fn every_bad_scene_is_refused_with_file_line_and_reason_and_writes_nothing() {
                 "Sphere(center: (0, 0, 0), radius: 1.2, material: \"red\")",
                 "Mesh(file: \"no/such.obj\", material: \"red\")",
             ),
-            "objects[0] (Mesh): cannot load OBJ file",
+            "objects[0] (Mesh): cannot open OBJ file",
         ),
     ];
     for (name, text, expected) in cases {

@@ -115,14 +115,17 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<Scene, Sce
         scene = scene.material(name, material.0);
     }
     for (index, entry) in desc.objects.into_iter().enumerate() {
-        let primitive = match entry.shape {
-            Shape::Ready(p) => p,
-            Shape::Mesh { file: obj, scale, translate } => {
-                let mesh = Mesh::load_obj(&base_dir.join(obj), scale, translate)
-                    .map_err(|reason| SceneError::Mesh { file: file.to_owned(), index, reason })?;
-                Primitive::Mesh(mesh)
-            }
-        };
+        let primitive =
+            match entry.shape {
+                Shape::Ready(p) => p,
+                Shape::Mesh { file: obj, scale, translate } => {
+                    let path = base_dir.join(obj);
+                    let mesh = Mesh::load_obj(&path, scale, translate)
+                        .map_err(|reason| SceneError::Mesh { file: file.to_owned(), index, reason })?;
+                    scene = scene.source_file(path);
+                    Primitive::Mesh(mesh)
+                }
+            };
         scene = scene.object(primitive, entry.material);
     }
     scene.build().map_err(|reason| SceneError::Invalid { file: file.to_owned(), reason })
@@ -297,6 +300,37 @@ mod tests {
             let e = error_after(from, to);
             assert!(e.starts_with("bad.ron:2:") && e.contains(expected), "{to}: {e}");
         }
+    }
+
+    #[test]
+    fn camera_errors_point_at_the_field_not_the_end_of_the_camera() {
+        // One field a line: the error's line is the field's.
+        let text = |fields: [&str; 5]| {
+            format!(
+                "(\n camera: (\n  position: {},\n  center_of_interest: {},\n  up: {},\n  fov_y: {},\n  near: {},\n ),\n \
+                 image: (width: 4, height: 4), materials: {{}}, objects: [],\n)",
+                fields[0], fields[1], fields[2], fields[3], fields[4]
+            )
+        };
+        let good = ["(0, 0, -5)", "(0, 0, 0)", "(0, 1, 0)", "40", "1"];
+        let line_of = |field: usize, value: &str| {
+            let mut f = good;
+            f[field] = value;
+            let e = parse(&text(f)).unwrap_err().to_string();
+            let line: usize = e.split(':').nth(1).unwrap().parse().unwrap();
+            (line, e)
+        };
+        // Lines: 3 position, 4 centre of interest, 5 up, 6 fov_y, 7 near.
+        let (line, e) = line_of(3, "190");
+        assert_eq!(line, 6, "{e}");
+        assert!(e.contains("camera.fov_y must be strictly between 0 and 180"), "{e}");
+        let (line, e) = line_of(4, "-2");
+        assert_eq!(line, 7, "{e}");
+        let (line, e) = line_of(2, "(0, 0, 3)");
+        assert_eq!(line, 5, "up parallel to the view: at up, the last of the three read: {e}");
+        let (line, e) = line_of(1, "(0, 0, -5)");
+        assert_eq!(line, 5, "C = COI is found when up completes the three: {e}");
+        assert!(e.contains("coincides with camera.position"), "{e}");
     }
 
     #[test]
@@ -475,8 +509,8 @@ mod tests {
             "Mesh(file: \"meshes/nope.obj\", material: \"red\")",
         );
         let e = parse_scene(&text, "bad.ron", dir.path()).unwrap_err().to_string();
-        assert!(e.starts_with("bad.ron: objects[0] (Mesh): cannot load OBJ file"), "{e}");
-        assert!(e.contains("meshes/nope.obj"), "{e}");
+        assert!(e.starts_with("bad.ron: objects[0] (Mesh): cannot open OBJ file"), "{e}");
+        assert!(e.contains("meshes/nope.obj: No such file or directory"), "{e}");
     }
 
     #[test]

@@ -269,7 +269,7 @@ impl Setting {
             Self::Methods(m) if m.aabb != d.aabb => format!("box={:?}", m.aabb),
             Self::Methods(_) => "default methods".into(),
             Self::Bounces(n) => format!("max_bounces={n}"),
-            Self::Roulette(on, n) => format!("roulette={} spp={n}", if on { "on" } else { "off" }),
+            Self::Roulette(on, n) => format!("roulette={}/{n}spp", if on { "on" } else { "off" }),
         }
     }
 }

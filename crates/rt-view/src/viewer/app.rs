@@ -1,22 +1,27 @@
-//! The viewer app: composes the parts of the window and passes each frame's
-//! input from them to the [`Scheduler`].
+//! The viewer app: composes the parts of the window, handles the keyboard
+//! shortcuts, and passes each frame's input from the parts to the
+//! [`Scheduler`].
 //!
-//! The side panel stacks the scene source, the camera panel, the image
-//! settings and Save; the status line and the image view come from the
-//! scheduler and [`image_view`](super::image_view). No part renders or
+//! The side panel (scrollable, fixed width) stacks the scene source, the
+//! camera panel, the image settings and Save; the status line and the image
+//! view come from the scheduler and [`ImageView`]. No part renders or
 //! waits: a change of view only asks the scheduler for a new job.
 
 use std::path::PathBuf;
+use std::time::{Duration, Instant};
 
-use egui::Color32;
+use egui::{Color32, Key, KeyboardShortcut, Modifiers};
+use rt_core::ViewPlane;
 
+use super::camera_controls::CameraSettings;
 use super::camera_panel::CameraPanel;
 use super::image_settings::ImageSettings;
-use super::image_view::image_ui;
+use super::image_view::ImageView;
 use super::interaction::Interaction;
-use super::render_job::JobSpec;
+use super::recent::RecentFiles;
+use super::render_job::{JobSpec, RenderJob};
 use super::scene_source::{SceneChange, SceneSource};
-use super::scheduler::Scheduler;
+use super::scheduler::{Kind, Scheduler};
 use super::screenshot::{Outcome, Screenshot};
 use crate::image_out::PendingImage;
 
@@ -30,18 +35,47 @@ pub struct ViewerOptions {
     pub screenshot: Option<PathBuf>,
 }
 
+/// How long a notice (a save's result, a render that could not start) stays.
+const NOTICE_FOR: Duration = Duration::from_secs(8);
+/// Width of the side panel, in points.
+const PANEL_WIDTH: f32 = 300.0;
+
+/// The keyboard shortcuts, as the help overlay and the docs list them.
+pub const SHORTCUTS: &[(&str, &str)] = &[
+    ("R", "reset the camera to the scene file's"),
+    ("F", "fit the image to the window"),
+    ("1", "show the image 1:1 (one image pixel per screen pixel)"),
+    ("Ctrl+S", "save the finished image as PNG"),
+    ("Ctrl+O", "open a scene file"),
+    ("F5", "reload the scene file"),
+    ("P", "show or hide the side panel"),
+    ("F1 or ?", "show or hide this help"),
+    ("Esc", "unpin the inspected pixel, close this help"),
+];
+
+/// A message that fades: what a save did, why a render could not start.
+struct Notice {
+    text: String,
+    at: Instant,
+}
+
 /// The viewer app: its parts, and what the window reports when it closes.
 pub struct Viewer {
     source: SceneSource,
     camera: CameraPanel,
     image: ImageSettings,
     scheduler: Scheduler,
+    view: ImageView,
     /// The path Save PNG writes to.
     save_path: String,
-    /// The result of the last save, or why a render could not start.
-    notice: Option<String>,
+    notice: Option<Notice>,
+    show_panel: bool,
+    show_help: bool,
     screenshot: Option<Screenshot>,
     outcome: Outcome,
+    /// Where Save PNG was last drawn (tests check that it can be reached).
+    #[cfg(test)]
+    save_button: Option<egui::Rect>,
 }
 
 impl Viewer {
@@ -52,17 +86,33 @@ impl Viewer {
         options: ViewerOptions,
         outcome: Outcome,
     ) -> Self {
+        Self::with_recent(ctx, scene, options, outcome, RecentFiles::load())
+    }
+
+    /// [`Viewer::new`] with the recent-files list given (tests keep theirs apart).
+    fn with_recent(
+        ctx: &egui::Context,
+        scene: rt_core::Scene,
+        options: ViewerOptions,
+        outcome: Outcome,
+        recent: RecentFiles,
+    ) -> Self {
         let mut viewer = Self {
             camera: CameraPanel::new(&scene.camera),
             image: ImageSettings::new(&scene),
-            source: SceneSource::new(options.scene, scene, ctx),
+            source: SceneSource::new(options.scene, scene, recent, ctx),
             scheduler: Scheduler::default(),
+            view: ImageView::default(),
             save_path: "render.png".to_owned(),
             notice: None,
+            show_panel: true,
+            show_help: false,
             screenshot: options.screenshot.map(Screenshot::new),
             outcome,
+            #[cfg(test)]
+            save_button: None,
         };
-        viewer.schedule(ctx, Interaction { changed: true, dragging: false });
+        viewer.start(ctx, Kind::NewScene);
         viewer
     }
 
@@ -75,51 +125,118 @@ impl Viewer {
         Some(JobSpec { scene: scene.clone(), camera, width, height, spp: self.image.spp(), plan })
     }
 
+    /// Starts a job of `kind` now.
+    fn start(&mut self, ctx: &egui::Context, kind: Kind) {
+        let spec = self.job_spec();
+        if let Err(e) = self.scheduler.start(ctx, || spec, kind) {
+            self.notify(e);
+        }
+    }
+
     /// Hands this frame's input to the scheduler.
     fn schedule(&mut self, ctx: &egui::Context, input: Interaction) {
         let spec = self.job_spec();
         if let Err(e) = self.scheduler.schedule(ctx, input, || spec) {
-            self.notice = Some(e);
+            self.notify(e);
         }
     }
 
-    /// A new scene is in place: the camera and settings follow it.
-    fn scene_changed(&mut self, change: SceneChange) -> Interaction {
+    fn notify(&mut self, text: String) {
+        self.notice = Some(Notice { text, at: Instant::now() });
+    }
+
+    /// A new scene is in place: the camera and settings follow it, old
+    /// notices go, and its render starts from a black image.
+    fn scene_changed(&mut self, ctx: &egui::Context, change: SceneChange) {
         let scene = self.source.scene().clone();
         self.camera.scene_loaded(&scene.camera, change.opened);
         self.image.scene_loaded(&scene, &change.previous, change.opened);
-        Interaction { changed: true, dragging: false }
+        self.notice = None;
+        self.view.unpin();
+        self.start(ctx, Kind::NewScene);
     }
 
     /// Writes the finished image to the Save path, atomically.
     fn save(&mut self) {
         let Some(canvas) = self.scheduler.canvas().filter(|_| self.scheduler.frame_is_final()) else {
+            self.notify("not saved: the image is not finished yet".into());
             return;
         };
         let path = PathBuf::from(self.save_path.trim());
         let [width, height] = canvas.size();
         let saved = PendingImage::png(&path)
             .and_then(|png| png.write_rgb8(width as u32, height as u32, &canvas.rgb8()));
-        self.notice = Some(match saved {
+        self.notify(match saved {
             Ok(()) => format!("saved {}", path.display()),
             Err(e) => format!("not saved: {e:#}"),
         });
     }
 
+    /// The keyboard shortcuts ([`SHORTCUTS`]), unless a text field has the keys.
+    fn shortcuts(&mut self, ctx: &egui::Context) -> Interaction {
+        let mut input = Interaction::default();
+        if ctx.egui_wants_keyboard_input() {
+            return input;
+        }
+        let pressed =
+            |key| ctx.input_mut(|i| i.consume_shortcut(&KeyboardShortcut::new(Modifiers::NONE, key)));
+        let command =
+            |key| ctx.input_mut(|i| i.consume_shortcut(&KeyboardShortcut::new(Modifiers::COMMAND, key)));
+        if command(Key::S) {
+            self.save();
+        }
+        if command(Key::O) {
+            self.source.browse();
+        }
+        if pressed(Key::F5)
+            && let Some(change) = self.source.reload(ctx)
+        {
+            self.scene_changed(ctx, change);
+        }
+        if pressed(Key::R) {
+            input.changed |= self.camera.reset();
+        }
+        if pressed(Key::F) {
+            self.view.fit();
+        }
+        if pressed(Key::Num1) {
+            let size = self.image.full_size(self.source.scene());
+            self.view.one_to_one(ctx.pixels_per_point(), size);
+        }
+        if pressed(Key::P) {
+            self.show_panel = !self.show_panel;
+        }
+        if pressed(Key::F1)
+            || ctx.input(|i| i.events.iter().any(|e| matches!(e, egui::Event::Text(t) if t == "?")))
+        {
+            self.show_help = !self.show_help;
+        }
+        if self.show_help && pressed(Key::Escape) {
+            self.show_help = false;
+        }
+        input
+    }
+
     /// The side panel, top to bottom.
     fn side_panel(&mut self, ui: &mut egui::Ui) -> Interaction {
         let mut input = Interaction::default();
+        let ctx = ui.ctx().clone();
         if let Some(change) = self.source.ui(ui) {
-            input = input | self.scene_changed(change);
+            self.scene_changed(&ctx, change);
         }
         ui.separator();
         input = input | self.camera.ui(ui);
         ui.separator();
         input = input | self.image.ui(ui, &self.source.scene().clone());
         ui.horizontal(|ui| {
-            ui.add(egui::TextEdit::singleline(&mut self.save_path).desired_width(150.0));
+            ui.add(egui::TextEdit::singleline(&mut self.save_path).desired_width(170.0));
             let ready = self.scheduler.frame_is_final();
-            if ui.add_enabled(ready, egui::Button::new("Save PNG")).clicked() {
+            let button = ui.add_enabled(ready, egui::Button::new("Save PNG")).on_hover_text("Ctrl+S");
+            #[cfg(test)]
+            {
+                self.save_button = Some(button.rect);
+            }
+            if button.clicked() {
                 self.save();
             }
         });
@@ -129,38 +246,134 @@ impl Viewer {
         }
         if let Some(n) = &self.notice {
             ui.separator();
-            ui.label(n);
+            ui.label(&n.text);
         }
         ui.separator();
-        ui.small("Drag: orbit · Shift/right drag: pan · Wheel: zoom");
+        ui.small("Drag: orbit · Shift/right drag: pan · Wheel: zoom\nCtrl+wheel, Ctrl+drag: zoom and pan the image\nF1: all shortcuts");
         input
     }
+
+    /// The shortcuts overlay.
+    fn help_ui(&mut self, ctx: &egui::Context) {
+        let mut open = self.show_help;
+        egui::Window::new("Keyboard and mouse").open(&mut open).collapsible(false).show(ctx, |ui| {
+            egui::Grid::new("shortcuts").striped(true).show(ui, |ui| {
+                for (keys, what) in SHORTCUTS {
+                    ui.monospace(*keys);
+                    ui.label(*what);
+                    ui.end_row();
+                }
+            });
+            ui.separator();
+            ui.label("Drag: orbit · Shift-, right- or middle-drag: pan · Wheel: zoom the camera");
+            ui.label("Ctrl+wheel: zoom the image · Ctrl+drag: pan the image");
+            ui.label("Hover: inspect a pixel · Click: pin it · Drop a .ron file: open it");
+        });
+        self.show_help = open;
+    }
+
+    /// One frame of the whole window.
+    fn frame(&mut self, ui: &mut egui::Ui) {
+        let ctx = ui.ctx().clone();
+        if let Some(change) = self.source.poll(&ctx) {
+            self.scene_changed(&ctx, change);
+        }
+        if let Some(change) = self.source.take_dropped(&ctx) {
+            self.scene_changed(&ctx, change);
+        }
+        let mut input = self.shortcuts(&ctx);
+        if self.notice.as_ref().is_some_and(|n| n.at.elapsed() > NOTICE_FOR) {
+            self.notice = None;
+        }
+        if self.show_panel {
+            input = input
+                | egui::Panel::left("controls")
+                    .resizable(false)
+                    .exact_size(PANEL_WIDTH)
+                    .show(ui, |ui| {
+                        egui::ScrollArea::vertical()
+                            .id_salt("side panel")
+                            .show(ui, |ui| self.side_panel(ui))
+                            .inner
+                    })
+                    .inner;
+        }
+        egui::Panel::bottom("status").show(ui, |ui| self.scheduler.status_ui(ui));
+        let size = self.image.full_size(self.source.scene());
+        let texture = self.scheduler.texture().cloned();
+        let (view_input, magnified) = egui::CentralPanel::default()
+            .show(ui, |ui| {
+                let (scene, scheduler) = (self.source.scene().clone(), &self.scheduler);
+                let settings = *self.camera.settings();
+                let inspect = |p| inspect(&scene, &settings, size, scheduler.shown_job(), p);
+                self.view.ui(ui, texture.as_ref(), size, &mut self.camera, inspect)
+            })
+            .inner;
+        input = input | view_input;
+        if let Some(change) = self.source.browser_ui(&ctx) {
+            self.scene_changed(&ctx, change);
+        }
+        self.help_ui(&ctx);
+        if input.changed {
+            self.notice = None;
+        }
+        self.scheduler.set_filter(if magnified {
+            egui::TextureOptions::NEAREST
+        } else {
+            egui::TextureOptions::LINEAR
+        });
+        self.schedule(&ctx, input);
+        self.scheduler.apply_rows(&ctx);
+        if let Some(screenshot) = &mut self.screenshot {
+            screenshot.step(&ctx, self.scheduler.frame_is_final(), &self.outcome);
+        }
+    }
+}
+
+/// What pixel (x, y) of the `size` image of `scene` seen with `settings`
+/// shows and hits: its linear colour from `job` (if that rendered the full
+/// image), and its primary ray's hit as `rt-view cast --pixels` reports it.
+fn inspect(
+    scene: &rt_core::Scene,
+    settings: &CameraSettings,
+    (w, h): (u32, u32),
+    job: Option<&RenderJob>,
+    [x, y]: [u32; 2],
+) -> String {
+    let mut lines = vec![format!("pixel ({x}, {y})")];
+    match job.filter(|j| (j.spec().width, j.spec().height) == (w, h)) {
+        Some(job) => match job.linear(x, y) {
+            Some((c, n)) => lines.push(format!("linear ({:.4}, {:.4}, {:.4}), {n} spp", c.x, c.y, c.z)),
+            None => lines.push("not rendered yet".into()),
+        },
+        None => lines.push("(preview: linear colour once the full image renders)".into()),
+    }
+    let view = settings.to_camera().ok().and_then(|c| ViewPlane::new(c, w, h).ok());
+    if let Some(view) = view {
+        let ray = view.center_ray(x, y);
+        match scene.cast(&ray) {
+            Some(hit) => {
+                let object = &scene.objects()[hit.object];
+                let material = &scene.material_names()[object.material];
+                let distance = hit.t * ray.dir.length();
+                lines.push(format!(
+                    "object {} ({}, material \"{material}\"), primitive {}",
+                    hit.object,
+                    object.primitive.kind(),
+                    hit.primitive
+                ));
+                lines.push(format!("t {}, distance {distance}", hit.t));
+                lines.push(format!("normal ({}, {}, {})", hit.normal.x, hit.normal.y, hit.normal.z));
+            }
+            None => lines.push("no hit: background".into()),
+        }
+    }
+    lines.join("\n")
 }
 
 impl eframe::App for Viewer {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
-        let ctx = ui.ctx().clone();
-        let mut input = Interaction::default();
-        if let Some(change) = self.source.poll(&ctx) {
-            input = input | self.scene_changed(change);
-        }
-        input = input
-            | egui::Panel::left("controls")
-                .resizable(false)
-                .default_size(270.0)
-                .show(ui, |ui| self.side_panel(ui))
-                .inner;
-        egui::Panel::bottom("status").show(ui, |ui| self.scheduler.status_ui(ui));
-        let size = self.image.full_size(self.source.scene());
-        input = input
-            | egui::CentralPanel::default()
-                .show(ui, |ui| image_ui(ui, self.scheduler.texture(), size, &mut self.camera))
-                .inner;
-        self.schedule(&ctx, input);
-        self.scheduler.apply_rows();
-        if let Some(screenshot) = &mut self.screenshot {
-            screenshot.step(&ctx, self.scheduler.frame_is_final(), &self.outcome);
-        }
+        self.frame(ui);
     }
 }
 
@@ -173,38 +386,68 @@ mod tests {
     use crate::viewer::canvas::Canvas;
     use crate::viewer::scene_source::load;
 
+    fn scenes() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
+    }
+
+    /// A viewer on `path` (the built-in scene for `None`) that remembers no recent files.
+    fn viewer(ctx: &egui::Context, path: Option<PathBuf>) -> Viewer {
+        let options = ViewerOptions { scene: path.clone(), screenshot: None };
+        Viewer::with_recent(
+            ctx,
+            load(path.as_deref()).unwrap(),
+            options,
+            Outcome::default(),
+            RecentFiles::load_from(None),
+        )
+    }
+
+    /// Runs one frame of the whole window, `size` points large, with `events`.
+    fn frame(ctx: &egui::Context, v: &mut Viewer, size: egui::Vec2, events: Vec<egui::Event>) {
+        let input = egui::RawInput {
+            screen_rect: Some(egui::Rect::from_min_size(egui::Pos2::ZERO, size)),
+            events,
+            ..Default::default()
+        };
+        let mut output = ctx.run_ui(input, |ui| v.frame(ui));
+        output.textures_delta.clear();
+        ctx.tex_manager().write().take_delta().clear();
+    }
+
     /// Drives `viewer` until its full-resolution canvas is complete.
-    fn finish_render(viewer: &mut Viewer) {
+    fn finish_render(ctx: &egui::Context, viewer: &mut Viewer) {
         let deadline = Instant::now() + Duration::from_secs(30);
-        while !viewer.scheduler.canvas().is_some_and(Canvas::is_complete) {
+        while !viewer.scheduler.frame_is_final() {
             assert!(Instant::now() < deadline, "render did not complete");
-            viewer.scheduler.apply_rows();
+            viewer.scheduler.apply_rows(ctx);
             std::thread::sleep(Duration::from_millis(5));
         }
     }
 
     /// What a file save does: reload, and render again if the scene changed.
     fn reload(viewer: &mut Viewer, ctx: &egui::Context) {
-        if let Some(change) = viewer.source.reload() {
-            let input = viewer.scene_changed(change);
-            viewer.schedule(ctx, input);
+        if let Some(change) = viewer.source.reload(ctx) {
+            viewer.scene_changed(ctx, change);
         }
+    }
+
+    fn drop_textures(ctx: &egui::Context, viewer: Viewer) {
+        drop(viewer);
+        ctx.tex_manager().write().take_delta().clear();
     }
 
     #[test]
     fn a_reload_that_fails_shows_the_error_and_keeps_the_last_good_image() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("scene.ron");
-        let good =
-            std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/sphere.ron"))
-                .unwrap()
-                .replace("width: 320, height: 240", "width: 64, height: 48");
+        let good = std::fs::read_to_string(scenes().join("sphere.ron"))
+            .unwrap()
+            .replace("width: 320, height: 240", "width: 64, height: 48");
         std::fs::write(&path, &good).unwrap();
 
         let ctx = egui::Context::default();
-        let options = ViewerOptions { scene: Some(path.clone()), screenshot: None };
-        let mut viewer = Viewer::new(&ctx, load(Some(&path)).unwrap(), options, Outcome::default());
-        finish_render(&mut viewer);
+        let mut viewer = viewer(&ctx, Some(path.clone()));
+        finish_render(&ctx, &mut viewer);
         let image = viewer.scheduler.canvas().unwrap().pixels().to_vec();
         assert!(image.contains(&Color32::from_rgb(230, 38, 26)), "the sphere is not in the image");
 
@@ -212,17 +455,131 @@ mod tests {
         reload(&mut viewer, &ctx);
         let error = viewer.source.error().expect("the error is shown").to_owned();
         assert!(error.contains("scene.ron:") && error.contains("sphere radius must be positive"), "{error}");
-        viewer.scheduler.apply_rows();
+        viewer.scheduler.apply_rows(&ctx);
         assert_eq!(viewer.scheduler.canvas().unwrap().pixels(), &image[..], "the last good image changed");
 
         // Fixing the file clears the error and renders again.
         std::fs::write(&path, good.replace("(0.9, 0.15, 0.1)", "(0.1, 0.9, 0.1)")).unwrap();
         reload(&mut viewer, &ctx);
         assert_eq!(viewer.source.error(), None);
-        finish_render(&mut viewer);
+        finish_render(&ctx, &mut viewer);
         assert!(viewer.scheduler.canvas().unwrap().pixels().contains(&Color32::from_rgb(26, 230, 26)));
+        drop_textures(&ctx, viewer);
+    }
 
-        drop(viewer);
-        ctx.tex_manager().write().take_delta().clear();
+    #[test]
+    fn open_takes_the_new_scenes_camera_and_projection_through_a_whole_frame() {
+        // Before, the panel copied the camera at the start of a frame, Open
+        // set the new one, and the end of the frame wrote the old copy back.
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, None);
+        frame(&ctx, &mut v, egui::vec2(1000.0, 700.0), vec![]);
+        for name in ["box.ron", "orthographic.ron"] {
+            let path = scenes().join(name);
+            let change = v.source.open(path.clone(), &ctx).unwrap();
+            v.scene_changed(&ctx, change);
+            frame(&ctx, &mut v, egui::vec2(1000.0, 700.0), vec![]);
+            let file = rt_core::load_scene(&path).unwrap().camera;
+            assert_eq!(v.camera.settings().to_camera().unwrap(), file, "{name}");
+        }
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn the_side_panel_scrolls_at_the_smallest_window_size() {
+        // At 640×400 the panel's contents are taller than the window. Before,
+        // Save PNG was below the window's bottom edge and out of reach; now
+        // scrolling the panel brings it into view.
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, None);
+        let size = egui::vec2(640.0, 400.0);
+        frame(&ctx, &mut v, size, vec![]);
+        frame(&ctx, &mut v, size, vec![]);
+        let below = v.save_button.expect("Save PNG was laid out");
+        assert!(below.top() > size.y, "the window is taller than assumed: {below:?}");
+        let over_panel = egui::pos2(100.0, 200.0);
+        let scroll = egui::Event::MouseWheel {
+            unit: egui::MouseWheelUnit::Point,
+            delta: egui::vec2(0.0, -2000.0),
+            modifiers: Modifiers::NONE,
+            phase: egui::TouchPhase::Move,
+            source: egui::MouseWheelSource::Wheel,
+        };
+        frame(&ctx, &mut v, size, vec![egui::Event::PointerMoved(over_panel), scroll]);
+        for _ in 0..30 {
+            frame(&ctx, &mut v, size, vec![egui::Event::PointerMoved(over_panel)]);
+        }
+        let after = v.save_button.unwrap();
+        assert!(after.bottom() <= size.y && after.top() >= 0.0, "Save PNG still out of reach: {after:?}");
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn notices_clear_when_a_new_scene_opens_and_when_the_view_changes() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, None);
+        v.save_path = "/no/such/dir/x.png".into();
+        v.save();
+        assert!(v.notice.as_ref().is_some_and(|n| n.text.starts_with("not saved")));
+        let change = v.source.open(scenes().join("box.ron"), &ctx).unwrap();
+        v.scene_changed(&ctx, change);
+        assert!(v.notice.is_none(), "Open clears the notice");
+        v.notify("not saved: something".into());
+        // Pressing R (reset) changes the view after an edit.
+        v.camera.edit(|s| s.orbit(0.2, 0.0));
+        frame(&ctx, &mut v, egui::vec2(1000.0, 700.0), vec![key(Key::R)]);
+        assert!(v.notice.is_none(), "a change of view clears the notice");
+        drop_textures(&ctx, v);
+    }
+
+    fn key(key: Key) -> egui::Event {
+        egui::Event::Key { key, physical_key: None, pressed: true, repeat: false, modifiers: Modifiers::NONE }
+    }
+
+    #[test]
+    fn a_new_scene_never_shows_the_old_scenes_pixels() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, None);
+        finish_render(&ctx, &mut v);
+        let change = v.source.open(scenes().join("sphere.ron"), &ctx).unwrap();
+        v.scene_changed(&ctx, change);
+        // Before any row of the new scene, the image on screen is black.
+        let canvas: &Canvas = v.scheduler.canvas().unwrap();
+        assert_eq!(canvas.rows_done(), 0);
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn inspecting_a_pixel_tells_what_cast_tells_and_its_linear_colour() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("sphere.ron")));
+        finish_render(&ctx, &mut v);
+        // sphere.ron is 320×240 with the sphere in the middle.
+        let size = v.image.full_size(v.source.scene());
+        let look = |p| inspect(v.source.scene(), v.camera.settings(), size, v.scheduler.shown_job(), p);
+        let text = look([160, 120]);
+        assert!(text.starts_with("pixel (160, 120)\nlinear ("), "{text}");
+        assert!(text.contains("object 0 (Sphere, material \"red\"), primitive 0"), "{text}");
+        assert!(text.contains("normal ("), "{text}");
+        assert!(look([0, 0]).contains("no hit: background"));
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn the_shortcuts_toggle_the_panel_and_the_help_and_fit_and_one_to_one_the_image() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, None);
+        let size = egui::vec2(1000.0, 700.0);
+        frame(&ctx, &mut v, size, vec![key(Key::P)]);
+        assert!(!v.show_panel);
+        frame(&ctx, &mut v, size, vec![key(Key::F1)]);
+        assert!(v.show_help);
+        frame(&ctx, &mut v, size, vec![key(Key::Escape)]);
+        assert!(!v.show_help);
+        frame(&ctx, &mut v, size, vec![key(Key::Num1)]);
+        assert!(matches!(v.view.zoom(), super::super::image_view::Zoom::Scale { .. }));
+        frame(&ctx, &mut v, size, vec![key(Key::F)]);
+        assert_eq!(v.view.zoom(), super::super::image_view::Zoom::Fit);
+        drop_textures(&ctx, v);
     }
 }

@@ -112,20 +112,84 @@ impl CameraSettings {
     /// World units per pixel at the centre of interest, for an image `height`
     /// pixels tall on screen: how far a pan of one pixel should move.
     pub fn world_per_pixel(&self, height: Real) -> Real {
-        let plane_h = 2.0 * self.near * (0.5 * self.fov_y.to_radians()).tan();
-        let at_coi = match self.projection {
-            Projection::Perspective => {
-                plane_h * (self.position - self.center_of_interest).length() / self.near
+        self.view_height() / height.max(1.0)
+    }
+
+    /// How tall the view is at the centre of interest, in world units: the
+    /// height of what a perspective camera sees at the COI's distance D
+    /// (`2·D·tan(fov_y/2)`), and of everything an orthographic camera sees
+    /// (its view plane, `2·near·tan(fov_y/2)`).
+    pub fn view_height(&self) -> Real {
+        let tan = (0.5 * self.fov_y.to_radians()).tan();
+        match self.projection {
+            Projection::Perspective => 2.0 * (self.position - self.center_of_interest).length() * tan,
+            Projection::Orthographic => 2.0 * self.near * tan,
+        }
+    }
+
+    /// The same camera with the view `height` world units tall at the centre
+    /// of interest ([`CameraSettings::view_height`]): the field of view is
+    /// chosen for it; an orthographic camera whose field of view would pass
+    /// the largest one moves its view plane out instead (its rays start
+    /// there). Refused (self unchanged) if no valid camera has it.
+    pub fn with_view_height(&self, height: Real) -> Self {
+        if !(height > 0.0 && height.is_finite()) {
+            return *self;
+        }
+        let max_half = (0.5 * FOV_RANGE.end().to_radians()).tan();
+        let (distance, near) = match self.projection {
+            Projection::Perspective => ((self.position - self.center_of_interest).length(), self.near),
+            Projection::Orthographic => {
+                let near = self.near.max(0.5 * height / max_half);
+                (near, near)
             }
-            Projection::Orthographic => plane_h,
         };
-        at_coi / height.max(1.0)
+        let fov_y = 2.0 * (0.5 * height / distance).atan().to_degrees();
+        self.accept(Self { fov_y, near, ..*self })
+    }
+
+    /// The same view in another projection: what is in view at the centre
+    /// of interest stays in view ([`CameraSettings::view_height`] is kept).
+    pub fn with_projection(&self, projection: Projection) -> Self {
+        if projection == self.projection {
+            return *self;
+        }
+        Self { projection, ..*self }.with_view_height(self.view_height())
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn switching_projection_keeps_what_is_in_view_at_the_centre_of_interest() {
+        let s = settings();
+        let h = s.view_height();
+        for p in [Projection::Orthographic, Projection::Perspective] {
+            let switched = s.with_projection(Projection::Orthographic).with_projection(p);
+            assert!(
+                (switched.view_height() - h).abs() < 1e-4 * h,
+                "{p:?}: {} vs {h}",
+                switched.view_height()
+            );
+            assert_eq!(switched.projection, p);
+        }
+        // Before, an orthographic camera with the perspective camera's near
+        // and fov saw only its near plane's height.
+        let ortho = s.with_projection(Projection::Orthographic);
+        assert!(ortho.to_camera().is_ok());
+        assert!((ortho.view_height() - h).abs() < 1e-4 * h);
+    }
+
+    #[test]
+    fn a_wide_orthographic_view_moves_its_plane_out_rather_than_passing_the_widest_fov() {
+        let ortho = CameraSettings { projection: Projection::Orthographic, near: 0.01, ..settings() };
+        let wide = ortho.with_view_height(1000.0);
+        assert!((wide.view_height() - 1000.0).abs() < 0.5, "{}", wide.view_height());
+        assert!(wide.fov_y <= *FOV_RANGE.end() && wide.near > 0.01);
+        assert_eq!(ortho.with_view_height(-1.0), ortho, "refused");
+    }
 
     fn settings() -> CameraSettings {
         CameraSettings {

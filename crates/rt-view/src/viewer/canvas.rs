@@ -2,13 +2,24 @@
 //! uploaded to an egui texture as partial updates.
 //!
 //! A canvas belongs to one job generation and refuses rows of any other, so a
-//! row of a cancelled job can never be drawn over the new view. It starts
-//! from a placeholder (the previous image, resampled) that rows replace as
-//! they arrive. The UI thread only copies rows: colours are built by workers.
+//! row of a cancelled job can never be drawn over the new view. The UI thread
+//! only copies rows: colours are built by workers.
+//!
+//! The canvas keeps the whole image (for Save PNG and pixel inspection), but
+//! the texture shows a *display* image of at most [`MAX_DISPLAY_SIDE`] pixels
+//! a side: every k-th pixel of every k-th row, k the smallest whole factor
+//! that fits. A 15 300 × 8 500 render thus shows through a 3 825 × 2 125
+//! texture, and starting a new job touches only that: the full-size buffer
+//! starts as zeroed memory straight from the allocator, transparent until
+//! rows arrive.
 
 use egui::{Color32, ColorImage, TextureHandle, TextureOptions};
 
 use super::render_job::Row;
+
+/// Largest side of the texture the image is shown through, in texels
+/// (lower if the GPU's limit is lower).
+pub const MAX_DISPLAY_SIDE: u32 = 4096;
 
 /// The image being assembled for one job generation.
 #[derive(Clone, Debug)]
@@ -16,46 +27,89 @@ pub struct Canvas {
     generation: u64,
     width: u32,
     height: u32,
+    /// The whole image, row-major, top row first; transparent (all bytes
+    /// zero) until rows arrive.
     pixels: Vec<Color32>,
     row_done: Vec<bool>,
     rows_done: u32,
-    /// Rows applied since the last upload, in arrival order.
+    /// Pixels of the image per display texel along each axis.
+    factor: u32,
+    /// The display image: `display_size()` texels.
+    display: Vec<Color32>,
+    /// Display rows changed since the last upload, in arrival order.
     pending: Vec<u32>,
 }
 
 impl Canvas {
-    /// A canvas for job `generation`, `width`×`height`, showing `placeholder`
-    /// (exactly `width·height` pixels) until rows arrive.
-    pub fn new(generation: u64, width: u32, height: u32, placeholder: Vec<Color32>) -> Self {
-        assert_eq!(placeholder.len(), width as usize * height as usize);
+    /// A black canvas for job `generation`, `width`×`height`, shown through
+    /// a texture of at most `max_side` texels a side (and never more than
+    /// [`MAX_DISPLAY_SIDE`]; the GPU's own limit comes from egui's
+    /// `InputState::max_texture_side`).
+    pub fn new(generation: u64, width: u32, height: u32, max_side: usize) -> Self {
+        let max_side = (max_side.max(1) as u32).min(MAX_DISPLAY_SIDE);
+        let factor = width.max(height).div_ceil(max_side).max(1);
+        let (dw, dh) = (width.div_ceil(factor), height.div_ceil(factor));
         Self {
             generation,
             width,
             height,
-            pixels: placeholder,
+            pixels: bytemuck::zeroed_vec(width as usize * height as usize),
             row_done: vec![false; height as usize],
             rows_done: 0,
+            factor,
+            display: vec![Color32::BLACK; dw as usize * dh as usize],
             pending: Vec::new(),
         }
     }
 
-    /// A canvas for `generation` whose placeholder is `previous` resampled to
-    /// the new size (nearest neighbour), or black without one.
-    pub fn replacing(previous: Option<&Canvas>, generation: u64, width: u32, height: u32) -> Self {
-        let placeholder = match previous {
-            Some(p) => p.resampled(width, height),
-            None => vec![Color32::BLACK; width as usize * height as usize],
-        };
-        Self::new(generation, width, height, placeholder)
+    /// A canvas for `generation` that shows `previous`'s display image,
+    /// resampled (nearest neighbour), until rows arrive; black without one.
+    pub fn replacing(
+        previous: Option<&Canvas>,
+        generation: u64,
+        width: u32,
+        height: u32,
+        max_side: usize,
+    ) -> Self {
+        let mut canvas = Self::new(generation, width, height, max_side);
+        if let Some(p) = previous {
+            let [dw, dh] = canvas.display_size();
+            let [pw, ph] = p.display_size();
+            for y in 0..dh {
+                let sy = y * ph / dh;
+                for x in 0..dw {
+                    canvas.display[y * dw + x] = p.display[sy * pw + x * pw / dw];
+                }
+            }
+        }
+        canvas
     }
 
-    /// `[width, height]` in pixels.
+    /// The job generation this canvas accepts rows of.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+    /// `[width, height]` of the image in pixels.
     pub fn size(&self) -> [usize; 2] {
         [self.width as usize, self.height as usize]
     }
-    /// Row-major pixels, top row first.
+    /// `[width, height]` of the display image (and texture) in texels.
+    pub fn display_size(&self) -> [usize; 2] {
+        [self.width.div_ceil(self.factor) as usize, self.height.div_ceil(self.factor) as usize]
+    }
+    /// Image pixels per display texel along each axis (1 unless the image
+    /// is larger than [`MAX_DISPLAY_SIDE`]).
+    pub fn display_factor(&self) -> u32 {
+        self.factor
+    }
+    /// Row-major pixels of the whole image, top row first.
     pub fn pixels(&self) -> &[Color32] {
         &self.pixels
+    }
+    /// The colour shown at pixel (x, y), if it is inside the image.
+    pub fn pixel(&self, x: u32, y: u32) -> Option<Color32> {
+        (x < self.width && y < self.height)
+            .then(|| self.pixels[y as usize * self.width as usize + x as usize])
     }
     /// How many distinct rows have arrived.
     pub fn rows_done(&self) -> u32 {
@@ -80,24 +134,44 @@ impl Canvas {
         if !std::mem::replace(&mut self.row_done[row.y as usize], true) {
             self.rows_done += 1;
         }
-        self.pending.push(row.y);
+        if row.y.is_multiple_of(self.factor) {
+            let dy = (row.y / self.factor) as usize;
+            let [dw, _] = self.display_size();
+            let k = self.factor as usize;
+            for (dx, texel) in self.display[dy * dw..(dy + 1) * dw].iter_mut().enumerate() {
+                *texel = row.pixels[dx * k];
+            }
+            self.pending.push(dy as u32);
+        }
         true
     }
 
-    /// A new texture holding the whole canvas.
+    /// A new texture holding the whole display image.
     pub fn to_texture(&mut self, ctx: &egui::Context, options: TextureOptions) -> TextureHandle {
-        self.pending.clear();
-        ctx.load_texture("render", ColorImage::new(self.size(), self.pixels.clone()), options)
+        let image = ColorImage::new(self.display_size(), self.to_texture_image());
+        ctx.load_texture("render", image, options)
     }
 
-    /// Uploads the rows applied since the last upload to `texture` (which
-    /// must have this canvas's size): one partial update per run of
+    /// The display image's texels, for uploading all of it (nothing is
+    /// pending afterwards).
+    pub fn to_texture_image(&mut self) -> Vec<Color32> {
+        self.pending.clear();
+        self.display.clone()
+    }
+
+    /// The display image's texels as they are now.
+    pub fn display_image(&self) -> Vec<Color32> {
+        self.display.clone()
+    }
+
+    /// Uploads the display rows changed since the last upload to `texture`
+    /// (which must have the display size): one partial update per run of
     /// consecutive rows. Returns the number of updates queued.
     pub fn upload_pending(&mut self, texture: &mut TextureHandle, options: TextureOptions) -> usize {
         let mut ys = std::mem::take(&mut self.pending);
         ys.sort_unstable();
         ys.dedup();
-        let width = self.width as usize;
+        let [width, _] = self.display_size();
         let mut updates = 0;
         let mut i = 0;
         while i < ys.len() {
@@ -106,23 +180,12 @@ impl Canvas {
                 j += 1;
             }
             let (first, count) = (ys[i] as usize, j - i);
-            let block = self.pixels[first * width..(first + count) * width].to_vec();
+            let block = self.display[first * width..(first + count) * width].to_vec();
             texture.set_partial([0, first], ColorImage::new([width, count], block), options);
             updates += 1;
             i = j;
         }
         updates
-    }
-
-    /// The canvas resampled to `width`×`height` by nearest neighbour.
-    fn resampled(&self, width: u32, height: u32) -> Vec<Color32> {
-        let mut out = Vec::with_capacity(width as usize * height as usize);
-        for y in 0..height as u64 {
-            let sy = (y * self.height as u64 / height as u64) as usize;
-            let row = &self.pixels[sy * self.width as usize..][..self.width as usize];
-            out.extend((0..width as u64).map(|x| row[(x * self.width as u64 / width as u64) as usize]));
-        }
-        out
     }
 
     /// The image as 8-bit RGB rows, for saving.
@@ -141,24 +204,24 @@ mod tests {
 
     #[test]
     fn rows_of_another_generation_are_never_applied() {
-        let mut c = Canvas::replacing(None, 2, 4, 3);
+        let mut c = Canvas::new(2, 4, 3, 4096);
         assert!(!c.apply(&row(1, 0, 4, Color32::RED)));
         assert!(!c.apply(&row(3, 0, 4, Color32::RED)));
-        assert!(c.pixels().iter().all(|&p| p == Color32::BLACK));
+        assert!(c.pixels().iter().all(|&p| p == Color32::TRANSPARENT));
         assert!(c.apply(&row(2, 0, 4, Color32::RED)));
         assert_eq!(c.rows_done(), 1);
     }
 
     #[test]
     fn misshapen_rows_are_refused() {
-        let mut c = Canvas::replacing(None, 1, 4, 3);
+        let mut c = Canvas::new(1, 4, 3, 4096);
         assert!(!c.apply(&row(1, 3, 4, Color32::RED)));
         assert!(!c.apply(&row(1, 0, 5, Color32::RED)));
     }
 
     #[test]
     fn completion_counts_distinct_rows() {
-        let mut c = Canvas::replacing(None, 1, 2, 2);
+        let mut c = Canvas::new(1, 2, 2, 4096);
         c.apply(&row(1, 0, 2, Color32::RED));
         c.apply(&row(1, 0, 2, Color32::RED));
         assert!(!c.is_complete());
@@ -167,19 +230,45 @@ mod tests {
     }
 
     #[test]
-    fn a_new_canvas_starts_from_the_previous_image_resampled() {
-        let mut small = Canvas::replacing(None, 1, 2, 1);
+    fn a_new_canvas_shows_the_previous_image_resampled_until_rows_arrive() {
+        let mut small = Canvas::new(1, 2, 1, 4096);
         small.apply(&Row { generation: 1, y: 0, samples: 1, pixels: vec![Color32::RED, Color32::BLUE] });
-        let big = Canvas::replacing(Some(&small), 2, 4, 2);
+        let big = Canvas::replacing(Some(&small), 2, 4, 2, 4096);
         let r = Color32::RED;
         let b = Color32::BLUE;
-        assert_eq!(big.pixels(), &[r, r, b, b, r, r, b, b]);
+        assert_eq!(big.display, &[r, r, b, b, r, r, b, b]);
+        // The image itself has no pixels yet: a saved image is never the placeholder.
+        assert!(big.pixels().iter().all(|&p| p == Color32::TRANSPARENT));
+    }
+
+    #[test]
+    fn a_huge_image_is_shown_through_a_texture_of_at_most_the_display_limit() {
+        // 15 300 × 8 500 (a 2× resolution scale on a big scene): the texture
+        // is every 4th pixel of every 4th row; with a GPU limit of 2048, every 8th.
+        assert_eq!(Canvas::new(1, 15_300, 8_500, 16_384).display_size(), [3825, 2125]);
+        let ctx = egui::Context::default();
+        let limit = ctx.input(|i| i.max_texture_side);
+        let mut c = Canvas::new(1, 15_300, 8_500, limit);
+        let k = c.display_factor() as usize;
+        assert!(c.display_size()[0] <= limit && c.display_size()[1] <= limit);
+        let mut texture = c.to_texture(&ctx, TextureOptions::NEAREST);
+        assert_eq!(texture.size(), c.display_size());
+        let mut pixels = vec![Color32::BLACK; 15_300];
+        pixels[2 * k] = Color32::RED;
+        assert!(c.apply(&Row { generation: 1, y: k as u32, samples: 1, pixels }));
+        let width = c.display_size()[0];
+        assert_eq!(c.display[width + 2], Color32::RED, "texel (2, 1) is pixel (2k, k)");
+        assert!(c.apply(&row(1, k as u32 + 1, 15_300, Color32::GREEN)), "rows between texels still count");
+        assert_eq!(c.upload_pending(&mut texture, TextureOptions::NEAREST), 1);
+        assert_eq!(c.pixel(2 * k as u32, k as u32), Some(Color32::RED));
+        drop(texture);
+        ctx.tex_manager().write().take_delta().clear();
     }
 
     #[test]
     fn pending_rows_upload_as_one_update_per_run_of_consecutive_rows() {
         let ctx = egui::Context::default();
-        let mut c = Canvas::replacing(None, 1, 3, 6);
+        let mut c = Canvas::new(1, 3, 6, 4096);
         let mut texture = c.to_texture(&ctx, TextureOptions::NEAREST);
         for y in [4, 0, 1, 5, 2] {
             c.apply(&row(1, y, 3, Color32::RED));

@@ -1,7 +1,23 @@
-//! The image on screen, fitted to the central panel, and the mouse on it:
-//! drag to orbit, shift-, right- or middle-drag to pan, wheel to zoom.
+//! The image on screen and the mouse on it.
+//!
+//! The image is shown fitted to the panel, at 1:1 (one image pixel per
+//! screen pixel), or at any zoom, independent of the camera; magnified, it
+//! is drawn nearest-neighbour so pixels stay square. The mouse:
+//!
+//! | input | does |
+//! |---|---|
+//! | drag | orbit the camera |
+//! | shift-drag, right- or middle-drag | pan the camera |
+//! | wheel | zoom the camera |
+//! | ctrl + wheel | zoom the image about the cursor |
+//! | ctrl + drag | pan the image |
+//! | hover | inspect the pixel under the cursor |
+//! | click | pin the inspection to that pixel (Esc unpins) |
+//!
+//! A drag counts as moving only in frames where the pointer moved: holding
+//! the button still lets the full-resolution render start.
 
-use egui::{Color32, PointerButton, Rect, Sense, TextureHandle, Vec2, pos2};
+use egui::{Align2, Color32, FontId, PointerButton, Pos2, Rect, Sense, TextureHandle, Vec2, pos2};
 use rt_core::Real;
 
 use super::camera_panel::CameraPanel;
@@ -11,42 +27,180 @@ use super::interaction::Interaction;
 const ORBIT_PER_POINT: f32 = 0.01;
 /// Zoom factor exponent per point of scrolling: `exp(−scroll·k)`.
 const ZOOM_PER_POINT: f32 = 0.0015;
+/// The image zoom's limits, in screen points per image pixel.
+const SCALE_RANGE: (f32, f32) = (0.02, 64.0);
 
-/// Draws `texture` (an image of `size` pixels, full resolution) as large as
-/// fits, keeping its proportions, and turns mouse input on it into camera edits.
-#[allow(clippy::unnecessary_cast)] // `Real` is f64 when rt-core's `f64` feature is on.
-pub(super) fn image_ui(
-    ui: &mut egui::Ui,
-    texture: Option<&TextureHandle>,
-    (w, h): (u32, u32),
-    camera: &mut CameraPanel,
-) -> Interaction {
-    let available = ui.available_rect_before_wrap();
-    let fit = (available.width() / w as f32).min(available.height() / h as f32).max(0.01);
-    let rect = Rect::from_center_size(available.center(), Vec2::new(w as f32 * fit, h as f32 * fit));
-    let response = ui.allocate_rect(rect, Sense::click_and_drag());
-    if let Some(texture) = texture {
-        let uv = Rect::from_min_max(pos2(0.0, 0.0), pos2(1.0, 1.0));
-        ui.painter().image(texture.id(), rect, uv, Color32::WHITE);
+/// How the image is scaled on screen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Zoom {
+    /// As large as fits, whole.
+    Fit,
+    /// `scale` screen points per image pixel, the image point `center` in
+    /// the middle of the panel.
+    Scale { scale: f32, center: Pos2 },
+}
+
+/// The image view's state: zoom and the inspected pixel.
+pub(super) struct ImageView {
+    zoom: Zoom,
+    /// The pixel clicked, inspected until Esc.
+    pinned: Option<[u32; 2]>,
+}
+
+impl Default for ImageView {
+    fn default() -> Self {
+        Self { zoom: Zoom::Fit, pinned: None }
     }
-    let delta = response.drag_delta();
-    let shift = ui.input(|i| i.modifiers.shift);
-    let panning = response.dragged_by(PointerButton::Secondary)
-        || response.dragged_by(PointerButton::Middle)
-        || (shift && response.dragged_by(PointerButton::Primary));
-    let mut changed = false;
-    if panning {
-        changed |= camera.edit(|s| {
-            let k = s.world_per_pixel(rect.height() as Real) as f32;
-            s.pan((-delta.x * k) as Real, (delta.y * k) as Real)
-        });
-    } else if response.dragged_by(PointerButton::Primary) {
-        changed |= camera
-            .edit(|s| s.orbit((-delta.x * ORBIT_PER_POINT) as Real, (-delta.y * ORBIT_PER_POINT) as Real));
+}
+
+impl ImageView {
+    /// Shows the whole image as large as fits.
+    pub fn fit(&mut self) {
+        self.zoom = Zoom::Fit;
     }
-    let scroll = if response.hovered() { ui.input(|i| i.smooth_scroll_delta.y) } else { 0.0 };
-    if scroll != 0.0 {
-        changed |= camera.edit(|s| s.zoom((-scroll * ZOOM_PER_POINT).exp() as Real));
+
+    /// Shows the image at one image pixel per screen pixel, centred.
+    pub fn one_to_one(&mut self, pixels_per_point: f32, (w, h): (u32, u32)) {
+        let center = pos2(w as f32 / 2.0, h as f32 / 2.0);
+        self.zoom = Zoom::Scale { scale: 1.0 / pixels_per_point, center };
     }
-    Interaction { changed, dragging: response.dragged() || scroll != 0.0 }
+
+    /// Forgets the pinned pixel.
+    pub fn unpin(&mut self) {
+        self.pinned = None;
+    }
+
+    /// The zoom in force.
+    #[cfg(test)]
+    pub fn zoom(&self) -> Zoom {
+        self.zoom
+    }
+
+    /// Draws `texture` (an image of `size` pixels at full resolution) and
+    /// turns mouse input on it into camera edits, image zoom and pan, and
+    /// inspection. `inspect` describes a pixel. Returns the interaction and
+    /// whether the image is magnified (drawn larger than its pixels).
+    #[allow(clippy::unnecessary_cast)] // `Real` is f64 when rt-core's `f64` feature is on.
+    pub fn ui(
+        &mut self,
+        ui: &mut egui::Ui,
+        texture: Option<&TextureHandle>,
+        (w, h): (u32, u32),
+        camera: &mut CameraPanel,
+        inspect: impl FnOnce([u32; 2]) -> String,
+    ) -> (Interaction, bool) {
+        let available = ui.available_rect_before_wrap();
+        let response = ui.allocate_rect(available, Sense::click_and_drag());
+        let size = Vec2::new(w as f32, h as f32);
+        let (scale, center) = match self.zoom {
+            Zoom::Fit => {
+                let fit = (available.width() / size.x).min(available.height() / size.y).max(1e-3);
+                (fit, pos2(size.x / 2.0, size.y / 2.0))
+            }
+            Zoom::Scale { scale, center } => (scale, center),
+        };
+        let rect = Rect::from_min_size(available.center() - center.to_vec2() * scale, size * scale);
+        let painter = ui.painter_at(available);
+        if let Some(texture) = texture {
+            let uv = Rect::from_min_max(pos2(0.0, 0.0), pos2(1.0, 1.0));
+            painter.image(texture.id(), rect, uv, Color32::WHITE);
+        }
+        let to_pixel = |p: Pos2| {
+            let q = (p - rect.min) / scale;
+            (q.x >= 0.0 && q.y >= 0.0 && q.x < size.x && q.y < size.y).then_some([q.x as u32, q.y as u32])
+        };
+
+        let (ctrl, shift) = ui.input(|i| (i.modifiers.command, i.modifiers.shift));
+        let delta = response.drag_delta();
+        let mut changed = false;
+        if ctrl && response.dragged_by(PointerButton::Primary) {
+            // Pan the image: the point under the cursor follows it.
+            self.zoom = Zoom::Scale { scale, center: center - delta / scale };
+        } else if response.dragged_by(PointerButton::Secondary)
+            || response.dragged_by(PointerButton::Middle)
+            || (shift && response.dragged_by(PointerButton::Primary))
+        {
+            changed |= camera.edit(|s| {
+                let k = s.world_per_pixel(rect.height() as Real) as f32;
+                s.pan((-delta.x * k) as Real, (delta.y * k) as Real)
+            });
+        } else if response.dragged_by(PointerButton::Primary) {
+            changed |= camera.edit(|s| {
+                s.orbit((-delta.x * ORBIT_PER_POINT) as Real, (-delta.y * ORBIT_PER_POINT) as Real)
+            });
+        }
+        let scroll = if response.hovered() { ui.input(|i| i.smooth_scroll_delta.y) } else { 0.0 };
+        if scroll != 0.0 {
+            if ctrl {
+                // Zoom the image about the cursor: the point under it stays.
+                let cursor = response.hover_pos().unwrap_or(available.center());
+                let new_scale = (scale * (scroll * 0.003).exp()).clamp(SCALE_RANGE.0, SCALE_RANGE.1);
+                let under = center + (cursor - available.center()) / scale;
+                let new_center = under - (cursor - available.center()) / new_scale;
+                self.zoom = Zoom::Scale { scale: new_scale, center: new_center };
+            } else {
+                changed |= camera.edit(|s| s.zoom((-scroll * ZOOM_PER_POINT).exp() as Real));
+            }
+        }
+        if response.clicked() {
+            self.pinned = response.interact_pointer_pos().and_then(to_pixel);
+        }
+        if ui.input(|i| i.key_pressed(egui::Key::Escape)) {
+            self.pinned = None;
+        }
+        let inspected = self.pinned.or_else(|| response.hover_pos().and_then(to_pixel));
+        if let Some(pixel) = inspected {
+            let text = inspect(pixel);
+            let galley = painter.layout_no_wrap(text, FontId::monospace(12.0), Color32::WHITE);
+            let at = available.left_bottom() + Vec2::new(8.0, -8.0 - galley.size().y);
+            let frame = Rect::from_min_size(at, galley.size()).expand(4.0);
+            painter.rect_filled(frame, 4.0, Color32::from_black_alpha(190));
+            painter.galley(at, galley, Color32::WHITE);
+            if let Some([x, y]) = self.pinned {
+                let marker = rect.min + Vec2::new(x as f32 + 0.5, y as f32 + 0.5) * scale;
+                painter.circle_stroke(marker, (scale * 0.5).max(4.0), (1.5, Color32::YELLOW));
+            }
+        }
+        let zoom_text = format!("{:.0} %", scale * ui.ctx().pixels_per_point() * 100.0);
+        painter.text(
+            available.right_top() + Vec2::new(-8.0, 6.0),
+            Align2::RIGHT_TOP,
+            zoom_text,
+            FontId::proportional(12.0),
+            Color32::from_white_alpha(160),
+        );
+        let moving = delta != Vec2::ZERO || scroll != 0.0;
+        let magnified = scale * ui.ctx().pixels_per_point() > 1.0;
+        (interaction(changed, response.dragged(), moving), magnified)
+    }
+}
+
+/// What a frame of mouse input did: a new render is due if the camera
+/// `changed`; a preview is wanted only while the pointer is `dragged` and
+/// actually `moving` (held still, the full render may start).
+pub(super) fn interaction(changed: bool, dragged: bool, moving: bool) -> Interaction {
+    Interaction { changed, dragging: dragged && moving }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn holding_the_button_still_is_not_dragging() {
+        // Before, any frame with the button down counted as dragging, so the
+        // full-resolution render waited for the button's release.
+        assert_eq!(interaction(false, true, false), Interaction { changed: false, dragging: false });
+        assert_eq!(interaction(true, true, true), Interaction { changed: true, dragging: true });
+        assert_eq!(interaction(false, false, true), Interaction { changed: false, dragging: false });
+    }
+
+    #[test]
+    fn one_to_one_shows_one_image_pixel_per_screen_pixel_and_fit_goes_back() {
+        let mut v = ImageView::default();
+        v.one_to_one(2.0, (640, 480));
+        assert_eq!(v.zoom(), Zoom::Scale { scale: 0.5, center: pos2(320.0, 240.0) });
+        v.fit();
+        assert_eq!(v.zoom(), Zoom::Fit);
+    }
 }

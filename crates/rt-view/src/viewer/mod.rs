@@ -4,8 +4,9 @@
 //! own piece of the UI, in the spirit of egui's demo app (`app::Viewer`
 //! composes them):
 //!
-//! - `scene_source`: the scene file (or the built-in scene), Open and
-//!   Reload, watching the file ([`scene_watch`]) and load errors;
+//! - `scene_source`: the scene file (or the built-in scene), opening another
+//!   (path field, `file_browser`, drop, `recent` files), Reload, watching
+//!   its files ([`scene_watch`]) and load errors;
 //! - `camera_panel`: the camera controls, on top of the pure camera
 //!   functions of [`camera_controls`];
 //! - `image_settings`: resolution scale, samples per pixel, effect toggles;
@@ -13,8 +14,8 @@
 //!   resolution once still), and the image it streams into: each job
 //!   ([`render_job`]) renders rows in the background and sends them to a
 //!   [`canvas`], from where they reach an egui texture;
-//! - `image_view`: the image on screen, and orbit, pan and zoom with the
-//!   mouse;
+//! - `image_view`: the image on screen (fit, 1:1, zoom), orbit, pan and
+//!   zoom with the mouse, and pixel inspection;
 //! - `screenshot`: `--screenshot`, saving the window once the frame is done.
 //!
 //! Rows flow one way: scene → job spec → render job (worker threads) →
@@ -25,9 +26,11 @@ mod app;
 pub mod camera_controls;
 mod camera_panel;
 pub mod canvas;
+mod file_browser;
 mod image_settings;
 mod image_view;
 mod interaction;
+mod recent;
 pub mod render_job;
 mod scene_source;
 pub mod scene_watch;
@@ -38,7 +41,7 @@ use std::sync::{Arc, Mutex};
 
 use anyhow::anyhow;
 
-pub use app::ViewerOptions;
+pub use app::{SHORTCUTS, ViewerOptions};
 pub use scene_source::{DEFAULT_SCENE, DEFAULT_SCENE_NAME, load};
 
 use crate::image_out::PendingImage;
@@ -66,7 +69,50 @@ pub fn run(options: ViewerOptions) -> anyhow::Result<()> {
         native,
         Box::new(move |cc| Ok(Box::new(app::Viewer::new(&cc.egui_ctx, scene, options, app_outcome)))),
     )
-    .map_err(|e| anyhow!("cannot open the viewer window: {e}"))?;
+    .map_err(|e| anyhow!("cannot open the viewer window: {}", without_source_location(&e.to_string())))?;
     let result = outcome.lock().unwrap().take();
     result.unwrap_or(Ok(())).map_err(|e: String| anyhow!(e))
+}
+
+/// `message` without the source locations windowing errors carry (winit
+/// prints "os error at /…/winit-…/src/….rs:765: reason"): " at PATH.rs:LINE"
+/// is dropped, the reason kept.
+fn without_source_location(message: &str) -> String {
+    let mut out = String::new();
+    let mut rest = message;
+    while let Some(i) = rest.find(" at ") {
+        let after = &rest[i + 4..];
+        let location = after.find(".rs:").and_then(|end| {
+            let tail = &after[end + 4..];
+            let digits = tail.chars().take_while(char::is_ascii_digit).count();
+            (digits > 0 && !after[..end].contains(' ')).then_some(&tail[digits..])
+        });
+        match location {
+            Some(tail) => {
+                out.push_str(&rest[..i]);
+                rest = tail;
+            }
+            None => {
+                out.push_str(&rest[..i + 4]);
+                rest = after;
+            }
+        }
+    }
+    out + rest
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn windowing_errors_lose_their_source_location_and_keep_their_reason() {
+        let winit = "winit EventLoopError: os error at /root/.cargo/registry/src/index.crates.io-1949cf8c6b5b557f/\
+                     winit-0.30.13/src/platform_impl/linux/mod.rs:765: neither WAYLAND_DISPLAY nor DISPLAY is set.";
+        assert_eq!(
+            without_source_location(winit),
+            "winit EventLoopError: os error: neither WAYLAND_DISPLAY nor DISPLAY is set."
+        );
+        assert_eq!(without_source_location("look at this: fine"), "look at this: fine");
+    }
 }

@@ -96,11 +96,36 @@ pub struct RenderJob {
     spec: JobSpec,
     rows: Receiver<Row>,
     shared: Arc<Shared>,
+    started: Instant,
+    generation: u64,
+}
+
+/// How far a job has got.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Progress {
+    /// The pass in progress (0-based; the last one once done).
+    pub pass: usize,
+    /// How many passes the job makes.
+    pub passes: usize,
+    /// The samples the pass adds to each pixel.
+    pub samples: Range<u32>,
+    /// Rows of the pass finished.
+    pub rows: u32,
+    /// Rows of the image.
+    pub height: u32,
+    /// Time since the job started.
+    pub elapsed: Duration,
+    /// Time the pass will still take at the rate so far (`None` before
+    /// the first row, and once the pass is done).
+    pub pass_eta: Option<Duration>,
+    /// Rays of all kinds per second so far.
+    pub rays_per_second: f64,
 }
 
 /// What the workers report to the job's handle.
-#[derive(Default)]
 struct Shared {
+    /// Each row's running sums of linear colour.
+    sums: Vec<Mutex<RowSums>>,
     /// Set to stop the workers after their current row.
     cancel: AtomicBool,
     /// Rays cast so far, all kinds.
@@ -114,6 +139,19 @@ struct Shared {
 }
 
 impl Shared {
+    fn new(width: u32, height: u32) -> Self {
+        Self {
+            sums: (0..height)
+                .map(|_| Mutex::new(RowSums { samples: 0, sums: vec![Color::ZERO; width as usize] }))
+                .collect(),
+            cancel: AtomicBool::new(false),
+            rays: AtomicU64::new(0),
+            rows_rendered: AtomicU32::new(0),
+            elapsed: Mutex::new(None),
+            failure: Mutex::new(None),
+        }
+    }
+
     fn cancelled(&self) -> bool {
         self.cancel.load(Ordering::Relaxed)
     }
@@ -155,7 +193,7 @@ impl RenderJob {
     ) -> Result<Self, RenderError> {
         // Validate on the caller's thread, so errors are returned, not lost.
         spec.renderer()?;
-        let shared = Arc::new(Shared::default());
+        let shared = Arc::new(Shared::new(spec.width, spec.height));
         let (tx, rows) = mpsc::channel();
         let worker =
             Worker { spec: spec.clone(), generation, shared: shared.clone(), tx, on_row, render_row };
@@ -163,7 +201,21 @@ impl RenderJob {
             .name(format!("render-job-{generation}"))
             .spawn(move || worker.run())
             .expect("the OS can start a thread");
-        Ok(Self { spec, rows, shared })
+        Ok(Self { spec, rows, shared, started: Instant::now(), generation })
+    }
+
+    /// The generation its rows carry.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// The linear colour of pixel (x, y) so far (the mean of its samples)
+    /// and how many samples it has; `None` outside the image or before its
+    /// row's first pass.
+    pub fn linear(&self, x: u32, y: u32) -> Option<(Color, u32)> {
+        let row = self.shared.sums.get(y as usize)?.lock().unwrap_or_else(|e| e.into_inner());
+        let sum = *row.sums.get(x as usize)?;
+        (row.samples > 0).then(|| (sum / row.samples as f32, row.samples))
     }
 
     /// Rays cast so far, all kinds together.
@@ -171,14 +223,36 @@ impl RenderJob {
         self.shared.rays.load(Ordering::Relaxed)
     }
 
-    /// Samples per pixel of the pass in progress (the last one's when done),
-    /// and how many of its rows are finished.
-    pub fn progress(&self) -> (u32, u32) {
+    /// The pass in progress and how many of its rows are finished, the time
+    /// so far, the time the pass still needs, and the rate of rays.
+    ///
+    /// The estimate counts work in samples × rows: the rate so far is the
+    /// work done over the time taken, and the pass needs its remaining rows
+    /// times its samples at that rate.
+    pub fn progress(&self) -> Progress {
         let passes = sample_passes(self.spec.spp);
+        let height = self.spec.height;
         let done = self.shared.rows_rendered.load(Ordering::Relaxed);
-        let pass = ((done / self.spec.height) as usize).min(passes.len() - 1);
-        let rows = done - pass as u32 * self.spec.height;
-        (passes[pass].end, rows)
+        let pass = ((done / height) as usize).min(passes.len() - 1);
+        let rows = (done - pass as u32 * height).min(height);
+        let elapsed = self.elapsed().unwrap_or_else(|| self.started.elapsed());
+        let seconds = elapsed.as_secs_f64().max(1e-9);
+        let len = |r: &Range<u32>| (r.end - r.start) as f64;
+        let work: f64 = passes[..pass].iter().map(|r| len(r) * height as f64).sum::<f64>()
+            + len(&passes[pass]) * rows as f64;
+        let remaining = len(&passes[pass]) * (height - rows) as f64;
+        let pass_eta =
+            (work > 0.0 && remaining > 0.0).then(|| Duration::from_secs_f64(remaining * seconds / work));
+        Progress {
+            pass,
+            passes: passes.len(),
+            samples: passes[pass].clone(),
+            rows,
+            height,
+            elapsed,
+            pass_eta,
+            rays_per_second: self.rays() as f64 / seconds,
+        }
     }
 
     /// Why the job stopped on its own, if a row panicked: "row Y: message".
@@ -230,9 +304,7 @@ impl<F: Fn() + Send + Sync> Worker<F> {
         let s = &self.spec;
         let renderer = s.renderer().expect("validated before the thread started");
         let passes = sample_passes(s.spp);
-        let sums: Vec<Mutex<RowSums>> = (0..s.height)
-            .map(|_| Mutex::new(RowSums { samples: 0, sums: vec![Color::ZERO; s.width as usize] }))
-            .collect();
+        let sums = &self.shared.sums;
         let start = Instant::now();
         let tasks = passes.len() as u64 * s.height as u64;
         let next_task = AtomicU64::new(0);
@@ -376,8 +448,29 @@ mod tests {
         let expected: Vec<Color32> =
             frame.to_rgb8().iter().map(|&[r, g, b]| Color32::from_rgb(r, g, b)).collect();
         assert!(image == expected, "final pass differs from `render`");
-        assert_eq!(job.progress(), (9, 27));
+        let p = job.progress();
+        assert_eq!((p.pass, p.passes, p.samples, p.rows, p.height, p.pass_eta), (2, 3, 4..9, 27, 27, None));
         assert_eq!(job.rays(), 48 * 27 * 9);
+    }
+
+    #[test]
+    fn progress_estimates_the_rest_of_the_pass_from_the_rate_so_far() {
+        let mut s = spec(64, 2000);
+        s.spp = 4;
+        let job = RenderJob::start(s, 1, || {}).unwrap();
+        // Wait for part of the first pass.
+        let mut taken = 0;
+        while taken < 100 {
+            job.next_row_blocking().unwrap();
+            taken += 1;
+        }
+        let p = job.progress();
+        assert_eq!((p.passes, p.height), (2, 2000));
+        if p.pass == 0 && p.rows < 2000 {
+            assert!(p.pass_eta.is_some(), "{p:?}");
+        }
+        assert!(p.rays_per_second > 0.0 && p.elapsed > Duration::ZERO);
+        job.cancel();
     }
 
     #[test]
@@ -399,12 +492,12 @@ mod tests {
         let old = RenderJob::start(spec(400, 300), 1, || {}).unwrap();
         // Let some old rows arrive, as they would while the user drags.
         let first = old.next_row_blocking().unwrap();
-        let mut canvas = Canvas::replacing(None, 1, 400, 300);
+        let mut canvas = Canvas::new(1, 400, 300, 4096);
         assert!(canvas.apply(&first));
         // The view changes: a new job and a new canvas replace the old ones.
         let new = RenderJob::start(spec(400, 300), 2, || {}).unwrap();
         old.cancel();
-        let mut canvas = Canvas::replacing(Some(&canvas), 2, 400, 300);
+        let mut canvas = Canvas::replacing(Some(&canvas), 2, 400, 300, 4096);
         // Everything the old job still delivers is refused ...
         let mut stale = 0;
         while let Some(row) = old.next_row_blocking() {

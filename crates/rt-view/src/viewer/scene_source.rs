@@ -1,6 +1,8 @@
-//! Where the viewer's scene comes from: a file (or the built-in scene), Open
-//! and Reload, a watcher that reloads the file when an editor saves it, and
-//! the error of the last load that failed.
+//! Where the viewer's scene comes from: a file (or the built-in scene), the
+//! ways of opening another — a path typed and Enter, the Open button (a
+//! file browser), a file dropped on the window, the recent files — Reload,
+//! a watcher that reloads when an editor saves the scene or one of its mesh
+//! files, and the error of the last load that failed.
 //!
 //! A failed load never replaces the scene: the last good one (and its image)
 //! stays, and the error is shown until a load succeeds.
@@ -12,6 +14,8 @@ use std::time::{Duration, Instant};
 use egui::Color32;
 use rt_core::Scene;
 
+use super::file_browser::FileBrowser;
+use super::recent::RecentFiles;
 use super::scene_watch::SceneWatcher;
 
 /// The built-in default scene's text (`scenes/default.ron`).
@@ -46,27 +50,35 @@ pub(super) struct SceneSource {
     scene: Arc<Scene>,
     watcher: Option<SceneWatcher>,
     reload_at: Option<Instant>,
-    /// The text of the Open field.
+    /// The text of the path field.
     open_path: String,
+    browser: FileBrowser,
+    recent: RecentFiles,
     /// Why the last load failed; cleared by the next one that succeeds.
     error: Option<String>,
-    /// Why the file is not watched, if it is not.
+    /// Why the files are not watched, if they are not.
     watch_problem: Option<String>,
 }
 
 impl SceneSource {
     /// The source of `scene`, loaded from `path` (`None`: the built-in scene),
-    /// watched from now on; `ctx` is repainted when the file changes.
-    pub fn new(path: Option<PathBuf>, scene: Scene, ctx: &egui::Context) -> Self {
+    /// watched from now on; `ctx` is repainted when a file changes.
+    pub fn new(path: Option<PathBuf>, scene: Scene, recent: RecentFiles, ctx: &egui::Context) -> Self {
+        let start = path.as_ref().and_then(|p| p.parent()).map_or_else(|| PathBuf::from("."), Path::to_owned);
         let mut source = Self {
             open_path: path.as_ref().map(|p| p.display().to_string()).unwrap_or_default(),
             path,
             scene: Arc::new(scene),
             watcher: None,
             reload_at: None,
+            browser: FileBrowser::new(start),
+            recent,
             error: None,
             watch_problem: None,
         };
+        if let Some(p) = source.path.clone() {
+            source.recent.add(&p);
+        }
         source.watch(ctx);
         source
     }
@@ -82,8 +94,8 @@ impl SceneSource {
         self.error.as_deref()
     }
 
-    /// Acts on file events: once the file has been quiet for
-    /// [`RELOAD_DEBOUNCE`] after a change, reloads it.
+    /// Acts on file events: once the files have been quiet for
+    /// [`RELOAD_DEBOUNCE`] after a change, reloads the scene.
     pub fn poll(&mut self, ctx: &egui::Context) -> Option<SceneChange> {
         if self.watcher.as_ref().is_some_and(SceneWatcher::changed) {
             self.reload_at = Some(Instant::now() + RELOAD_DEBOUNCE);
@@ -95,13 +107,17 @@ impl SceneSource {
             return None;
         }
         self.reload_at = None;
-        self.reload()
+        self.reload(ctx)
     }
 
     /// Loads the scene file again; on error the scene stays and the error is kept.
-    pub fn reload(&mut self) -> Option<SceneChange> {
+    pub fn reload(&mut self, ctx: &egui::Context) -> Option<SceneChange> {
         match load(self.path.as_deref()) {
-            Ok(scene) => Some(self.replace(scene, false)),
+            Ok(scene) => {
+                let change = self.replace(scene, false);
+                self.watch(ctx); // The mesh files may have changed.
+                Some(change)
+            }
             Err(e) => {
                 self.error = Some(e.to_string());
                 None
@@ -114,6 +130,8 @@ impl SceneSource {
     pub fn open(&mut self, path: PathBuf, ctx: &egui::Context) -> Option<SceneChange> {
         match load(Some(&path)) {
             Ok(scene) => {
+                self.open_path = path.display().to_string();
+                self.recent.add(&path);
                 self.path = Some(path);
                 let change = self.replace(scene, true);
                 self.watch(ctx);
@@ -132,39 +150,86 @@ impl SceneSource {
         SceneChange { previous, opened }
     }
 
-    /// Starts watching the scene file, if there is one.
+    /// Watches the scene file and its mesh files, if it has a file.
     fn watch(&mut self, ctx: &egui::Context) {
         self.watcher = None;
         self.watch_problem = None;
         if let Some(path) = &self.path {
+            let mut files = vec![path.clone()];
+            files.extend(self.scene.source_files().iter().cloned());
             let repaint = ctx.clone();
-            match SceneWatcher::new(path, move || repaint.request_repaint()) {
+            match SceneWatcher::new(&files, move || repaint.request_repaint()) {
                 Ok(w) => self.watcher = Some(w),
                 Err(e) => self.watch_problem = Some(format!("not watching {}: {e}", path.display())),
             }
         }
     }
 
-    /// The scene's name, the Open field and button, Reload, and the last
-    /// load error.
+    /// Shows the file browser (Ctrl+O).
+    pub fn browse(&mut self) {
+        let dir = self.path.as_ref().and_then(|p| p.parent()).map(Path::to_owned);
+        self.browser.show(dir.as_deref());
+    }
+
+    /// Opens a `.ron` file dropped on the window, if one was.
+    pub fn take_dropped(&mut self, ctx: &egui::Context) -> Option<SceneChange> {
+        let dropped: Vec<PathBuf> =
+            ctx.input(|i| i.raw.dropped_files.iter().map(|f| f.path().to_owned()).collect());
+        let path = dropped.into_iter().next()?;
+        let is_scene = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron"));
+        if !is_scene {
+            self.error = Some(format!("{}: not a scene file (.ron)", path.display()));
+            return None;
+        }
+        self.open(path, ctx)
+    }
+
+    /// The file browser's window, if shown.
+    pub fn browser_ui(&mut self, ctx: &egui::Context) -> Option<SceneChange> {
+        let path = self.browser.ui(ctx)?;
+        self.open(path, ctx)
+    }
+
+    /// The scene's path (resolved), the path field (Enter opens it), Open
+    /// (the file browser), Recent, Reload, and the last load error.
     pub fn ui(&mut self, ui: &mut egui::Ui) -> Option<SceneChange> {
         let mut change = None;
+        let ctx = ui.ctx().clone();
         ui.heading("Scene");
-        let name = self.path.as_ref().map_or(DEFAULT_SCENE_NAME.to_owned(), |p| p.display().to_string());
-        ui.label(name).on_hover_text("The scene file shown; it reloads when saved on disk.");
+        let shown = match &self.path {
+            Some(p) => std::fs::canonicalize(p).unwrap_or_else(|_| p.clone()).display().to_string(),
+            None => DEFAULT_SCENE_NAME.to_owned(),
+        };
+        ui.add(egui::Label::new(egui::RichText::new(shown).monospace()).wrap())
+            .on_hover_text("The scene shown; it reloads when it or one of its mesh files is saved.");
+        let field = ui.add(
+            egui::TextEdit::singleline(&mut self.open_path)
+                .hint_text("path/to/scene.ron, Enter opens")
+                .desired_width(f32::INFINITY),
+        );
+        if field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter)) {
+            change = self.open(PathBuf::from(self.open_path.trim()), &ctx);
+        }
         ui.horizontal(|ui| {
-            ui.add(
-                egui::TextEdit::singleline(&mut self.open_path)
-                    .hint_text("path/to/scene.ron")
-                    .desired_width(150.0),
-            );
-            if ui.button("Open").clicked() {
-                change = self.open(PathBuf::from(self.open_path.trim()), ui.ctx());
+            if ui.button("Open…").on_hover_text("Browse for a scene file (Ctrl+O)").clicked() {
+                self.browse();
+            }
+            let recent = self.recent.files().to_vec();
+            ui.add_enabled_ui(!recent.is_empty(), |ui| {
+                ui.menu_button("Recent", |ui| {
+                    for p in recent {
+                        if ui.button(p.display().to_string()).clicked() {
+                            change = self.open(p, &ctx);
+                            ui.close();
+                        }
+                    }
+                });
+            });
+            if ui.add_enabled(self.path.is_some(), egui::Button::new("Reload")).on_hover_text("F5").clicked()
+            {
+                change = self.reload(&ctx);
             }
         });
-        if self.path.is_some() && ui.button("Reload").clicked() {
-            change = self.reload();
-        }
         for problem in [&self.error, &self.watch_problem].into_iter().flatten() {
             ui.colored_label(Color32::from_rgb(220, 60, 50), problem);
         }

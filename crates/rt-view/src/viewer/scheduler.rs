@@ -1,12 +1,16 @@
 //! Which render runs, and the image it streams into.
 //!
-//! Any change of view cancels the job in flight and starts a new one with a
-//! new generation, and a new [`Canvas`] for that generation (starting from the
-//! previous image, resampled). While the user drags, jobs render at
-//! 1/[`PREVIEW_DIVISOR`] of the size with one sample; a full-resolution job
-//! follows once the input has been still for [`REFINE_AFTER`]. Each frame,
-//! the rows that arrived are applied to the canvas and uploaded to its
-//! texture.
+//! Any change cancels the job in flight and starts a new one with a new
+//! generation, and a new [`Canvas`] for that generation: first a preview at
+//! 1/[`PREVIEW_DIVISOR`] of the size with one sample, then, once the input
+//! has been still for [`REFINE_AFTER`] (holding the mouse button without
+//! moving counts as still), the full-resolution job. Each frame, the rows
+//! that arrived are applied to their canvas and uploaded to the texture.
+//!
+//! What is on screen never mixes two views: a preview renders off screen
+//! and replaces the image only when complete (a preview takes a frame or
+//! two); the full-resolution job of the same view then streams its rows
+//! over it; a new scene starts from black.
 
 use std::time::{Duration, Instant};
 
@@ -21,6 +25,17 @@ pub const PREVIEW_DIVISOR: u32 = 4;
 /// How long input must be still before the full-resolution render starts.
 pub const REFINE_AFTER: Duration = Duration::from_millis(150);
 
+/// What a job is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Kind {
+    /// A quick low-resolution render while the view moves.
+    Preview,
+    /// The full-resolution render with every sample.
+    Full,
+    /// The full render of a scene just (re)loaded: nothing of the old scene stays on screen.
+    NewScene,
+}
+
 /// Statistics of the last completed full-resolution frame.
 #[derive(Clone, Copy, Debug)]
 struct FrameStats {
@@ -30,13 +45,17 @@ struct FrameStats {
     msamples_per_s: f64,
 }
 
-/// The current job, its canvas and texture, and when to refine.
+/// The current job, the image on screen and its texture, and when to refine.
 #[derive(Default)]
 pub(super) struct Scheduler {
     job: Option<RenderJob>,
     job_is_preview: bool,
-    canvas: Option<Canvas>,
+    /// The image on screen.
+    shown: Option<Canvas>,
+    /// A preview being rendered off screen, shown once complete.
+    pending: Option<Canvas>,
     texture: Option<TextureHandle>,
+    filter: Option<TextureOptions>,
     next_generation: u64,
     /// A preview is on screen and a full render is due once input is still.
     refine_pending: bool,
@@ -45,10 +64,10 @@ pub(super) struct Scheduler {
 }
 
 impl Scheduler {
-    /// Starts the job for this frame's input, if one is due: a preview (or a
-    /// full render when nothing is dragged) when the view `changed`, the full
-    /// render once a preview has been still for [`REFINE_AFTER`]. `spec`
-    /// gives the full-resolution job. Returns why a job could not start.
+    /// Starts the job for this frame's input, if one is due: a preview when
+    /// something changed, the full render once nothing has changed or been
+    /// dragged for [`REFINE_AFTER`]. `spec` gives the full-resolution job.
+    /// Returns why a job could not start.
     pub fn schedule(
         &mut self,
         ctx: &egui::Context,
@@ -58,8 +77,8 @@ impl Scheduler {
         let now = Instant::now();
         if input.changed {
             self.last_change = Some(now);
-            self.refine_pending = input.dragging;
-            return self.start(ctx, spec, input.dragging);
+            self.refine_pending = true;
+            return self.start(ctx, spec, Kind::Preview);
         }
         if !self.refine_pending || input.dragging {
             return Ok(());
@@ -70,22 +89,25 @@ impl Scheduler {
             return Ok(());
         }
         self.refine_pending = false;
-        self.start(ctx, spec, false)
+        self.start(ctx, spec, Kind::Full)
     }
 
-    /// Cancels the job in flight and starts `spec` (at preview size and one
-    /// sample if `preview`), with a canvas of its own.
+    /// Cancels the job in flight and starts `spec` as a job of `kind` (at
+    /// preview size with one sample for a preview), with a canvas of its own.
     pub fn start(
         &mut self,
         ctx: &egui::Context,
         spec: impl FnOnce() -> Option<JobSpec>,
-        preview: bool,
+        kind: Kind,
     ) -> Result<(), String> {
         let Some(mut spec) = spec() else { return Ok(()) };
-        if preview {
+        if kind == Kind::Preview {
             spec.width = (spec.width / PREVIEW_DIVISOR).max(1);
             spec.height = (spec.height / PREVIEW_DIVISOR).max(1);
             spec.spp = 1;
+        }
+        if kind == Kind::NewScene {
+            self.refine_pending = false;
         }
         let (width, height) = (spec.width, spec.height);
         self.next_generation += 1;
@@ -94,30 +116,81 @@ impl Scheduler {
         let job = RenderJob::start(spec, generation, move || repaint.request_repaint())
             .map_err(|e| format!("cannot render: {e}"))?;
         self.job = Some(job); // Dropping the old job cancels it.
-        let mut canvas = Canvas::replacing(self.canvas.as_ref(), generation, width, height);
-        let same_size = self.texture.as_ref().is_some_and(|t| t.size() == canvas.size());
-        // A new texture when the size or the filter changes; otherwise the
-        // texture already shows the placeholder.
-        if !same_size || preview != self.job_is_preview {
-            self.texture = Some(canvas.to_texture(ctx, texture_options(preview)));
+        self.job_is_preview = kind == Kind::Preview;
+        let max_side = ctx.input(|i| i.max_texture_side);
+        match kind {
+            Kind::Preview => self.pending = Some(Canvas::new(generation, width, height, max_side)),
+            Kind::Full => {
+                self.pending = None;
+                let canvas = Canvas::replacing(self.shown.as_ref(), generation, width, height, max_side);
+                self.show(ctx, canvas);
+            }
+            Kind::NewScene => {
+                self.pending = None;
+                self.show(ctx, Canvas::new(generation, width, height, max_side));
+            }
         }
-        self.job_is_preview = preview;
-        self.canvas = Some(canvas);
         Ok(())
     }
 
-    /// Applies the rows that arrived since the last frame and uploads them.
-    pub fn apply_rows(&mut self) {
-        let (Some(job), Some(canvas), Some(texture)) = (&self.job, &mut self.canvas, &mut self.texture)
-        else {
-            return;
-        };
-        for row in job.try_rows() {
-            canvas.apply(&row);
+    /// Puts `canvas` on screen, in a new texture if the size changed.
+    fn show(&mut self, ctx: &egui::Context, mut canvas: Canvas) {
+        let options = self.texture_options();
+        match &mut self.texture {
+            Some(t) if t.size() == canvas.display_size() => {
+                let size = canvas.display_size();
+                // The same texture, all of it replaced (the placeholder).
+                let image = canvas.to_texture_image();
+                t.set(egui::ColorImage::new(size, image), options);
+            }
+            _ => self.texture = Some(canvas.to_texture(ctx, options)),
         }
-        canvas.upload_pending(texture, texture_options(self.job_is_preview));
+        self.shown = Some(canvas);
+    }
+
+    /// Nearest-neighbour for a magnified image and the blocky preview,
+    /// linear otherwise.
+    fn texture_options(&self) -> TextureOptions {
+        self.filter.unwrap_or(if self.job_is_preview {
+            TextureOptions::NEAREST
+        } else {
+            TextureOptions::LINEAR
+        })
+    }
+
+    /// Shows the image with `options` from now on (the image view asks for
+    /// nearest-neighbour when it magnifies the image).
+    pub fn set_filter(&mut self, options: TextureOptions) {
+        if self.filter == Some(options) {
+            return;
+        }
+        self.filter = Some(options);
+        if let (Some(t), Some(c)) = (&mut self.texture, &self.shown) {
+            t.set(egui::ColorImage::new(c.display_size(), c.display_image()), options);
+        }
+    }
+
+    /// Applies the rows that arrived since the last frame and uploads them;
+    /// a preview that is complete goes on screen.
+    pub fn apply_rows(&mut self, ctx: &egui::Context) {
+        let Some(job) = &self.job else { return };
+        for row in job.try_rows() {
+            let applied = self.pending.as_mut().is_some_and(|c| c.apply(&row));
+            if !applied && let Some(c) = &mut self.shown {
+                c.apply(&row);
+            }
+        }
+        if self.pending.as_ref().is_some_and(Canvas::is_complete) {
+            let preview = self.pending.take().expect("checked");
+            self.show(ctx, preview);
+        }
+        let options = self.texture_options();
+        let (Some(canvas), Some(texture)) = (&mut self.shown, &mut self.texture) else { return };
+        canvas.upload_pending(texture, options);
         if canvas.is_complete()
             && !self.job_is_preview
+            && canvas.generation() == job_generation(&self.job)
+            && let Some(job) = &self.job
             && let Some(elapsed) = job.elapsed()
         {
             let rays = job.rays() as f64;
@@ -139,9 +212,15 @@ impl Scheduler {
         Some(format!("render failed at {failure}; change the view to try again"))
     }
 
-    /// The image being shown.
+    /// The image on screen.
     pub fn canvas(&self) -> Option<&Canvas> {
-        self.canvas.as_ref()
+        self.shown.as_ref()
+    }
+
+    /// The job whose rows make the image on screen, if it is the current one.
+    pub fn shown_job(&self) -> Option<&RenderJob> {
+        let job = self.job.as_ref()?;
+        (self.shown.as_ref()?.generation() == job.generation()).then_some(job)
     }
 
     /// The texture the image is uploaded to.
@@ -151,22 +230,40 @@ impl Scheduler {
 
     /// Whether the full-resolution image has all its samples.
     pub fn frame_is_final(&self) -> bool {
-        let complete = self.canvas.as_ref().is_some_and(Canvas::is_complete);
-        complete && !self.job_is_preview && self.job.as_ref().is_some_and(|j| j.elapsed().is_some())
+        let complete = self.shown.as_ref().is_some_and(Canvas::is_complete);
+        complete
+            && !self.job_is_preview
+            && self.pending.is_none()
+            && self.job.as_ref().is_some_and(|j| j.elapsed().is_some())
     }
 
-    /// The status line: progress of the job in flight and the last full frame's time.
+    /// The status line: progress of the job in flight (pass, rows, time,
+    /// the pass's remaining time, rays per second) and the last full frame.
     pub fn status_ui(&self, ui: &mut egui::Ui) {
         let mut parts = Vec::new();
-        if let Some(c) = &self.canvas {
-            let [w, h] = c.size();
+        if let Some(job) = &self.job {
+            let spec = job.spec();
             let kind = if self.job_is_preview { "preview" } else { "full" };
-            match &self.job {
-                Some(job) if job.spec().spp > 1 => {
-                    let (samples, rows) = job.progress();
-                    parts.push(format!("{samples}/{} spp, rows {rows}/{h} ({kind} {w}×{h})", job.spec().spp));
+            let p = job.progress();
+            if job.elapsed().is_some() {
+                parts.push(format!("{kind} {}×{} done, {} spp", spec.width, spec.height, spec.spp));
+            } else {
+                let mut s = format!("{kind} {}×{}", spec.width, spec.height);
+                if p.passes > 1 {
+                    s += &format!(
+                        ", pass {}/{} ({}–{} spp)",
+                        p.pass + 1,
+                        p.passes,
+                        p.samples.start,
+                        p.samples.end
+                    );
                 }
-                _ => parts.push(format!("rows {}/{h} ({kind} {w}×{h})", c.rows_done())),
+                s += &format!(", rows {}/{}, {:.1} s", p.rows, p.height, p.elapsed.as_secs_f64());
+                if let Some(eta) = p.pass_eta {
+                    s += &format!(", pass ends in {:.1} s", eta.as_secs_f64());
+                }
+                s += &format!(", {:.2} Mrays/s", p.rays_per_second / 1e6);
+                parts.push(s);
             }
         }
         match self.last_full {
@@ -180,7 +277,88 @@ impl Scheduler {
     }
 }
 
-/// Nearest-neighbour magnification for the blocky preview, linear otherwise.
-fn texture_options(preview: bool) -> TextureOptions {
-    if preview { TextureOptions::NEAREST } else { TextureOptions::LINEAR }
+/// The generation of `job`, or 0 (no canvas has it) without one.
+fn job_generation(job: &Option<RenderJob>) -> u64 {
+    job.as_ref().map_or(0, RenderJob::generation)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rt_core::Renderer;
+
+    fn spec(position: rt_core::Vec3) -> JobSpec {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/showcase.ron");
+        let scene = std::sync::Arc::new(rt_core::load_scene(&path).unwrap());
+        let c = scene.camera;
+        let camera = rt_core::Camera::new(
+            position,
+            c.center_of_interest(),
+            c.up(),
+            c.fov_y(),
+            c.near(),
+            c.projection(),
+        )
+        .unwrap();
+        let plan = scene.effect_plan();
+        JobSpec { scene, camera, width: 160, height: 90, spp: 1, plan }
+    }
+
+    fn wait(
+        ctx: &egui::Context,
+        s: &mut Scheduler,
+        until: impl Fn(&Scheduler) -> bool,
+        check: impl Fn(&Scheduler),
+    ) {
+        let deadline = Instant::now() + Duration::from_secs(30);
+        while !until(s) {
+            assert!(Instant::now() < deadline, "timed out");
+            s.apply_rows(ctx);
+            check(s);
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+
+    #[test]
+    fn a_change_of_view_never_shows_rows_of_two_views_at_once() {
+        // Before, a change without dragging streamed the new view's rows
+        // over the old image: a seam between two views until it finished.
+        let ctx = egui::Context::default();
+        let mut s = Scheduler::default();
+        let first = spec(rt_core::Vec3::new(0.0, 2.0, -8.0));
+        let moved = spec(rt_core::Vec3::new(3.0, 2.0, -8.0));
+        s.start(&ctx, || Some(first.clone()), Kind::NewScene).unwrap();
+        wait(&ctx, &mut s, Scheduler::frame_is_final, |_| {});
+        let old = s.canvas().unwrap().pixels().to_vec();
+        let expected_old: Vec<egui::Color32> = Renderer::with_camera(&first.scene, first.camera, 160, 90, 1)
+            .unwrap()
+            .render(|_| {})
+            .to_rgb8()
+            .iter()
+            .map(|&[r, g, b]| egui::Color32::from_rgb(r, g, b))
+            .collect();
+        assert_eq!(old, expected_old);
+
+        // The camera moves (a typed value, no drag): a preview renders off
+        // screen; until it is complete the old image stays whole.
+        s.schedule(&ctx, Interaction { changed: true, dragging: false }, || Some(moved.clone())).unwrap();
+        wait(
+            &ctx,
+            &mut s,
+            |s| s.canvas().is_some_and(|c| c.size() == [40, 22]),
+            |s| {
+                let c = s.canvas().unwrap();
+                assert!(c.size() == [40, 22] || c.pixels() == &old[..], "old and new rows mixed");
+            },
+        );
+        assert!(s.canvas().unwrap().is_complete(), "a preview is shown only complete");
+        // Still for REFINE_AFTER: the full render of the new view streams over its preview.
+        std::thread::sleep(REFINE_AFTER);
+        s.schedule(&ctx, Interaction::default(), || Some(moved.clone())).unwrap();
+        wait(&ctx, &mut s, Scheduler::frame_is_final, |_| {});
+        assert_eq!(s.canvas().unwrap().size(), [160, 90]);
+        assert_ne!(s.canvas().unwrap().pixels(), &old[..]);
+        drop(s);
+        ctx.tex_manager().write().take_delta().clear();
+    }
 }
