@@ -12,9 +12,10 @@ use crate::viewer;
 /// A CPU ray tracer: view RON scene files live, render them to PNG, or query rays against them.
 ///
 /// With no command, opens the interactive viewer on SCENE (or a built-in
-/// scene): drag to orbit, shift- or right-drag to pan, wheel to zoom; the side
-/// panel has FOV, near, position and look-at controls. Saving the scene file
-/// in an editor reloads it.
+/// scene): drag to orbit, shift- or right-drag to pan, wheel to zoom, ctrl+wheel
+/// to zoom the image, hover to inspect a pixel, F1 for every shortcut; the
+/// side panel has the camera, image and effect controls. Saving the scene
+/// file or one of its meshes in an editor reloads it.
 #[derive(Debug, Parser)]
 #[command(
     name = "rt-view",

@@ -138,8 +138,13 @@ impl Canvas {
             let dy = (row.y / self.factor) as usize;
             let [dw, _] = self.display_size();
             let k = self.factor as usize;
-            for (dx, texel) in self.display[dy * dw..(dy + 1) * dw].iter_mut().enumerate() {
-                *texel = row.pixels[dx * k];
+            let texels = &mut self.display[dy * dw..(dy + 1) * dw];
+            if k == 1 {
+                texels.copy_from_slice(&row.pixels);
+            } else {
+                for (texel, pixel) in texels.iter_mut().zip(row.pixels.iter().step_by(k)) {
+                    *texel = *pixel;
+                }
             }
             self.pending.push(dy as u32);
         }
