@@ -1,21 +1,31 @@
 #!/usr/bin/env python3
-"""Cast the same primary rays as `rt-view bench` with Intel Embree 4 (embreex).
+"""Cast the same rays as `rt-view bench` with Intel Embree 4 (embreex).
 
-Usage (after `rt-view bench --out bench-out`):
+Usage (after `rt-view bench --out bench-out --threads 1,2`):
     pip install embreex numpy
-    python3 bench/embree_primary.py bench-out [--runs 5]
+    python3 bench/embree_primary.py bench-out [--runs 5] [--threads 1,2]
 
-For every bench-out/terrain_*.obj with its camera JSON, it loads the mesh,
-builds Embree's BVH, casts one primary ray through each pixel centre (the
-camera math of docs/conventions.md: perspective rays from C through
-O + (ix+0.5)(w/W)·x − (iy+0.5)(h/H)·y), and prints the build time, the
-median throughput in Mrays/s, the hit count (compare it with rt-view's) and
-how many CPU seconds the casting used per wall second (embreex casts rays one
-at a time with rtcIntersect1, on one thread).
+For every bench-out/terrain_*.obj with its camera JSON and bounce rays, and
+for each thread count T, it measures:
+  - the BVH build with T threads (Embree builds with TBB, which uses the CPUs
+    the process may run on: the build runs in a child process allowed T CPUs);
+  - the primary rays, one through each pixel centre (the camera math of
+    docs/conventions.md: rays from C through O + (ix+0.5)(w/W)·x −
+    (iy+0.5)(h/H)·y), and the incoherent bounce rays rt-view wrote
+    (terrain_*.bounce: per ray six little-endian f32, origin and direction,
+    and the u32 primitive rt-view hit), cast with rtcIntersect1 ray by ray.
+    embreex casts on the calling thread, so T threads are T processes, each
+    pinned to its own CPU with its own copy of the scene, casting a 1/T share;
+    the time is the slowest one's.
+It prints medians, the hit counts (compare them with rt-view's), how many
+bounce rays hit the same primitive in both, and, from bench-out/bench.csv,
+rt-view's figures over Embree's for the same mesh and thread count.
 """
 import argparse
+import csv
 import glob
 import json
+import multiprocessing as mp
 import os
 import statistics
 import time
@@ -55,36 +65,121 @@ def primary_rays(cam):
     upward = (ph / 2 - iy * (ph / H)).reshape(-1, 1)
     dirs = near * z + right * x + upward * y
     origins = np.tile(c, (W * H, 1))
-    return origins.astype(np.float32), dirs.astype(np.float32)
+    return np.ascontiguousarray(origins, dtype=np.float32), np.ascontiguousarray(dirs, dtype=np.float32)
+
+
+def load_bounce(path):
+    """Origins, directions (float32) and rt-view's primitive ids (uint32) of the bounce rays."""
+    rec = np.fromfile(path, dtype=np.dtype([("ray", "<f4", 6), ("id", "<u4")]))
+    rays = rec["ray"]
+    return np.ascontiguousarray(rays[:, :3]), np.ascontiguousarray(rays[:, 3:]), rec["id"].astype(np.int64)
+
+
+def new_scene(verts, tris):
+    scene = rtcs.EmbreeScene()
+    TriangleMesh(scene, verts, tris)
+    scene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))  # commits: builds the BVH
+    return scene
+
+
+# Set in the parent before forking; the children read them.
+DATA = {}
+
+
+def build_worker(cpus, runs, out):
+    os.sched_setaffinity(0, cpus)
+    times = []
+    for _ in range(runs):
+        t0 = time.perf_counter()
+        new_scene(DATA["verts"], DATA["tris"])
+        times.append(time.perf_counter() - t0)
+    out.put(statistics.median(times))
+
+
+def cast_worker(cpu, share, runs, barrier, out):
+    os.sched_setaffinity(0, {cpu})
+    scene = new_scene(DATA["verts"], DATA["tris"])
+    result = {}
+    for name in ("primary", "bounce"):
+        origins, dirs = DATA[name]
+        lo, hi = share * len(origins) // DATA["parts"], (share + 1) * len(origins) // DATA["parts"]
+        o, d = origins[lo:hi], dirs[lo:hi]
+        ids = scene.run(o, d)  # warm-up, and the hits
+        times = []
+        for _ in range(runs):
+            barrier.wait()
+            t0 = time.perf_counter()
+            scene.run(o, d)
+            times.append(time.perf_counter() - t0)
+        result[name] = (times, ids)
+    out.put((share, result))
+
+
+def measure(threads, runs):
+    ctx = mp.get_context("fork")
+    out = ctx.Queue()
+    cpus = sorted(os.sched_getaffinity(0))
+    p = ctx.Process(target=build_worker, args=(set(cpus[:threads]), runs, out))
+    p.start()
+    build = out.get()
+    p.join()
+    DATA["parts"] = threads
+    barrier = ctx.Barrier(threads)
+    procs = [ctx.Process(target=cast_worker, args=(cpus[i % len(cpus)], i, runs, barrier, out)) for i in range(threads)]
+    for p in procs:
+        p.start()
+    parts = dict(out.get() for _ in procs)
+    for p in procs:
+        p.join()
+    res = {"build": build}
+    for name in ("primary", "bounce"):
+        # Run k took as long as its slowest process.
+        walls = [max(parts[s][name][0][k] for s in parts) for k in range(runs)]
+        ids = np.concatenate([parts[s][name][1] for s in sorted(parts)])
+        res[name] = (len(DATA[name][0]) / statistics.median(walls) / 1e6, ids)
+    return res
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("out", help="the folder `rt-view bench --out` wrote")
     ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--threads", default="1,2", help="thread counts, comma-separated")
     args = ap.parse_args()
-    print(f"{'mesh':>6} {'triangles':>10} {'build s':>9} {'Mrays/s':>9} {'hits':>9} {'cpu/wall':>9}")
+    threads = [int(t) for t in args.threads.split(",")]
+    ours = {}
+    bench_csv = os.path.join(args.out, "bench.csv")
+    if os.path.exists(bench_csv):
+        for row in csv.DictReader(open(bench_csv)):
+            ours[(row["mesh"], int(row["threads"]))] = row
+    print(f"Intel Embree 4 (embreex, rtcIntersect1), medians of {args.runs} runs; Mrays/s")
+    print(f"{'mesh':>5} {'triangles':>10} {'threads':>7} {'build s':>8} {'primary':>8} {'bounce':>8} "
+          f"{'hits':>8} {'b. hits':>8} {'same id':>8}   rt-view / Embree: {'build':>6} {'single':>7} {'packets':>8} {'bounce':>7}")
     for obj in sorted(glob.glob(os.path.join(args.out, "terrain_*.obj")), key=os.path.getsize):
         label = os.path.basename(obj)[len("terrain_"):-len(".obj")]
-        cam = json.load(open(obj[:-4] + ".json"))
-        verts, tris = load_obj(obj)
-        origins, dirs = primary_rays(cam)
-        builds = []
-        for _ in range(args.runs):
-            t0 = time.perf_counter()
-            scene = rtcs.EmbreeScene()
-            TriangleMesh(scene, verts, tris)
-            scene.run(origins[:1], dirs[:1])  # commits (builds the BVH) and casts one ray
-            builds.append(time.perf_counter() - t0)
-        times, cpu = [], []
-        for _ in range(args.runs):
-            w0, c0 = time.perf_counter(), time.process_time()
-            ids = scene.run(origins, dirs)
-            times.append(time.perf_counter() - w0)
-            cpu.append((time.process_time() - c0) / times[-1])
-        hits = int((ids >= 0).sum())
-        mrays = len(origins) / statistics.median(times) / 1e6
-        print(f"{label:>6} {len(tris):>10} {statistics.median(builds):>9.4f} {mrays:>9.3f} {hits:>9} {statistics.median(cpu):>9.2f}")
+        DATA["verts"], DATA["tris"] = load_obj(obj)
+        DATA["primary"] = primary_rays(json.load(open(obj[:-4] + ".json")))
+        bounce_path = obj[:-4] + ".bounce"
+        if not os.path.exists(bounce_path):
+            raise SystemExit(f"{bounce_path} is missing: run the current `rt-view bench` first")
+        *rays, our_ids = load_bounce(bounce_path)
+        DATA["bounce"] = tuple(rays)
+        for t in threads:
+            r = measure(t, args.runs)
+            hits = int((r["primary"][1] >= 0).sum())
+            b_ids = r["bounce"][1]
+            b_hits = int((b_ids >= 0).sum())
+            ours_ids = np.where(our_ids == 0xFFFFFFFF, -1, our_ids)
+            same = float((b_ids == ours_ids).mean())
+            line = (f"{label:>5} {len(DATA['tris']):>10} {t:>7} {r['build']:>8.4f} {r['primary'][0]:>8.3f} "
+                    f"{r['bounce'][0]:>8.3f} {hits:>8} {b_hits:>8} {same:>8.5f}")
+            o = ours.get((label, t))
+            if o:
+                line += (f"   {' ':>16} {r['build'] / float(o['bvh_build_s']):>5.2f}x "
+                         f"{float(o['primary_single_mrays_per_s']) / r['primary'][0]:>6.2f}x "
+                         f"{float(o['primary_packets_mrays_per_s']) / r['primary'][0]:>7.2f}x "
+                         f"{float(o['bounce_mrays_per_s']) / r['bounce'][0]:>6.2f}x")
+            print(line, flush=True)
 
 
 if __name__ == "__main__":

@@ -167,6 +167,23 @@ def bsdf(m):
     return {"type": "blendbsdf", "weight": delta, "bsdf_0": rest, "bsdf_1": deltas}
 
 
+def chromatic(desc):
+    """Whether some medium's mean free path differs between channels."""
+    return any(
+        m.get("subsurface") and len(set(m["subsurface"]["mean_free_path"])) > 1 for m in desc["materials"]
+    )
+
+
+def one_channel(desc, channel):
+    """The export with every medium's mean free path set to that of `channel`
+    in all three channels (albedo and the rest unchanged)."""
+    out = json.loads(json.dumps(desc))
+    for m in out["materials"]:
+        if m.get("subsurface"):
+            m["subsurface"]["mean_free_path"] = [m["subsurface"]["mean_free_path"][channel]] * 3
+    return out
+
+
 def mitsuba_scene(mi, desc, folder, width, height, plane_size):
     """The Mitsuba scene dictionary of an rt-view export."""
     T = mi.ScalarTransform4f
@@ -176,9 +193,23 @@ def mitsuba_scene(mi, desc, folder, width, height, plane_size):
     gi = desc["global_illumination"]
     if gi is None:
         sys.exit("the scene has no global_illumination: nothing to compare with a path tracer")
+    materials = {m["name"]: m for m in desc["materials"]}
+    translucent = any(m.get("subsurface") for m in materials.values())
+    if translucent:
+        # Media need the volumetric path tracer. Its depth counts scattering
+        # events inside media as well as surfaces, which rt-view's
+        # max_bounces does not (a walk is capped by max_walk_steps instead):
+        # the reference runs without a depth limit, so the scene's
+        # max_bounces must be high enough not to matter.
+        if gi["max_bounces"] < 32:
+            print(f"warning: max_bounces {gi['max_bounces']} truncates rt-view's paths; Mitsuba's volpath "
+                  "runs without a limit here", file=sys.stderr)
+        integrator = {"type": "volpath", "max_depth": -1, "hide_emitters": False}
+    else:
+        integrator = {"type": "path", "max_depth": gi["max_bounces"] + 1, "hide_emitters": False}
     scene = {
         "type": "scene",
-        "integrator": {"type": "path", "max_depth": gi["max_bounces"] + 1, "hide_emitters": False},
+        "integrator": integrator,
         "sensor": {
             "type": "perspective",
             "fov": cam["fov_y"],
@@ -199,7 +230,6 @@ def mitsuba_scene(mi, desc, folder, width, height, plane_size):
     }
     if max(desc["background"]) > 0:
         scene["background"] = {"type": "constant", "radiance": rgb(mi, desc["background"])}
-    materials = {m["name"]: m for m in desc["materials"]}
     coi = np.array(cam["center_of_interest"])
     for i, o in enumerate(desc["objects"]):
         m = materials[o["material"]]
@@ -218,6 +248,25 @@ def mitsuba_scene(mi, desc, folder, width, height, plane_size):
             mirrored_obj(os.path.join(folder, o["file"]), path)
             shape = {"type": "obj", "filename": path, "face_normals": True}
         shape["bsdf"] = bsdf(m)
+        medium = m.get("subsurface")
+        if medium:
+            # A smooth dielectric (or, at ior 1, index-matched: null) boundary
+            # around a homogeneous medium; σt = 1/mean free path. The mirrored
+            # OBJ keeps the faces wound outward, so the interior is inside.
+            if m["ior"] == 1.0:
+                shape["bsdf"] = {"type": "null"}
+            else:
+                shape["bsdf"] = {"type": "dielectric", "int_ior": m["ior"], "ext_ior": 1.0}
+            # Mitsuba reads an RGB sigma_t as a reflectance in [0, 1]: give
+            # it relative to the largest channel, times `scale`.
+            sigma_t = [1.0 / l for l in medium["mean_free_path"]]
+            shape["interior"] = {
+                "type": "homogeneous",
+                "albedo": rgb(mi, medium["albedo"]),
+                "sigma_t": rgb(mi, [s / max(sigma_t) for s in sigma_t]),
+                "scale": max(sigma_t),
+                "phase": {"type": "hg", "g": medium["anisotropy"]},
+            }
         if max(m["emission"]) > 0:
             shape["emitter"] = {"type": "area", "radiance": rgb(mi, m["emission"])}
         scene[f"object-{i}"] = shape
@@ -288,7 +337,22 @@ def main():
     width = args.width or desc["width"]
     height = args.height or desc["height"]
     per_batch = max(1, args.spp // args.batches)
-    scene = mi.load_dict(mitsuba_scene(mi, desc, folder, width, height, args.plane_size))
+    # Mitsuba's volpath draws a free path from one channel chosen per path
+    # and weighs the others by that channel's density alone (no MIS over the
+    # channels): where mean free paths differ between channels its estimates
+    # of the others have rare, huge weights and converge far too slowly to
+    # serve as a reference. The channels of such a scene do not interact, so
+    # each is rendered on its own with grey media of that channel's mean free
+    # path, and the three are put together.
+    split = chromatic(desc)
+    if split:
+        print("chromatic media: Mitsuba renders each channel with grey media (3 renders per batch)", file=sys.stderr)
+        scenes = [
+            mi.load_dict(mitsuba_scene(mi, one_channel(desc, c), folder, width, height, args.plane_size))
+            for c in range(3)
+        ]
+    else:
+        scene = mi.load_dict(mitsuba_scene(mi, desc, folder, width, height, args.plane_size))
 
     env = dict(os.environ, RAYON_NUM_THREADS=str(args.threads))
     rt_images, mi_images = [], []
@@ -302,8 +366,14 @@ def main():
         rt_time += time.perf_counter() - start
         rt_images.append(read_exr(mi, out))
         start = time.perf_counter()
-        image = mi.render(scene, spp=per_batch, seed=k)
-        pixels = np.array(image, dtype=np.float64)[:, :, :3]
+        if split:
+            pixels = np.stack(
+                [np.array(mi.render(scenes[c], spp=per_batch, seed=k), dtype=np.float64)[:, :, c] for c in range(3)],
+                axis=2,
+            )
+        else:
+            image = mi.render(scene, spp=per_batch, seed=k)
+            pixels = np.array(image, dtype=np.float64)[:, :, :3]
         mi_time += time.perf_counter() - start
         mi_images.append(pixels)
         print(f"batch {k + 1}/{args.batches}: rt-view {rt_time:.1f} s, Mitsuba {mi_time:.1f} s so far", flush=True)

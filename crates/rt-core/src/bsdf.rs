@@ -49,7 +49,8 @@
 //! The dielectric is oriented: the side the geometric normal points to is
 //! outside (index 1), the other inside (index `ior`).
 
-use crate::material::{Color, Material};
+use crate::color::Color;
+use crate::material::Material;
 use crate::real::{Real, Vec3, to_f32};
 use crate::sampler::cosine_hemisphere;
 use crate::shading::{fresnel_dielectric, reflect, refract};

@@ -4,8 +4,9 @@
 
 use std::ops::{Add, AddAssign};
 
+use crate::color::Color;
 use crate::light::Light;
-use crate::material::{Color, Material};
+use crate::material::Material;
 use crate::real::Real;
 
 /// Deepest reflection/refraction recursion a scene may ask for.
@@ -36,6 +37,15 @@ pub struct Lighting {
 /// Most surfaces a path may scatter from under global illumination.
 pub const MAX_BOUNCES: u32 = 1024;
 
+/// The largest cap on scattering events in one walk through a translucent
+/// object that a scene may set.
+pub const MAX_WALK_STEPS: u32 = 1_000_000;
+
+/// The cap on scattering events in one walk that a scene gets unless it sets
+/// one: far above what the walks of the example scenes take (their mean is
+/// tens to a few hundred steps), so it ends almost no walk.
+pub const DEFAULT_WALK_STEPS: u32 = 4096;
+
 /// Global-illumination settings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct GlobalIllumination {
@@ -46,6 +56,11 @@ pub struct GlobalIllumination {
     /// Whether Russian roulette may end paths early (unbiased; faster for
     /// the same noise on most scenes).
     pub russian_roulette: bool,
+    /// How many scattering events one random walk through a translucent
+    /// object may take, 1 to [`MAX_WALK_STEPS`]; a walk that reaches the cap
+    /// ends there and its light is lost (a bias, which
+    /// `rt-view accuracy` measures).
+    pub max_walk_steps: u32,
 }
 
 /// Ambient-occlusion settings.
@@ -78,6 +93,10 @@ pub struct EffectPlan {
     /// Path tracing instead of the direct-lighting tracer; the flags above
     /// then say what the direct-lighting tracer would do if it were switched off.
     pub global_illumination: Option<GlobalIllumination>,
+    /// Some material has a translucent inside and global illumination is
+    /// on: random walks through those objects (off: their materials act as
+    /// plain surfaces).
+    pub subsurface: bool,
 }
 
 /// Effects a user can switch off in the viewer; a plan never turns on what
@@ -94,6 +113,9 @@ pub struct EffectToggles {
     pub ambient_occlusion: bool,
     /// Keep global illumination (off: the direct-lighting tracer).
     pub global_illumination: bool,
+    /// Keep random walks through translucent objects (off: their materials
+    /// act as plain surfaces).
+    pub subsurface: bool,
 }
 
 impl Default for EffectToggles {
@@ -104,6 +126,7 @@ impl Default for EffectToggles {
             refraction: true,
             ambient_occlusion: true,
             global_illumination: true,
+            subsurface: true,
         }
     }
 }
@@ -114,10 +137,11 @@ impl EffectPlan {
     pub fn new<'m>(lighting: &Lighting, used_materials: impl IntoIterator<Item = &'m Material>) -> Self {
         let global_illumination = lighting.global_illumination;
         let shading = !lighting.lights.is_empty() || global_illumination.is_some();
-        let (mut reflects, mut refracts) = (false, false);
+        let (mut reflects, mut refracts, mut translucent) = (false, false, false);
         for m in used_materials {
             reflects |= m.reflectivity > 0.0 || m.transparency > 0.0;
             refracts |= m.transparency > 0.0;
+            translucent |= m.subsurface.is_some();
         }
         let recursion = shading && lighting.max_depth > 0;
         Self {
@@ -130,6 +154,7 @@ impl EffectPlan {
                 .filter(|_| shading && lighting.ambient != Color::ZERO),
             max_depth: if recursion { lighting.max_depth } else { 0 },
             global_illumination,
+            subsurface: translucent && global_illumination.is_some(),
         }
     }
 
@@ -141,6 +166,7 @@ impl EffectPlan {
             refraction: self.refraction && toggles.refraction,
             ambient_occlusion: self.ambient_occlusion.filter(|_| toggles.ambient_occlusion),
             global_illumination: self.global_illumination.filter(|_| toggles.global_illumination),
+            subsurface: self.subsurface && toggles.subsurface && toggles.global_illumination,
             ..self
         }
     }
@@ -165,6 +191,13 @@ pub struct RayCounts {
     /// Global illumination: shadow rays towards sampled points on lights
     /// (next-event estimation).
     pub next_event: u64,
+    /// Random walks: rays cast inside translucent objects, from one
+    /// scattering event (or the point of entry) to the next event or the
+    /// surface.
+    pub subsurface: u64,
+    /// Random walks: scattering events inside translucent objects (not
+    /// rays; each is followed by one `subsurface` ray).
+    pub walk_steps: u64,
 }
 
 impl RayCounts {
@@ -177,6 +210,7 @@ impl RayCounts {
             + self.ambient_occlusion
             + self.bounce
             + self.next_event
+            + self.subsurface
     }
 }
 
@@ -191,6 +225,8 @@ impl Add for RayCounts {
             ambient_occlusion: self.ambient_occlusion + o.ambient_occlusion,
             bounce: self.bounce + o.bounce,
             next_event: self.next_event + o.next_event,
+            subsurface: self.subsurface + o.subsurface,
+            walk_steps: self.walk_steps + o.walk_steps,
         }
     }
 }
@@ -243,6 +279,7 @@ mod tests {
                 ambient_occlusion: None,
                 max_depth: 0,
                 global_illumination: None,
+                subsurface: false,
             }
         );
     }
@@ -277,6 +314,7 @@ mod tests {
             refraction: false,
             ambient_occlusion: false,
             global_illumination: false,
+            subsurface: false,
         };
         let off = all.restricted(none);
         assert!(

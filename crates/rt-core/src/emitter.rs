@@ -18,8 +18,8 @@
 
 use thiserror::Error;
 
+use crate::color::Color;
 use crate::light::SphereCone;
-use crate::material::Color;
 use crate::primitive::Primitive;
 use crate::real::{Real, Vec3, normalize_robust};
 use crate::triangle::geometric_normal;

@@ -13,7 +13,7 @@
 //! far away is I in every direction, like the point light it becomes as R
 //! shrinks.
 
-use crate::material::Color;
+use crate::color::Color;
 use crate::real::{Real, Vec3, to_f32};
 use crate::sampler::stratified;
 

@@ -18,9 +18,9 @@
 //! The choice only steers where samples go: any choice with a positive
 //! probability for every light gives the same image in the mean.
 
+use crate::color::Color;
 use crate::emitter::Emitter;
 use crate::light::{Light, LightKind};
-use crate::material::Color;
 use crate::real::Real;
 
 /// A source of light that can be chosen.

@@ -1,14 +1,8 @@
-//! Materials: how a surface answers light, and how colours become pixels.
-//!
-//! Colours are linear RGB (proportional to light), `f32` whatever
-//! [`crate::real::Real`] is. Scene files give them linear; the output
-//! [`ColorSpace`] decides how they are encoded into 8-bit pixels.
+//! Materials: how a surface answers light. Its colours are linear RGB
+//! ([`crate::color`]).
 
-use serde::Deserialize;
-
-/// A linear RGB colour; components ≥ 0, nominally in [0, 1] (lit scenes may
-/// exceed 1 before the output clamps them).
-pub type Color = glam::Vec3;
+use crate::color::Color;
+use crate::medium::Subsurface;
 
 /// A surface's appearance.
 ///
@@ -44,6 +38,12 @@ pub struct Material {
     /// geometric normal points to. It is seen directly; under global
     /// illumination it also lights the scene.
     pub emission: Color,
+    /// A translucent inside ([`crate::medium`]): under global illumination
+    /// the surface is then a smooth dielectric boundary of index `ior`
+    /// (index-matched, letting light straight through, when `ior` is 1)
+    /// around a homogeneous scattering medium, and the BSDF lobes above are
+    /// not used. Only closed objects may have one.
+    pub subsurface: Option<Subsurface>,
 }
 
 impl Material {
@@ -58,6 +58,7 @@ impl Material {
             transparency: 0.0,
             ior: 1.5,
             emission: Color::ZERO,
+            subsurface: None,
         }
     }
 
@@ -69,58 +70,14 @@ impl Material {
         (2.0 / (self.shininess + 2.0)).sqrt()
     }
 
+    /// The surface of a subsurface material: a clear, smooth dielectric of
+    /// its `ior` (the medium inside does the colouring), with its emission.
+    pub fn boundary(&self) -> Material {
+        Material { color: Color::ONE, transparency: 1.0, reflectivity: 0.0, subsurface: None, ..*self }
+    }
+
     /// Whether the surface gives off light.
     pub fn is_emissive(&self) -> bool {
         self.emission != Color::ZERO
-    }
-}
-
-/// How linear colours are written to 8-bit images.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
-pub enum ColorSpace {
-    /// Each component clamped to [0, 1] and scaled to 0..=255 as is: what
-    /// flat-colour scenes always did, so a colour (0.5, …) in the file is
-    /// pixel value 128.
-    #[default]
-    Linear,
-    /// The sRGB transfer curve (IEC 61966-2-1) applied after clamping: what
-    /// displays expect for physically linear light, so lit scenes look right.
-    Srgb,
-}
-
-impl ColorSpace {
-    /// `c` clamped to [0, 1], encoded, and rounded to 8 bits (NaN becomes 0).
-    pub fn encode(self, c: Color) -> [u8; 3] {
-        c.to_array().map(|v| {
-            let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
-            let v = match self {
-                Self::Linear => v,
-                Self::Srgb => srgb_encode(v),
-            };
-            (v * 255.0 + 0.5) as u8
-        })
-    }
-}
-
-/// The sRGB transfer function for a linear value in [0, 1]:
-/// `12.92·v` below 0.0031308, else `1.055·v^(1/2.4) − 0.055`.
-pub fn srgb_encode(v: f32) -> f32 {
-    if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn linear_encoding_clamps_and_rounds() {
-        assert_eq!(ColorSpace::Linear.encode(Color::new(-1.0, 0.5, 2.0)), [0, 128, 255]);
-        assert_eq!(ColorSpace::Linear.encode(Color::new(f32::NAN, 0.0, 1.0)), [0, 0, 255]);
-    }
-
-    #[test]
-    fn srgb_encoding_brightens_mid_greys_and_keeps_the_ends() {
-        assert_eq!(ColorSpace::Srgb.encode(Color::new(0.0, 1.0, 0.216)), [0, 255, 128]);
-        assert!((srgb_encode(0.003_130_8) - 0.040_45).abs() < 1e-5, "the two pieces meet");
     }
 }

@@ -8,7 +8,7 @@ use crate::aabb::Aabb;
 use crate::hit::PrimitiveHit;
 use crate::method::TriangleMethod;
 use crate::ray::{Interval, Ray};
-use crate::real::{Real, Vec3};
+use crate::real::{Real, Vec3, to_f64};
 use crate::surface::SurfacePoint;
 use crate::triangle::{TriangleRay, geometric_normal, intersect_by, triangle_surface_point};
 
@@ -187,6 +187,69 @@ impl Mesh {
     pub fn normal(&self, i: usize) -> Vec3 {
         self.normals[i]
     }
+    /// Whether the mesh bounds a volume, with its faces wound outward, as a
+    /// translucent object's must: every edge belongs to exactly two faces,
+    /// which run along it in opposite directions (so the winding is
+    /// consistent), and the signed volume `Σ a·(b×c)/6` is positive (so
+    /// the normals `(b−a)×(c−a)` point out). Vertices are compared by
+    /// position, so files that repeat a position for each face pass too.
+    /// The error says what is wrong, naming an edge by its corners.
+    pub fn closed(&self) -> Result<(), String> {
+        use std::collections::HashMap;
+        // +0.0 and −0.0 are one position.
+        let key = |p: Vec3| p.to_array().map(|c| to_f64(c) + 0.0).map(f64::to_bits);
+        let mut ids = HashMap::new();
+        let id: Vec<usize> = self
+            .positions
+            .iter()
+            .map(|&p| {
+                let next = ids.len();
+                *ids.entry(key(p)).or_insert(next)
+            })
+            .collect();
+        // Directed edges (from, to) and how often each occurs.
+        let mut edges: HashMap<(usize, usize), u32> = HashMap::new();
+        for t in &self.triangles {
+            let [a, b, c] = t.map(|i| id[i as usize]);
+            for edge in [(a, b), (b, c), (c, a)] {
+                *edges.entry(edge).or_insert(0) += 1;
+            }
+        }
+        let corner = |i: usize| {
+            let j = id.iter().position(|&k| k == i).expect("an id comes from a vertex");
+            self.positions[j]
+        };
+        let mut sorted: Vec<_> = edges.iter().collect();
+        sorted.sort();
+        for (&(a, b), &n) in sorted {
+            if n > 1 {
+                return Err(format!(
+                    "{n} faces run along the edge from {} to {} in the same direction (a seam, or \
+                     faces wound inconsistently)",
+                    corner(a),
+                    corner(b)
+                ));
+            }
+            if !edges.contains_key(&(b, a)) {
+                return Err(format!(
+                    "the edge from {} to {} belongs to one face only (a hole)",
+                    corner(a),
+                    corner(b)
+                ));
+            }
+        }
+        let volume: f64 = (0..self.triangle_count())
+            .map(|i| {
+                let [a, b, c] = self.triangle(i).map(|p| glam::DVec3::from(p.to_array().map(to_f64)));
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum();
+        if volume <= 0.0 {
+            return Err(format!("its faces are wound inward (signed volume {volume:.3e})"));
+        }
+        Ok(())
+    }
+
     /// The box around all triangles.
     pub fn bounds(&self) -> Aabb {
         self.bounds
@@ -411,6 +474,47 @@ mod tests {
         }
     }
 
+    /// The icosahedron as a mesh, faces changed by `edit`.
+    fn icosahedron_mesh(edit: impl FnOnce(&mut Vec<[u32; 3]>)) -> Mesh {
+        let (corners, faces) = icosahedron();
+        let positions = corners.iter().map(|c| Vec3::new(c[0] as Real, c[1] as Real, c[2] as Real)).collect();
+        let mut faces = faces.to_vec();
+        edit(&mut faces);
+        Mesh::new(positions, faces).unwrap()
+    }
+
+    #[test]
+    fn closed_meshes_are_told_from_open_inconsistent_and_inside_out_ones() {
+        assert_eq!(icosahedron_mesh(|_| {}).closed(), Ok(()));
+        let hole = icosahedron_mesh(|f| {
+            f.pop();
+        })
+        .closed();
+        assert!(hole.as_ref().is_err_and(|e| e.contains("one face only (a hole)")), "{hole:?}");
+        let flipped_one = icosahedron_mesh(|f| f[3].swap(1, 2)).closed();
+        assert!(flipped_one.as_ref().is_err_and(|e| e.contains("same direction")), "{flipped_one:?}");
+        let inside_out = icosahedron_mesh(|f| f.iter_mut().for_each(|t| t.swap(1, 2))).closed();
+        assert!(inside_out.as_ref().is_err_and(|e| e.contains("wound inward")), "{inside_out:?}");
+        let doubled = icosahedron_mesh(|f| f.push(f[0])).closed();
+        assert!(doubled.is_err(), "a face given twice");
+        // A face per triangle with its own copies of the corners (as some
+        // exporters write) is still closed: vertices are matched by position.
+        let (corners, faces) = icosahedron();
+        let positions: Vec<Vec3> = faces
+            .iter()
+            .flatten()
+            .map(|&i| {
+                Vec3::new(
+                    corners[i as usize][0] as Real,
+                    corners[i as usize][1] as Real,
+                    corners[i as usize][2] as Real,
+                )
+            })
+            .collect();
+        let unshared = (0..20u32).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+        assert_eq!(Mesh::new(positions, unshared).unwrap().closed(), Ok(()));
+    }
+
     #[test]
     fn icosahedron_has_equal_edges_and_faces_wound_outward() {
         let (corners, faces) = icosahedron();
@@ -446,19 +550,8 @@ mod tests {
     fn a_fine_grid_far_away_has_no_holes() {
         // 100 × 100 quads of 0.01 units (20 000 triangles) seen from 5000 units:
         // 5·10⁵ triangle sizes away. Every ray aimed into the grid must hit it.
-        let n = 100;
-        let positions: Vec<Vec3> = (0..=n)
-            .flat_map(|j| (0..=n).map(move |i| Vec3::new(i as Real * 0.01, j as Real * 0.01, 0.0)))
-            .collect();
-        let at = |i: u32, j: u32| j * (n + 1) + i;
-        let triangles: Vec<[u32; 3]> = (0..n)
-            .flat_map(|j| {
-                (0..n).flat_map(move |i| {
-                    [[at(i, j), at(i + 1, j), at(i + 1, j + 1)], [at(i, j), at(i + 1, j + 1), at(i, j + 1)]]
-                })
-            })
-            .collect();
-        let grid = Mesh::new(positions, triangles).unwrap();
+        let grid =
+            crate::test_support::grid_mesh(100, |i, j| Vec3::new(i as Real * 0.01, j as Real * 0.01, 0.0));
         let eye = Vec3::new(0.3, 0.6, -5000.0);
         for k in 0..2000u32 {
             // Targets on a lattice that includes vertices and shared edges.

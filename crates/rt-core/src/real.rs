@@ -2,7 +2,7 @@
 //!
 //! All geometry (points, directions, ray parameters) uses [`Real`] and [`Vec3`]:
 //! `f32`/`glam::Vec3` by default, `f64`/`glam::DVec3` with the `f64` cargo feature.
-//! Colours are always `f32` (see [`crate::material::Color`]).
+//! Colours are always `f32` (see [`crate::color::Color`]).
 //!
 //! Every numerical tolerance of the crate is defined here, once, with the
 //! reasoning that fixes its value.

@@ -13,10 +13,14 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use rayon::prelude::*;
 use thiserror::Error;
 
+use crate::bvh::PACKET_RAYS;
 use crate::camera::Camera;
+use crate::color::{Color, ColorSpace};
 use crate::effects::{EffectPlan, RayCounts};
-use crate::material::{Color, ColorSpace};
+use crate::hit::Hit;
 use crate::path_tracer::PathTracer;
+use crate::ray::Ray;
+use crate::real::Vec3;
 use crate::sampler::{MAX_SAMPLES_PER_PIXEL, SampleRng, subpixel_offset};
 use crate::scene::Scene;
 use crate::tracer::Tracer;
@@ -61,6 +65,7 @@ impl Frame {
 /// Renders one scene at one image size and sample count.
 #[derive(Clone, Copy, Debug)]
 pub struct Renderer<'s> {
+    scene: &'s Scene,
     tracer: Tracer<'s>,
     /// Under global illumination, the path tracer that replaces `tracer`.
     path_tracer: Option<PathTracer<'s>>,
@@ -101,8 +106,9 @@ impl<'s> Renderer<'s> {
             return Err(RenderError::SamplesPerPixel(spp));
         }
         Ok(Self {
+            scene,
             tracer: Tracer::new(scene, plan),
-            path_tracer: plan.global_illumination.map(|gi| PathTracer::new(scene, gi)),
+            path_tracer: plan.global_illumination.map(|gi| PathTracer::new(scene, gi, plan.subsurface)),
             view: ViewPlane::new(camera, width, height)?,
             spp,
             seed: 0,
@@ -140,16 +146,35 @@ impl<'s> Renderer<'s> {
     /// Sample `k` of pixel (x, y): one primary ray through its sub-pixel
     /// offset ([`crate::sampler::subpixel_offset`]; the centre when spp = 1), traced.
     pub fn sample(&self, x: u32, y: u32, k: u32, counts: &mut RayCounts) -> Color {
-        let ray = if self.spp == 1 {
+        let ray = self.primary_ray(x, y, k);
+        self.shade_sample(x, y, k, &ray, self.scene.cast(&ray), counts)
+    }
+
+    /// The primary ray of sample `k` of pixel (x, y).
+    fn primary_ray(&self, x: u32, y: u32, k: u32) -> Ray {
+        if self.spp == 1 {
             self.view.center_ray(x, y)
         } else {
             let (sx, sy) = subpixel_offset(x, y, k, self.spp, self.seed);
             self.view.primary_ray(x, y, sx, sy)
-        };
+        }
+    }
+
+    /// The colour of sample `k` of pixel (x, y), whose primary ray `ray` was
+    /// cast already and gave `hit`.
+    fn shade_sample(
+        &self,
+        x: u32,
+        y: u32,
+        k: u32,
+        ray: &Ray,
+        hit: Option<Hit>,
+        counts: &mut RayCounts,
+    ) -> Color {
         let rng = &mut SampleRng::seeded(x, y, k, self.seed);
         match &self.path_tracer {
-            Some(path_tracer) => path_tracer.trace_primary(&ray, rng, counts),
-            None => self.tracer.trace_primary(&ray, rng, counts),
+            Some(path_tracer) => path_tracer.trace_primary_hit(ray, hit, rng, counts),
+            None => self.tracer.trace_primary_hit(ray, hit, rng, counts),
         }
     }
 
@@ -163,21 +188,43 @@ impl<'s> Renderer<'s> {
     /// Adds samples `samples` of each pixel of row `y` to `sums`, in order:
     /// after adding `0..spp` in any number of steps, `sums[x] / spp` is
     /// exactly [`Renderer::pixel`] (the viewer refines an image this way).
+    ///
+    /// The row's primary rays, pixel by pixel and sample by sample, are cast
+    /// in packets of [`PACKET_RAYS`] ([`Scene::cast_all`]): a pixel's
+    /// samples, or a run of neighbouring pixels at one sample each. The hits,
+    /// and so the colours, are the ones [`Renderer::sample`] gives one by one.
     pub fn accumulate_row(&self, y: u32, samples: Range<u32>, sums: &mut [Color]) -> RayCounts {
         let mut counts = RayCounts::default();
-        for (x, sum) in sums.iter_mut().enumerate() {
-            for k in samples.clone() {
-                *sum += self.sample(x as u32, y, k, &mut counts);
+        let mut jobs = (0..sums.len() as u32).flat_map(|x| samples.clone().map(move |k| (x, k)));
+        let mut packet = [(0, 0); PACKET_RAYS];
+        let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET_RAYS];
+        let mut hits = [None; PACKET_RAYS];
+        loop {
+            let mut n = 0;
+            for job in jobs.by_ref().take(PACKET_RAYS) {
+                packet[n] = job;
+                rays[n] = self.primary_ray(job.0, y, job.1);
+                n += 1;
+            }
+            if n == 0 {
+                return counts;
+            }
+            self.scene.cast_all(&rays[..n], &mut hits[..n]);
+            for i in 0..n {
+                let (x, k) = packet[i];
+                sums[x as usize] += self.shade_sample(x, y, k, &rays[i], hits[i], &mut counts);
             }
         }
-        counts
     }
 
-    /// Fills `row` (one linear colour per column) with row `y` of the image.
+    /// Fills `row` (one linear colour per column) with row `y` of the image:
+    /// [`Renderer::pixel`] for each, computed as [`Renderer::accumulate_row`]
+    /// does.
     pub fn render_row(&self, y: u32, row: &mut [Color]) -> RayCounts {
-        let mut counts = RayCounts::default();
-        for (x, out) in row.iter_mut().enumerate() {
-            *out = self.pixel(x as u32, y, &mut counts);
+        row.fill(Color::ZERO);
+        let counts = self.accumulate_row(y, 0..self.spp, row);
+        for out in row.iter_mut() {
+            *out /= self.spp as f32;
         }
         counts
     }
@@ -301,6 +348,43 @@ mod tests {
         for spp in [1, 3, 16] {
             let f = Renderer::new(&s, 32, 24, spp).unwrap().render(|_| {});
             assert_eq!(f.rays, RayCounts { primary: 32 * 24 * spp as u64, ..RayCounts::default() });
+        }
+    }
+
+    #[test]
+    fn rows_cast_in_packets_give_the_pixels_cast_ray_by_ray() {
+        // Meshes, a sphere and a plane, lit, with and without global
+        // illumination: every pixel of a row (its primary rays cast as
+        // packets) equals the pixel rendered ray by ray, bit for bit.
+        let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+        for gi in ["", "global_illumination: (max_bounces: 3),"] {
+            let text = format!(
+                r#"(
+                camera: (position: (0.3, 1.6, -4.5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 45, near: 1),
+                image: (width: 40, height: 30),
+                background: (0.2, 0.3, 0.4),
+                lights: [Point(position: (3, 5, -4), color: (1, 1, 1), intensity: 40)],
+                effects: ( {gi} ),
+                materials: {{ "jade": (color: (0.3, 0.75, 0.5)), "red": (color: (0.8, 0.1, 0.1), specular: 0.5) }},
+                objects: [
+                    Mesh(file: "meshes/icosphere.obj", scale: 0.9, translate: (-1.1, 0, 0.5), material: "jade"),
+                    Mesh(file: "meshes/torus.obj", scale: 0.9, translate: (1.2, 0, -0.3), material: "red"),
+                    Sphere(center: (0, 0.6, 1.5), radius: 0.5, material: "red"),
+                    Plane(normal: (0, 1, 0), d: -1, material: "jade"),
+                ],
+            )"#
+            );
+            let s = crate::parse_scene(&text, "packets.ron", &scenes).unwrap();
+            for spp in [1, 5] {
+                let r = Renderer::new(&s, 40, 30, spp).unwrap();
+                let mut row = vec![Color::ZERO; 40];
+                for y in [3, 14, 15, 22] {
+                    r.render_row(y, &mut row);
+                    let one_by_one: Vec<Color> =
+                        (0..40).map(|x| r.pixel(x, y, &mut RayCounts::default())).collect();
+                    assert_eq!(row, one_by_one, "spp {spp}, row {y}, {gi}");
+                }
+            }
         }
     }
 

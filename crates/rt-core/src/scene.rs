@@ -9,18 +9,19 @@ use std::path::PathBuf;
 
 use thiserror::Error;
 
-use crate::bvh::{Bvh, BvhStats};
+use crate::bvh::{Bvh, BvhStats, PACKET_RAYS};
 use crate::camera::Camera;
+use crate::color::{Color, ColorSpace};
 use crate::effects::{EffectPlan, Lighting};
 use crate::emitter::{Emitter, EmitterError};
 use crate::hit::Hit;
 use crate::light_sampler::LightSampler;
-use crate::material::{Color, ColorSpace, Material};
+use crate::material::Material;
 use crate::method::Methods;
 use crate::object::Object;
 use crate::primitive::Primitive;
 use crate::ray::{Interval, Ray, rescale_t};
-use crate::real::{Real, cast_min_t, scale_pow2};
+use crate::real::{Real, Vec3, cast_min_t, scale_pow2};
 use crate::sampler::MAX_SAMPLES_PER_PIXEL;
 use crate::view_plane::{ViewPlane, ViewPlaneError, check_image_size};
 
@@ -79,6 +80,18 @@ pub enum SceneBuildError {
         name: String,
         /// The names that exist, comma-separated.
         defined: String,
+    },
+    /// An object with a subsurface material has no inside.
+    #[error("objects[{index}] ({kind}): material \"{material}\" has a subsurface medium, {reason}")]
+    Subsurface {
+        /// 0-based object index.
+        index: usize,
+        /// The object's variant ([`Primitive::kind`]).
+        kind: &'static str,
+        /// The material's name.
+        material: String,
+        /// Why it cannot have one.
+        reason: String,
     },
     /// An emissive object cannot be a light.
     #[error("objects[{index}] ({kind}): {reason}")]
@@ -220,6 +233,36 @@ impl SceneBuilder {
                 }),
             })
             .collect::<Result<Vec<_>, _>>()?;
+        for (index, o) in objects.iter().enumerate() {
+            if materials[o.material].subsurface.is_none() {
+                continue;
+            }
+            let reason = if self.lighting.global_illumination.is_none() {
+                Some(String::from(
+                    "which needs global illumination: add effects: (global_illumination: ()) to the scene",
+                ))
+            } else {
+                match &o.primitive {
+                    Primitive::Sphere(_) | Primitive::Aabb(_) => None,
+                    Primitive::Mesh(mesh) => {
+                        mesh.closed().err().map(|why| format!("but the mesh is not closed: {why}"))
+                    }
+                    other => Some(format!(
+                        "but a {} has no inside (only spheres, boxes and closed meshes do)",
+                        other.kind()
+                    )),
+                }
+            };
+            if let Some(reason) = reason {
+                let material = material_names[o.material].clone();
+                return Err(SceneBuildError::Subsurface {
+                    index,
+                    kind: o.primitive.kind(),
+                    material,
+                    reason,
+                });
+            }
+        }
         let mut emitters = Vec::new();
         let mut emitter_of = vec![None; objects.len()];
         for (index, o) in objects.iter().enumerate() {
@@ -260,6 +303,17 @@ impl Scene {
     /// Objects in file order: a hit's `object` indexes this list.
     pub fn objects(&self) -> &[Object] {
         &self.objects
+    }
+
+    /// The hierarchy over the objects.
+    #[cfg(test)]
+    pub(crate) fn bvh(&self) -> &Bvh {
+        &self.bvh
+    }
+
+    /// The intersection routines the scene is traced with.
+    pub(crate) fn methods(&self) -> Methods {
+        self.methods
     }
 
     /// What building the BVH took and produced.
@@ -314,6 +368,40 @@ impl Scene {
         // Rescale once: the rule's minimum t is computed on the rescaled ray.
         let (unit, k) = ray.rescaled()?;
         self.closest_hit_rescaled(&unit, Interval::new(cast_min_t(unit.origin, unit.dir), Real::INFINITY), k)
+    }
+
+    /// [`Scene::cast`] for each of `rays`, into `hits`, with the same
+    /// results bit for bit, traced as packets ([`Bvh::closest_hits`]): rays
+    /// next to each other in the slice should be close in space and direction,
+    /// as a pixel's samples or a run of a row's pixels are.
+    pub fn cast_all(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len(), "one hit per ray");
+        let mut units = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET_RAYS];
+        let mut ranges = [Interval::new(0.0, 0.0); PACKET_RAYS];
+        let mut scales = [None; PACKET_RAYS];
+        let mut found = [None; PACKET_RAYS];
+        for (rays, hits) in rays.chunks(PACKET_RAYS).zip(hits.chunks_mut(PACKET_RAYS)) {
+            // Rays that can hit nothing stay out of the packet.
+            let mut n = 0;
+            for (ray, scale) in rays.iter().zip(&mut scales) {
+                *scale = ray.rescaled().map(|(unit, k)| {
+                    units[n] = unit;
+                    ranges[n] = Interval::new(cast_min_t(unit.origin, unit.dir), Real::INFINITY);
+                    n += 1;
+                    k
+                });
+            }
+            self.bvh.closest_hits(&self.objects, &units[..n], &ranges[..n], self.methods, &mut found[..n]);
+            let mut next = 0;
+            for (hit, scale) in hits.iter_mut().zip(&scales) {
+                *hit = scale.and_then(|k| {
+                    next += 1;
+                    let mut h = found[next - 1]?;
+                    h.t = rescale_t(h.t, k)?;
+                    Some(h)
+                });
+            }
+        }
     }
 
     /// The range of `t` the cast rule accepts for `ray`: `(min_t, ∞)`.

@@ -2,7 +2,8 @@
 
 use crate::aabb::Aabb;
 use crate::camera::{Camera, Projection};
-use crate::material::{Color, Material};
+use crate::color::Color;
+use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::plane::Plane;
 use crate::polygon::Polygon;
@@ -64,4 +65,19 @@ pub fn random_parts(extent: f32, max: usize) -> impl Strategy<Value = Vec<Parts>
 /// The valid primitives among `parts`.
 pub fn primitives_of(parts: Vec<Parts>) -> Vec<Primitive> {
     parts.into_iter().filter_map(|(k, p, q, r)| random_primitive(k, p, q, r)).collect()
+}
+
+/// A grid of `n`×`n` squares, two triangles each, with the vertex of column
+/// `i` and row `j` at `vertex(i, j)` (`i`, `j` in `0..=n`).
+pub fn grid_mesh(n: u32, vertex: impl Fn(u32, u32) -> Vec3) -> Mesh {
+    let positions = (0..=n).flat_map(|j| (0..=n).map(move |i| (i, j))).map(|(i, j)| vertex(i, j)).collect();
+    let at = |i: u32, j: u32| j * (n + 1) + i;
+    let triangles = (0..n)
+        .flat_map(|j| {
+            (0..n).flat_map(move |i| {
+                [[at(i, j), at(i + 1, j), at(i + 1, j + 1)], [at(i, j), at(i + 1, j + 1), at(i, j + 1)]]
+            })
+        })
+        .collect();
+    Mesh::new(positions, triangles).unwrap()
 }

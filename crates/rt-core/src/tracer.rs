@@ -35,9 +35,9 @@
 //! off the surface by its error bound ([`crate::surface`]).
 
 use crate::bsdf::Bsdf;
+use crate::color::Color;
 use crate::effects::{EffectPlan, RayCounts};
 use crate::hit::Hit;
-use crate::material::Color;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, normalize_robust, to_f32};
 use crate::sampler::{SampleRng, cosine_hemisphere, stratified};
@@ -70,8 +70,21 @@ impl<'s> Tracer<'s> {
     /// The colour seen along a camera ray (the `cast` rule decides what
     /// counts as a hit); `rng` is this pixel sample's random stream.
     pub fn trace_primary(&self, ray: &Ray, rng: &mut SampleRng, counts: &mut RayCounts) -> Color {
+        self.trace_primary_hit(ray, self.scene.cast(ray), rng, counts)
+    }
+
+    /// [`Tracer::trace_primary`] for a primary ray already cast: `hit` is
+    /// what [`Scene::cast`] gave for `ray` (packets of primary rays are cast
+    /// together, [`Scene::cast_all`]).
+    pub fn trace_primary_hit(
+        &self,
+        ray: &Ray,
+        hit: Option<Hit>,
+        rng: &mut SampleRng,
+        counts: &mut RayCounts,
+    ) -> Color {
         counts.primary += 1;
-        let Some(hit) = self.scene.cast(ray) else {
+        let Some(hit) = hit else {
             return self.scene.background;
         };
         if !self.plan.shading {

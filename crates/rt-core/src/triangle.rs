@@ -162,6 +162,18 @@ impl TriangleRay {
         let d = Vec3::new(ray.dir[kx], ray.dir[ky], ray.dir[kz]);
         Self { ray: *ray, axes: [kx, ky, kz], shear: Vec3::new(-d.x / d.z, -d.y / d.z, 1.0 / d.z) }
     }
+
+    /// The axis order `(kx, ky, kz)`.
+    #[cfg_attr(any(feature = "f64", not(target_arch = "x86_64")), allow(dead_code))]
+    pub(crate) fn axes(&self) -> [usize; 3] {
+        self.axes
+    }
+
+    /// The shear `(sx, sy, sz)`.
+    #[cfg_attr(any(feature = "f64", not(target_arch = "x86_64")), allow(dead_code))]
+    pub(crate) fn shear(&self) -> Vec3 {
+        self.shear
+    }
 }
 
 /// [`intersect_watertight`] on a prepared ray.
@@ -182,9 +194,7 @@ pub fn intersect_watertight_prepared(
     };
     let (p0, p1, p2) = (shear(a), shear(b), shear(c));
 
-    let e0 = difference_of_products(p1.x, p2.y, p1.y, p2.x);
-    let e1 = difference_of_products(p2.x, p0.y, p2.y, p0.x);
-    let e2 = difference_of_products(p0.x, p1.y, p0.y, p1.x);
+    let [e0, e1, e2] = edge_functions(p0, p1, p2);
     if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
         return None;
     }
@@ -208,6 +218,38 @@ pub fn intersect_watertight_prepared(
         return None;
     }
     Some(TriangleHit { t, barycentric: [e0 * inv_det, e1 * inv_det, e2 * inv_det] })
+}
+
+/// The three edge functions of the watertight test for the sheared corners
+/// `p0, p1, p2`: `e₀ = x₁y₂ − y₁x₂`, `e₁ = x₂y₀ − y₂x₀`, `e₂ = x₀y₁ − y₀x₁`,
+/// each with its exact sign (pbrt-v4's `IntersectTriangle`).
+///
+/// With `f32` geometry they are first computed as plain `f32` products and a
+/// difference. Rounding is monotone, so when `x₁y₂ > y₁x₂` exactly, the
+/// rounded products keep that order and their rounded difference is ≥ 0:
+/// the sign is right or the result is 0 (a difference of two distinct floats
+/// is never rounded to 0 under gradual underflow). Only when an edge
+/// function is 0, or not finite (products past `f32::MAX`), are all three
+/// recomputed with [`difference_of_products`], whose sign is exact. Edge
+/// functions of a shared edge, computed from its two corners in either
+/// order, are exact negatives of each other either way, so the test stays
+/// watertight. The SIMD test of four triangles (`bvh::leaf`) does the same
+/// operations lane by lane, so both give the same bits. With `f64` geometry
+/// every edge function is a [`difference_of_products`].
+#[inline(always)]
+pub fn edge_functions(p0: Vec3, p1: Vec3, p2: Vec3) -> [Real; 3] {
+    #[cfg(not(feature = "f64"))]
+    {
+        let e = [p1.x * p2.y - p1.y * p2.x, p2.x * p0.y - p2.y * p0.x, p0.x * p1.y - p0.y * p1.x];
+        if e.iter().all(|e| *e != 0.0 && e.is_finite()) {
+            return e;
+        }
+    }
+    [
+        difference_of_products(p1.x, p2.y, p1.y, p2.x),
+        difference_of_products(p2.x, p0.y, p2.y, p0.x),
+        difference_of_products(p0.x, p1.y, p0.y, p1.x),
+    ]
 }
 
 /// The ray/triangle test `method` on corners `a, b, c`.

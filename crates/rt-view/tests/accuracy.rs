@@ -41,6 +41,14 @@ fn a_quick_run_measures_every_knob_and_writes_csv_table_and_plot() {
     for setting in ["triangle=MollerTrumbore", "triangle=AreaRatio", "sphere=Textbook", "box=SixPlane"] {
         find("methods (showcase)", setting);
     }
+    // Subsurface: noise against samples, and a walk capped at one step
+    // loses light that the reference's walks carry.
+    assert!(rmse("subsurface (spp)", "spp=1") > rmse("subsurface (spp)", "spp=16"));
+    assert_eq!(rmse("subsurface (walk cap)", "max_walk_steps=1000000"), 0.0);
+    assert!(
+        rmse("subsurface (walk cap)", "max_walk_steps=1")
+            > rmse("subsurface (walk cap)", "max_walk_steps=4096")
+    );
     // Geometry: the default methods are never wrong; the course's triangle test is.
     let wrong = |experiment: &str, setting: &str| find(experiment, setting)[8].parse::<usize>().unwrap();
     for r in rows.iter().filter(|r| r[1] == "geometry") {

@@ -70,6 +70,41 @@ fn exported_triangles_keep_the_normals_rt_view_uses() {
 }
 
 #[test]
+fn a_translucent_material_is_exported_with_its_medium() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("sss.ron");
+    std::fs::write(
+        &scene,
+        r#"(
+        camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1),
+        image: (width: 8, height: 6),
+        materials: {
+            "jade": (color: (0.3, 0.7, 0.4), ior: 1.6, subsurface: (albedo: (0.8, 0.9, 0.85), mean_free_path: (0.2, 0.3, 0.25), anisotropy: 0.3)),
+            "grey": (color: (0.5, 0.5, 0.5)),
+        },
+        objects: [ Sphere(center: (0, 0, 0), radius: 1, material: "jade"), Plane(normal: (0, 1, 0), d: -1, material: "grey") ],
+        effects: (global_illumination: (max_walk_steps: 100)),
+    )"#,
+    )
+    .unwrap();
+    let out = dir.path().join("sss.json");
+    let o = rt_view(&["export", scene.to_str().unwrap(), "-o", out.to_str().unwrap()], "");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(json["global_illumination"]["max_walk_steps"], 100);
+    let materials = json["materials"].as_array().unwrap();
+    let jade = materials.iter().find(|m| m["name"] == "jade").unwrap();
+    let f = |v: &serde_json::Value| {
+        v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap() as f32).collect::<Vec<_>>()
+    };
+    assert_eq!(f(&jade["subsurface"]["albedo"]), [0.8, 0.9, 0.85]);
+    assert_eq!(f(&jade["subsurface"]["mean_free_path"]), [0.2, 0.3, 0.25]);
+    assert_eq!(jade["subsurface"]["anisotropy"].as_f64().unwrap() as f32, 0.3);
+    let grey = materials.iter().find(|m| m["name"] == "grey").unwrap();
+    assert!(grey.get("subsurface").is_none());
+}
+
+#[test]
 fn export_refuses_a_bad_scene_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.json");

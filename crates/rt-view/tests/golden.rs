@@ -67,6 +67,16 @@ fn docs_global_illumination_pictures_are_current_renders() {
     }
 }
 
+/// And for the subsurface-scattering pictures of docs/effects.md (and the
+/// README), docs/sss/SCENE.png.
+#[test]
+fn docs_subsurface_pictures_are_current_renders() {
+    let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/sss");
+    for scene in ["subsurface", "translucent_slab", "skin_mesh"] {
+        compare_render(scene, &docs.join(format!("{scene}.png")), &[]);
+    }
+}
+
 /// Renders scenes/`name`.ron with `extra` arguments and compares the result
 /// with `reference`, or overwrites `reference` when `RT_BLESS` is set.
 fn compare_render(name: &str, reference: &Path, extra: &[&str]) {

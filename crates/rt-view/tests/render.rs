@@ -296,17 +296,24 @@ fn bench_runs_and_writes_meshes_cameras_and_csv() {
     assert!(o.status.success(), "{}", stderr(&o));
     let table = String::from_utf8_lossy(&o.stdout);
     assert!(table.contains("Mrays/s") && table.contains("full render"), "{table}");
-    for file in ["terrain_10k.obj", "terrain_10k.json", "terrain_100k.obj", "bench.csv"] {
+    for file in ["terrain_10k.obj", "terrain_10k.json", "terrain_10k.bounce", "terrain_100k.obj", "bench.csv"]
+    {
         assert!(out.join(file).exists(), "{file} missing");
     }
     let csv = std::fs::read_to_string(out.join("bench.csv")).unwrap();
     let rows: Vec<&str> = csv.lines().collect();
     assert_eq!(
         rows[0],
-        "mesh,triangles,bvh_build_s,bytes_per_triangle,threads,mrays_per_s,hits,peak_rss_mib"
+        "mesh,triangles,threads,bvh_build_s,sah_cost,bytes_per_triangle,primary_packets_mrays_per_s,\
+         primary_single_mrays_per_s,bounce_mrays_per_s,hits,bounce_hits,peak_rss_mib"
     );
     assert_eq!(rows.len(), 3, "{csv}");
-    assert!(rows[1].starts_with("10k,10082,") && rows[2].starts_with("100k,100352,"), "{csv}");
+    assert!(rows[1].starts_with("10k,10082,1,") && rows[2].starts_with("100k,100352,1,"), "{csv}");
+    // One bounce ray (28 bytes) from every primary hit, and some of them hit.
+    let fields: Vec<&str> = rows[1].split(',').collect();
+    let (hits, bounce_hits): (u64, u64) = (fields[9].parse().unwrap(), fields[10].parse().unwrap());
+    assert_eq!(std::fs::metadata(out.join("terrain_10k.bounce")).unwrap().len(), 28 * hits);
+    assert!(bounce_hits > 0 && bounce_hits < hits, "{csv}");
 }
 
 #[test]
@@ -322,6 +329,22 @@ fn stats_count_bounce_and_next_event_rays_under_global_illumination_and_nothing_
         assert_eq!(count(kind), 0, "{kind}: {err}");
     }
     assert!(count("bounce ") > 0 && count("next event ") > 0, "{err}");
+    assert_eq!((count("subsurface "), walk_steps(&err)), (0, 0), "{err}");
+}
+
+#[test]
+fn stats_count_subsurface_rays_and_walk_steps_where_a_material_is_translucent() {
+    let err = stats_of("subsurface", 32, 24, 2);
+    assert!(err.contains("subsurface random walks of at most 4096 steps"), "{err}");
+    assert_eq!(ray_count(&err, "primary "), 32 * 24 * 2);
+    assert!(ray_count(&err, "subsurface ") > 0 && walk_steps(&err) > 0, "{err}");
+}
+
+/// The walk steps in `--stats` output.
+fn walk_steps(stats: &str) -> u64 {
+    let counts = stats.lines().find_map(|l| l.strip_prefix("rays: ")).expect("rays line");
+    let steps = counts.split("(walk steps ").nth(1).expect("walk steps");
+    steps.trim_end_matches(')').parse().unwrap()
 }
 
 /// `render --stats` of scenes/`name`.ron at `width`×`height` and `spp`: its stderr.
@@ -340,7 +363,8 @@ fn stats_of(name: &str, width: u32, height: u32, spp: u32) -> String {
 /// The count of rays of `kind` ("primary ", "bounce ", …) in `--stats` output.
 fn ray_count(stats: &str, kind: &str) -> u64 {
     let counts = stats.lines().find_map(|l| l.strip_prefix("rays: ")).expect("rays line");
-    counts.split(", ").find_map(|c| c.strip_prefix(kind)).unwrap().trim().parse().unwrap()
+    let count = counts.split(", ").find_map(|c| c.strip_prefix(kind)).unwrap();
+    count.split_whitespace().next().unwrap().parse().unwrap()
 }
 
 #[test]

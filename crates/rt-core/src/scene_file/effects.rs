@@ -3,8 +3,10 @@
 
 use serde::Deserialize;
 
-use super::values::{Finite, check_count};
-use crate::effects::{AmbientOcclusion, GlobalIllumination, MAX_BOUNCES, MAX_DEPTH, MAX_EFFECT_SAMPLES};
+use super::values::{Finite, check_count, present};
+use crate::effects::{
+    AmbientOcclusion, GlobalIllumination, MAX_BOUNCES, MAX_DEPTH, MAX_EFFECT_SAMPLES, MAX_WALK_STEPS,
+};
 
 /// `effects: (max_depth: 5, ambient_occlusion: (samples: 16, radius: 1.5),
 /// global_illumination: (max_bounces: 8))`; every field optional.
@@ -17,12 +19,6 @@ pub(super) struct EffectsDesc {
     pub(super) ambient_occlusion: Option<AoDesc>,
     #[serde(default, deserialize_with = "present")]
     pub(super) global_illumination: Option<GiDesc>,
-}
-
-/// A field that is `None` when absent and read as its plain value (no
-/// `Some(…)`) when present.
-fn present<'de, D: serde::Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<Option<T>, D::Error> {
-    T::deserialize(d).map(Some)
 }
 
 /// Reflection/refraction recursion depth, 0 to [`MAX_DEPTH`]; 5 when absent.
@@ -65,7 +61,8 @@ impl TryFrom<AoFields> for AoDesc {
     }
 }
 
-/// `global_illumination: (max_bounces: 8, russian_roulette: true)`.
+/// `global_illumination: (max_bounces: 8, russian_roulette: true,
+/// max_walk_steps: 4096)`.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields, rename = "GlobalIllumination")]
 struct GiFields {
@@ -73,6 +70,13 @@ struct GiFields {
     max_bounces: u32,
     #[serde(default = "super::values::yes")]
     russian_roulette: bool,
+    #[serde(default = "default_walk_steps")]
+    max_walk_steps: u32,
+}
+
+/// The walk cap a scene gets unless it sets one.
+fn default_walk_steps() -> u32 {
+    crate::effects::DEFAULT_WALK_STEPS
 }
 
 /// Eight bounces: enough for the light of most interiors.
@@ -88,6 +92,8 @@ impl TryFrom<GiFields> for GiDesc {
     type Error = String;
     fn try_from(f: GiFields) -> Result<Self, String> {
         let max_bounces = check_count("global_illumination.max_bounces", 0..=MAX_BOUNCES, f.max_bounces)?;
-        Ok(Self(GlobalIllumination { max_bounces, russian_roulette: f.russian_roulette }))
+        let max_walk_steps =
+            check_count("global_illumination.max_walk_steps", 1..=MAX_WALK_STEPS, f.max_walk_steps)?;
+        Ok(Self(GlobalIllumination { max_bounces, russian_roulette: f.russian_roulette, max_walk_steps }))
     }
 }

@@ -20,8 +20,8 @@ use std::path::Path;
 use serde::Deserialize;
 use thiserror::Error;
 
+use crate::color::ColorSpace;
 use crate::effects::Lighting;
-use crate::material::ColorSpace;
 use crate::mesh::{Mesh, MeshError};
 use crate::method::Methods;
 use crate::primitive::Primitive;
@@ -184,9 +184,10 @@ fn unique_materials<'de, D: serde::Deserializer<'de>>(
 mod tests {
     use super::*;
     use crate::camera::Projection;
+    use crate::color::Color;
     use crate::effects::{AmbientOcclusion, GlobalIllumination};
     use crate::light::{Light, LightKind};
-    use crate::material::{Color, Material};
+    use crate::material::Material;
     use crate::method::{BoxMethod, SphereMethod, TriangleMethod};
     use crate::real::Vec3;
 
@@ -475,12 +476,101 @@ mod tests {
                 .replace("objects: [", &format!("effects: (global_illumination: ({fields})), objects: ["));
             parse(&text).unwrap().lighting.global_illumination.unwrap()
         };
-        assert_eq!(gi(""), GlobalIllumination { max_bounces: 8, russian_roulette: true });
         assert_eq!(
-            gi("max_bounces: 3, russian_roulette: false"),
-            GlobalIllumination { max_bounces: 3, russian_roulette: false }
+            gi(""),
+            GlobalIllumination { max_bounces: 8, russian_roulette: true, max_walk_steps: 4096 }
+        );
+        assert_eq!(
+            gi("max_bounces: 3, russian_roulette: false, max_walk_steps: 20"),
+            GlobalIllumination { max_bounces: 3, russian_roulette: false, max_walk_steps: 20 }
         );
         assert_eq!(parse(GOOD).unwrap().lighting.global_illumination, None);
+    }
+
+    #[test]
+    fn a_subsurface_material_is_read_and_bad_coefficients_are_refused_at_the_field() {
+        let gi = GOOD.replace("objects: [", "effects: (global_illumination: ()), objects: [");
+        let with = |fields: &str| {
+            gi.replace(
+                "\"red\": (color: (1, 0, 0))",
+                &format!("\"red\": (color: (1, 0, 0), subsurface: ({fields}))"),
+            )
+        };
+        let s = parse(&with("albedo: (0.9, 0.8, 0.7), mean_free_path: (0.1, 0.2, 0.3), anisotropy: 0.4"))
+            .unwrap();
+        let m = s.materials()[s.objects()[0].material].subsurface.unwrap();
+        assert_eq!(m.albedo, Color::new(0.9, 0.8, 0.7));
+        assert_eq!(m.mean_free_path, Color::new(0.1, 0.2, 0.3));
+        assert_eq!(m.anisotropy, 0.4);
+        let g0 = parse(&with("albedo: (1, 1, 1), mean_free_path: (1, 1, 1)")).unwrap();
+        assert_eq!(g0.materials()[g0.objects()[0].material].subsurface.unwrap().anisotropy, 0.0);
+        let bad = |fields: &str| parse(&with(fields)).unwrap_err().to_string();
+        let e = bad("albedo: (1.2, 1, 1), mean_free_path: (1, 1, 1)");
+        assert!(
+            e.starts_with("bad.ron:4:")
+                && e.contains("subsurface.albedo is a fraction: each component must be 0 to 1, got 1.2"),
+            "{e}"
+        );
+        assert!(bad("albedo: (1, -0.1, 1), mean_free_path: (1, 1, 1)").contains("got -0.1"));
+        assert!(
+            bad("albedo: (1, 1, 1), mean_free_path: (1, 0, 1)")
+                .contains("subsurface.mean_free_path is a length")
+        );
+        assert!(bad("albedo: (1, 1, 1), mean_free_path: (1, -2, 1)").contains("got -2"));
+        assert!(bad("albedo: (1, 1, 1), mean_free_path: (1, 1, inf)").contains("expected a finite number"));
+        assert!(
+            bad("albedo: (1, 1, 1), mean_free_path: (1, 1, 1), anisotropy: 1")
+                .contains("subsurface.anisotropy must be between −1 and 1")
+        );
+        assert!(bad("albedo: (1, 1, 1), mean_free_path: (1, 1, 1), anisotropy: -1.5").contains("got -1.5"));
+        assert!(bad("albedo: (1, 1, 1)").contains("mean_free_path"));
+        assert!(
+            bad("albedo: (1, 1, 1), mean_free_path: (1, 1, 1), sigma: 2")
+                .contains("Unexpected field named `sigma`")
+        );
+    }
+
+    #[test]
+    fn only_closed_objects_may_be_translucent_and_only_under_global_illumination() {
+        let gi = GOOD.replace("objects: [", "effects: (global_illumination: ()), objects: [");
+        let translucent = |text: &str, name: &str| {
+            text.replace(
+                &format!("\"{name}\": (color: "),
+                &format!("\"{name}\": (subsurface: (albedo: (1, 1, 1), mean_free_path: (1, 1, 1)), color: "),
+            )
+        };
+        // A sphere is fine; a plane has no inside.
+        assert!(parse(&translucent(&gi, "red")).is_ok());
+        let e = parse(&translucent(&gi, "grey")).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "bad.ron: objects[1] (Plane): material \"grey\" has a subsurface medium, but a Plane has no inside \
+             (only spheres, boxes and closed meshes do)"
+        );
+        // Without global illumination there is nothing to walk with.
+        let e = parse(&translucent(GOOD, "red")).unwrap_err().to_string();
+        assert!(e.contains("objects[0] (Sphere): material \"red\" has a subsurface medium, which needs global illumination"), "{e}");
+        // An open mesh names its hole.
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("open.obj"),
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\n",
+        )
+        .unwrap();
+        let mesh = translucent(&gi, "red").replace(
+            "Sphere(center: (0, 0, 0), radius: 1, material: \"red\")",
+            "Mesh(file: \"open.obj\", material: \"red\")",
+        );
+        let e = parse_scene(&mesh, "bad.ron", dir.path()).unwrap_err().to_string();
+        assert!(e.contains("objects[0] (Mesh): material \"red\" has a subsurface medium, but the mesh is not closed: the edge from"), "{e}");
+        assert!(e.contains("belongs to one face only (a hole)"), "{e}");
+        // Closing it makes it fine.
+        std::fs::write(
+            dir.path().join("open.obj"),
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+        )
+        .unwrap();
+        assert!(parse_scene(&mesh, "bad.ron", dir.path()).is_ok());
     }
 
     #[test]

@@ -3,7 +3,7 @@
 
 use serde::Deserialize;
 
-use crate::material::Color;
+use crate::color::Color;
 use crate::real::{Real, Vec3};
 
 /// A number that must be finite (RON also reads `NaN` and `inf`); 0 by default.
@@ -76,4 +76,12 @@ pub(super) fn white() -> ColorDesc {
 /// `true`, for boolean fields that default to on.
 pub(super) fn yes() -> bool {
     true
+}
+
+/// A field that is `None` when absent and read as its plain value (no
+/// `Some(…)`) when present.
+pub(super) fn present<'de, D: serde::Deserializer<'de>, T: Deserialize<'de>>(
+    d: D,
+) -> Result<Option<T>, D::Error> {
+    T::deserialize(d).map(Some)
 }

@@ -256,6 +256,8 @@ enum Setting {
     Bounces(u32),
     /// Global illumination with Russian roulette on or off, at a sample count.
     Roulette(bool, u32),
+    /// Global illumination's `max_walk_steps` (subsurface random walks).
+    WalkSteps(u32),
 }
 
 impl Setting {
@@ -270,6 +272,7 @@ impl Setting {
             Self::Methods(_) => "default methods".into(),
             Self::Bounces(n) => format!("max_bounces={n}"),
             Self::Roulette(on, n) => format!("roulette={}/{n}spp", if on { "on" } else { "off" }),
+            Self::WalkSteps(n) => format!("max_walk_steps={n}"),
         }
     }
 }
@@ -313,6 +316,16 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         reference: Setting::Roulette(false, reference_spp),
         spp: None,
     };
+    // Subsurface scattering (random walks through the translucent sphere and
+    // box of subsurface.ron): noise against samples, and the bias of capping
+    // the walks' length (same samples, as for the bounce limit).
+    let walk_sweep = Sweep {
+        experiment: "subsurface (walk cap)",
+        scene: "subsurface.ron",
+        settings: [1, 4, 16, 64, 256, 1024, 4096].iter().map(|&n| Setting::WalkSteps(n)).collect(),
+        reference: Setting::WalkSteps(rt_core::effects::MAX_WALK_STEPS),
+        spp: Some(gi_spp),
+    };
     let d = Methods::default();
     let method_sweep = Sweep {
         experiment: "methods (showcase)",
@@ -336,6 +349,8 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         spp_sweep("global illumination (spp)", "cornell_box.ron"),
         bounce_sweep,
         roulette_sweep,
+        spp_sweep("subsurface (spp)", "subsurface.ron"),
+        walk_sweep,
     ];
     let mut rows = Vec::new();
     for sweep in sweeps {
@@ -347,6 +362,8 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
             (scene.width, scene.height)
         } else if sweep.experiment.starts_with("global") {
             if args.quick { (32, 32) } else { (128, 128) }
+        } else if sweep.experiment.starts_with("subsurface") {
+            if args.quick { (32, 24) } else { (160, 120) }
         } else {
             size
         };
@@ -400,6 +417,7 @@ fn render(
         (Setting::Methods(m), _) => scene.methods = m,
         (Setting::Bounces(n), Some(gi)) => gi.max_bounces = n,
         (Setting::Roulette(on, n), Some(gi)) => (gi.russian_roulette, spp) = (on, n),
+        (Setting::WalkSteps(n), Some(gi)) => gi.max_walk_steps = n,
         (_, None) => bail!("{setting:?} needs a scene with global illumination"),
     }
     let renderer = Renderer::new(&scene, w, h, spp)?;

@@ -1,6 +1,14 @@
-//! `rt-view bench`: BVH build, primary-ray throughput and memory on generated
-//! meshes of about 10k, 100k and 1M triangles, and a full render of the
-//! showcase scene. Every figure is the median of `--runs` timed runs.
+//! `rt-view bench`: BVH build, ray throughput and memory on generated meshes
+//! of about 10k, 100k and 1M triangles, and a full render of the showcase
+//! scene. Every figure is the median of `--runs` timed runs.
+//!
+//! Three sets of rays per mesh, at 1280×960: the renderer's primary rays (cast
+//! as packets, [`Scene::cast_all`]), the same rays one at a time
+//! ([`Scene::cast`], what Embree's `rtcIntersect1` does), and incoherent
+//! rays: from each primary hit, one cosine-distributed diffuse bounce with a
+//! fixed seed, as the path tracer spawns it. The meshes, the camera and the
+//! bounce rays are written out, so `bench/embree_primary.py` casts the very
+//! same rays with Intel Embree.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -8,21 +16,26 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use clap::Args;
+use rayon::prelude::*;
 use rt_core::mesh::Mesh;
-use rt_core::{Camera, Color, Material, Primitive, Projection, Real, Renderer, Scene, SceneBuilder, Vec3};
+use rt_core::real::to_f32;
+use rt_core::sampler::{SampleRng, cosine_hemisphere};
+use rt_core::{
+    Camera, Color, Interval, Material, Primitive, Projection, Ray, Real, Renderer, Scene, SceneBuilder, Vec3,
+};
 
 use crate::timing::median;
 
 /// `rt-view bench`.
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// Folder for the generated OBJ files, cameras and bench.csv.
+    /// Folder for the generated meshes, cameras, bounce rays and bench.csv.
     #[arg(long, default_value = "bench-out")]
     pub out: PathBuf,
     /// Timed runs per measurement; the median is reported.
     #[arg(long, default_value_t = 5)]
     pub runs: usize,
-    /// Thread counts to measure throughput with, comma-separated.
+    /// Thread counts to measure builds and throughput with, comma-separated.
     #[arg(long, value_delimiter = ',', default_values_t = [1, 2])]
     pub threads: Vec<usize>,
     /// Only the 10k and 100k meshes (a quick run).
@@ -36,33 +49,38 @@ pub struct BenchArgs {
 /// Image size of the throughput measurement.
 const WIDTH: u32 = 1280;
 const HEIGHT: u32 = 960;
+/// Seed of the bounce rays' random numbers.
+const BOUNCE_SEED: u64 = 1;
 
-/// One generated mesh's results.
-struct MeshResult {
+/// One mesh's results at one thread count.
+struct Row {
     label: &'static str,
     triangles: usize,
+    threads: usize,
     build: Duration,
+    sah_cost: f64,
     bytes_per_triangle: f64,
-    /// (threads, Mrays/s) pairs.
-    mrays: Vec<(usize, f64)>,
+    /// Mrays/s of the renderer (packets), of single primary rays, of bounce rays.
+    packets: f64,
+    single: f64,
+    bounce: f64,
     hits: usize,
+    bounce_hits: usize,
     peak_rss_mib: Option<f64>,
-    /// Median time of the full render pipeline over median time of bare
-    /// `Scene::cast` calls for the same pixels, one thread each.
-    render_over_cast: f64,
 }
 
-/// Runs the benchmark and prints a table; writes meshes and bench.csv to `--out`.
+/// Runs the benchmark and prints a table; writes meshes, rays and bench.csv to `--out`.
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
+    anyhow::ensure!(args.threads.iter().all(|&t| t > 0), "--threads: thread counts must be at least 1");
     let runs = args.runs.max(1);
     let sizes: &[(&str, u32)] =
         if args.quick { &[("10k", 71), ("100k", 224)] } else { &[("10k", 71), ("100k", 224), ("1m", 708)] };
     let camera =
         Camera::new(Vec3::new(0.0, 6.0, -9.0), Vec3::ZERO, Vec3::Y, 50.0, 1.0, Projection::Perspective)?;
-    let mut results = Vec::new();
+    let mut rows = Vec::new();
     for &(label, n) in sizes {
-        eprintln!("terrain {label}: generating {}x{n} quads ...", n);
+        eprintln!("terrain {label}: generating {n}x{n} quads ...");
         let (positions, triangles) = terrain(n);
         write_obj(&args.out.join(format!("terrain_{label}.obj")), &positions, &triangles)?;
         write_camera(&args.out.join(format!("terrain_{label}.json")), &camera)?;
@@ -76,77 +94,127 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                 .object(Primitive::Mesh(mesh), "ground")
                 .build()
         };
-        let mut builds = Vec::new();
-        for _ in 0..runs {
-            builds.push(scene_of(mesh.clone())?.bvh_stats().build_time);
-        }
-        let scene = scene_of(mesh)?;
+        let scene = scene_of(mesh.clone())?;
         let stats = scene.bvh_stats();
         let renderer = Renderer::new(&scene, WIDTH, HEIGHT, 1)?;
-        let rays = WIDTH as f64 * HEIGHT as f64;
-        let mut mrays = Vec::new();
+        let view = renderer.view_plane();
+        let primary: Vec<Ray> =
+            (0..HEIGHT).flat_map(|y| (0..WIDTH).map(move |x| view.center_ray(x, y))).collect();
+        let (bounce, bounce_ids) = bounce_rays(&scene, &primary);
+        write_rays(&args.out.join(format!("terrain_{label}.bounce")), &bounce, &bounce_ids)?;
+        let hits = primary.iter().filter(|r| scene.cast(r).is_some()).count();
+        let bounce_hits = bounce_ids.iter().filter(|&&id| id != u32::MAX).count();
         for &threads in &args.threads {
+            eprintln!("terrain {label}: {threads} thread(s) ...");
+            // A pool per measurement, dropped after it: idle workers of
+            // another pool would compete for the cores.
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-            let times: Vec<Duration> = (0..runs)
-                .map(|_| {
-                    let start = Instant::now();
-                    pool.install(|| renderer.render(|_| {}));
-                    start.elapsed()
+            let build = median(
+                (0..runs)
+                    .map(|_| pool.install(|| scene_of(mesh.clone())).map(|s| s.bvh_stats().build_time))
+                    .collect::<Result<_, _>>()?,
+            );
+            let rays = |f: &(dyn Fn() + Sync)| {
+                primary.len() as f64 / median_of(runs, || pool.install(f)).as_secs_f64() / 1e6
+            };
+            let packets = rays(&|| {
+                renderer.render(|_| {});
+            });
+            let single = rays(&|| {
+                primary.par_chunks(1024).for_each(|c| {
+                    c.iter().for_each(|r| {
+                        let _ = scene.cast(r);
+                    })
+                });
+            });
+            let bounce_rate = bounce.len() as f64
+                / median_of(runs, || {
+                    pool.install(|| {
+                        bounce.par_chunks(1024).for_each(|c| {
+                            c.iter().for_each(|r| {
+                                let _ = bounce_hit(&scene, r);
+                            })
+                        })
+                    })
                 })
-                .collect();
-            mrays.push((threads, rays / median(times).as_secs_f64() / 1e6));
+                .as_secs_f64()
+                / 1e6;
+            rows.push(Row {
+                label,
+                triangles: stats.primitives,
+                threads,
+                build,
+                sah_cost: stats.sah_cost,
+                bytes_per_triangle: (stats.bytes + mesh_bytes) as f64 / stats.primitives as f64,
+                packets,
+                single,
+                bounce: bounce_rate,
+                hits,
+                bounce_hits,
+                peak_rss_mib: peak_rss_mib(),
+            });
         }
-        let render_over_cast = render_over_cast(&scene, &renderer, runs)?;
-        let hits = (0..HEIGHT)
-            .flat_map(|y| (0..WIDTH).map(move |x| (x, y)))
-            .filter(|&(x, y)| scene.cast(&renderer.view_plane().center_ray(x, y)).is_some())
-            .count();
-        results.push(MeshResult {
-            label,
-            triangles: stats.primitives,
-            build: median(builds),
-            bytes_per_triangle: (stats.bytes + mesh_bytes) as f64 / stats.primitives as f64,
-            mrays,
-            hits,
-            peak_rss_mib: peak_rss_mib(),
-            render_over_cast,
-        });
     }
     let showcase = time_scene(&args.showcase, runs)?;
-    report(args, &results, showcase)
+    report(args, &rows, showcase)
 }
 
-/// How much the renderer (effect plan, samples, ray counts, colours) costs
-/// over pure ray casting for a scene without lights: the median time of
-/// `Renderer::render` over the median time of a loop of `Scene::cast` calls
-/// through the same pixel centres that stores the same flat colours. Runs
-/// alternate, on one thread, so drift on a shared machine hits both alike.
-fn render_over_cast(scene: &Scene, renderer: &Renderer, runs: usize) -> anyhow::Result<f64> {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
-    let view = renderer.view_plane();
-    let cast_all = || {
-        let mut pixels = Vec::with_capacity((WIDTH * HEIGHT) as usize);
-        for y in 0..HEIGHT {
-            for x in 0..WIDTH {
-                pixels.push(match scene.cast(&view.center_ray(x, y)) {
-                    Some(hit) => scene.hit_color(&hit),
-                    None => scene.background,
-                });
-            }
+/// The median wall time of `runs` calls of `f`, after one untimed call
+/// (which pages in what the first run would otherwise pay for).
+fn median_of(runs: usize, f: impl Fn()) -> Duration {
+    f();
+    median(
+        (0..runs)
+            .map(|_| {
+                let start = Instant::now();
+                f();
+                start.elapsed()
+            })
+            .collect(),
+    )
+}
+
+/// The incoherent ray set: from each primary hit, one diffuse bounce, drawn
+/// as the path tracer draws it (cosine-distributed about the normal on the
+/// side the ray came from, from an origin offset off the surface), with the
+/// random stream of sample 0 of the pixel under [`BOUNCE_SEED`]. Also the
+/// primitive each bounce ray hits (`u32::MAX` for a miss).
+fn bounce_rays(scene: &Scene, primary: &[Ray]) -> (Vec<Ray>, Vec<u32>) {
+    let rays: Vec<Ray> = primary
+        .par_iter()
+        .enumerate()
+        .filter_map(|(i, ray)| {
+            let hit = scene.cast(ray)?;
+            let object = &scene.objects()[hit.object];
+            let sp = object.primitive.surface_point(hit.primitive, hit.normal, ray.at(hit.t));
+            let n = if sp.normal.dot(ray.dir) < 0.0 { sp.normal } else { -sp.normal };
+            let (x, y) = (i as u32 % WIDTH, i as u32 / WIDTH);
+            let dir = cosine_hemisphere(n, SampleRng::seeded(x, y, 0, BOUNCE_SEED).next_pair());
+            Some(Ray::new(sp.spawn_origin(dir), dir))
+        })
+        .collect();
+    let ids =
+        rays.par_iter().map(|r| bounce_hit(scene, r).map_or(u32::MAX, |h| h.primitive as u32)).collect();
+    (rays, ids)
+}
+
+/// A bounce ray's hit: any `t > 0` counts (its origin is off the surface).
+fn bounce_hit(scene: &Scene, ray: &Ray) -> Option<rt_core::Hit> {
+    scene.closest_hit(ray, Interval::new(0.0, Real::INFINITY))
+}
+
+/// Writes `rays` as little-endian f32 (origin x, y, z, direction x, y, z)
+/// and the primitive each hits as a u32 (`0xFFFFFFFF` for a miss), ray by
+/// ray: 28 bytes each, for `bench/embree_primary.py`.
+fn write_rays(path: &Path, rays: &[Ray], ids: &[u32]) -> anyhow::Result<()> {
+    let mut bytes = Vec::with_capacity(rays.len() * 28);
+    for (r, id) in rays.iter().zip(ids) {
+        for v in [r.origin.x, r.origin.y, r.origin.z, r.dir.x, r.dir.y, r.dir.z] {
+            bytes.extend_from_slice(&to_f32(v).to_le_bytes());
         }
-        pixels
-    };
-    let (mut rendered, mut cast) = (Vec::new(), Vec::new());
-    for _ in 0..runs {
-        let start = Instant::now();
-        let frame = pool.install(|| renderer.render(|_| {}));
-        rendered.push(start.elapsed());
-        let start = Instant::now();
-        let pixels = cast_all();
-        cast.push(start.elapsed());
-        anyhow::ensure!(frame.pixels == pixels, "the renderer and pure casting disagree");
+        bytes.extend_from_slice(&id.to_le_bytes());
     }
-    Ok(median(rendered).as_secs_f64() / median(cast).as_secs_f64())
+    std::fs::write(path, bytes).with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// Median of the showcase's full render time (its own size and spp), if it exists.
@@ -156,72 +224,61 @@ fn time_scene(path: &Path, runs: usize) -> anyhow::Result<Option<(Duration, u32,
     }
     let scene = rt_core::load_scene(path)?;
     let renderer = Renderer::new(&scene, scene.width, scene.height, scene.samples_per_pixel)?;
-    let times = (0..runs)
-        .map(|_| {
-            let start = Instant::now();
-            renderer.render(|_| {});
-            start.elapsed()
-        })
-        .collect();
-    Ok(Some((median(times), scene.width, scene.height)))
+    let time = median_of(runs, || {
+        renderer.render(|_| {});
+    });
+    Ok(Some((time, scene.width, scene.height)))
 }
 
-fn report(
-    args: &BenchArgs,
-    results: &[MeshResult],
-    showcase: Option<(Duration, u32, u32)>,
-) -> anyhow::Result<()> {
-    const COLUMNS: [(&str, &str, usize); 8] = [
-        ("mesh", "mesh", 6),
+fn report(args: &BenchArgs, rows: &[Row], showcase: Option<(Duration, u32, u32)>) -> anyhow::Result<()> {
+    const COLUMNS: [(&str, &str, usize); 12] = [
+        ("mesh", "mesh", 5),
         ("triangles", "triangles", 10),
-        ("build s", "bvh_build_s", 10),
-        ("B/tri", "bytes_per_triangle", 10),
-        ("threads", "threads", 8),
-        ("Mrays/s", "mrays_per_s", 11),
-        ("hits", "hits", 9),
-        ("peak MiB", "peak_rss_mib", 9),
+        ("threads", "threads", 7),
+        ("build s", "bvh_build_s", 8),
+        ("SAH", "sah_cost", 6),
+        ("B/tri", "bytes_per_triangle", 6),
+        ("packets", "primary_packets_mrays_per_s", 8),
+        ("single", "primary_single_mrays_per_s", 8),
+        ("bounce", "bounce_mrays_per_s", 8),
+        ("hits", "hits", 8),
+        ("b. hits", "bounce_hits", 8),
+        ("peak MiB", "peak_rss_mib", 8),
     ];
     let row = |fields: &[String]| {
         fields.iter().zip(COLUMNS).map(|(f, (_, _, w))| format!("{f:>w$}")).collect::<Vec<_>>().join(" ")
     };
     let mut csv = COLUMNS.map(|c| c.1).join(",") + "\n";
-    println!("primary rays {WIDTH}x{HEIGHT}, medians of {} runs", args.runs.max(1));
+    println!(
+        "{WIDTH}x{HEIGHT} rays, Mrays/s: primary rays as the renderer casts them (packets) and one by one \
+         (single), and one diffuse bounce per primary hit; medians of {} runs",
+        args.runs.max(1)
+    );
     println!("{}", row(&COLUMNS.map(|c| c.0.to_owned())));
-    for r in results {
-        for &(threads, m) in &r.mrays {
-            let fields = [
-                r.label.to_owned(),
-                r.triangles.to_string(),
-                format!("{:.4}", r.build.as_secs_f64()),
-                format!("{:.1}", r.bytes_per_triangle),
-                threads.to_string(),
-                format!("{m:.3}"),
-                r.hits.to_string(),
-                r.peak_rss_mib.map_or(String::from("-"), |v| format!("{v:.0}")),
-            ];
-            println!("{}", row(&fields));
-            csv += &(fields.join(",") + "\n");
-        }
+    for r in rows {
+        let fields = [
+            r.label.to_owned(),
+            r.triangles.to_string(),
+            r.threads.to_string(),
+            format!("{:.4}", r.build.as_secs_f64()),
+            format!("{:.2}", r.sah_cost),
+            format!("{:.1}", r.bytes_per_triangle),
+            format!("{:.3}", r.packets),
+            format!("{:.3}", r.single),
+            format!("{:.3}", r.bounce),
+            r.hits.to_string(),
+            r.bounce_hits.to_string(),
+            r.peak_rss_mib.map_or(String::from("-"), |v| format!("{v:.0}")),
+        ];
+        println!("{}", row(&fields));
+        csv += &(fields.join(",") + "\n");
     }
-    if let (Some(first), Some(last)) = (results.first(), results.last())
-        && let (Some(&(t, a)), Some(&(_, b))) = (first.mrays.first(), last.mrays.first())
-    {
-        println!(
-            "time per ray, {} vs {} triangles ({t} thread(s)): {:.2}x",
-            last.triangles,
-            first.triangles,
-            a / b
-        );
-    }
-    let ratios: Vec<String> =
-        results.iter().map(|r| format!("{:.3}x ({})", r.render_over_cast, r.label)).collect();
-    println!("no-effects render / pure ray casting, 1 thread: {}", ratios.join(", "));
     if let Some((time, w, h)) = showcase {
         println!("{}: {w}x{h} full render {:.4} s", args.showcase.display(), time.as_secs_f64());
     }
     let path = args.out.join("bench.csv");
     std::fs::write(&path, csv).with_context(|| format!("cannot write {}", path.display()))?;
-    eprintln!("wrote {} and the meshes to {}", path.display(), args.out.display());
+    eprintln!("wrote {} and the meshes and rays to {}", path.display(), args.out.display());
     Ok(())
 }
 

@@ -62,6 +62,7 @@ struct CameraJson {
 struct GiJson {
     max_bounces: u32,
     russian_roulette: bool,
+    max_walk_steps: u32,
 }
 
 #[derive(Serialize)]
@@ -77,6 +78,17 @@ struct MaterialJson {
     transparency: f32,
     ior: f32,
     emission: [f32; 3],
+    /// The medium inside, if translucent.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    subsurface: Option<SubsurfaceJson>,
+}
+
+#[derive(Serialize)]
+struct SubsurfaceJson {
+    albedo: [f32; 3],
+    /// Per channel, scene units; σt = 1/mean_free_path.
+    mean_free_path: [f32; 3],
+    anisotropy: f32,
 }
 
 #[derive(Serialize)]
@@ -146,6 +158,11 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
             transparency: m.transparency,
             ior: m.ior,
             emission: c3(m.emission),
+            subsurface: m.subsurface.map(|s| SubsurfaceJson {
+                albedo: c3(s.albedo),
+                mean_free_path: c3(s.mean_free_path),
+                anisotropy: s.anisotropy,
+            }),
         })
         .collect();
     let lights = scene
@@ -183,15 +200,16 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
         samples_per_pixel: scene.samples_per_pixel,
         background: c3(scene.background),
         color_space: match scene.color_space {
-            rt_core::material::ColorSpace::Linear => "Linear",
-            rt_core::material::ColorSpace::Srgb => "Srgb",
+            rt_core::color::ColorSpace::Linear => "Linear",
+            rt_core::color::ColorSpace::Srgb => "Srgb",
         },
         ambient: c3(scene.lighting.ambient),
         max_depth: scene.lighting.max_depth,
-        global_illumination: scene
-            .lighting
-            .global_illumination
-            .map(|g| GiJson { max_bounces: g.max_bounces, russian_roulette: g.russian_roulette }),
+        global_illumination: scene.lighting.global_illumination.map(|g| GiJson {
+            max_bounces: g.max_bounces,
+            russian_roulette: g.russian_roulette,
+            max_walk_steps: g.max_walk_steps,
+        }),
         materials,
         objects,
         lights,

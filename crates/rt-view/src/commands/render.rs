@@ -123,7 +123,15 @@ pub fn describe_plan(plan: &EffectPlan) -> String {
     }
     if let Some(gi) = plan.global_illumination {
         let roulette = if gi.russian_roulette { ", Russian roulette" } else { "" };
-        return format!("global illumination (path tracing, at most {} bounces{roulette})", gi.max_bounces);
+        let subsurface = if plan.subsurface {
+            format!(", subsurface random walks of at most {} steps", gi.max_walk_steps)
+        } else {
+            String::new()
+        };
+        return format!(
+            "global illumination (path tracing, at most {} bounces{roulette}{subsurface})",
+            gi.max_bounces
+        );
     }
     let mut on = vec!["shading".to_owned()];
     if plan.shadows {
@@ -147,7 +155,16 @@ pub fn describe_plan(plan: &EffectPlan) -> String {
 /// The ray counts by kind: "primary 345600, shadow 0, …".
 pub fn describe_counts(c: &RayCounts) -> String {
     format!(
-        "primary {}, shadow {}, reflection {}, refraction {}, ambient occlusion {}, bounce {}, next event {}",
-        c.primary, c.shadow, c.reflection, c.refraction, c.ambient_occlusion, c.bounce, c.next_event
+        "primary {}, shadow {}, reflection {}, refraction {}, ambient occlusion {}, bounce {}, next event {}, \
+         subsurface {} (walk steps {})",
+        c.primary,
+        c.shadow,
+        c.reflection,
+        c.refraction,
+        c.ambient_occlusion,
+        c.bounce,
+        c.next_event,
+        c.subsurface,
+        c.walk_steps
     )
 }

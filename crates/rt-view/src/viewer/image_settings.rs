@@ -76,6 +76,11 @@ impl ImageSettings {
                 egui::Checkbox::new(&mut t.global_illumination, "global illumination"),
             )
             .on_hover_text("Path tracing: light bounces between surfaces, glass lets light through, emissive objects and the background light the scene");
+            ui.add_enabled(
+                asked.subsurface && t.global_illumination,
+                egui::Checkbox::new(&mut t.subsurface, "subsurface"),
+            )
+            .on_hover_text("Random walks through translucent objects; off, their materials act as plain surfaces");
             ui.add_enabled(direct && asked.shadows, egui::Checkbox::new(&mut t.shadows, "shadows"));
             ui.add_enabled(direct && asked.reflection, egui::Checkbox::new(&mut t.reflection, "reflection"));
             ui.add_enabled(direct && asked.refraction, egui::Checkbox::new(&mut t.refraction, "refraction"));

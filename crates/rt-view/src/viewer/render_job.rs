@@ -26,8 +26,8 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use egui::Color32;
+use rt_core::color::Color;
 use rt_core::effects::{EffectPlan, RayCounts};
-use rt_core::material::Color;
 use rt_core::render::RenderError;
 use rt_core::{Camera, Renderer, Scene};
 

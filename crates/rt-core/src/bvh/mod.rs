@@ -7,9 +7,11 @@
 //! tree, then collapsed into a 4-wide one (each node holds the boxes of up to
 //! four children, as Embree's BVH4 does; Wald, Benthin and Boulos, "Getting
 //! Rid of Packets", 2008): one node visit tests four boxes with the same
-//! instructions, which the compiler turns into 4-lane SIMD. Leaves store
-//! their triangles' corners inline, in tree order, so a leaf's triangles sit
-//! together in memory.
+//! instructions, which the compiler turns into 4-lane SIMD. A leaf holds up
+//! to four triangles with their corners stored lane by lane, tested at once
+//! with SIMD (`bvh/leaf.rs`); leaves are stored in tree order. Coherent rays
+//! (a pixel's samples, a run of a row's pixels) go down the tree together
+//! as packets ([`Bvh::closest_hits`], `bvh/packet.rs`).
 //!
 //! Traversal goes on with the nearest child a ray enters (the others wait on
 //! a stack) and skips subtrees that start beyond the closest hit so far.
@@ -17,48 +19,52 @@
 //! primitive functions compute each `t` from the same corners, and exact ties
 //! go to the lower (object, primitive) index, as the in-order loop gives them.
 
+mod build;
+mod collapse;
+mod leaf;
+mod packet;
+mod query;
+
+use std::mem::MaybeUninit;
 use std::time::{Duration, Instant};
 
+use rayon::prelude::*;
+
 use crate::aabb::Aabb;
-use crate::hit::{Hit, PrimitiveHit};
+use crate::hit::Hit;
 use crate::method::Methods;
 use crate::object::Object;
 use crate::primitive::Primitive;
 use crate::ray::{Interval, Ray};
-use crate::real::{Real, Vec3, gamma};
-use crate::triangle::{TriangleRay, intersect_by};
+use crate::real::{Real, Vec3, gamma, to_f64};
+use crate::triangle::TriangleRay;
+use build::Item;
+use leaf::{Lanes, Leaf, lanes_of};
+pub use packet::PACKET_RAYS;
+use query::Query;
 
-/// Leaves hold at most this many primitives.
-const MAX_LEAF: usize = 4;
-/// SAH bins per split.
-const BINS: usize = 16;
-/// Below this depth the SAH chooses splits; from here on, splits are at the
-/// median, so the depth stays under SAH_DEPTH plus log₂ of the primitive count.
-const SAH_DEPTH: usize = 64;
 /// Traversal stack entries kept on the machine stack at most: enough for
 /// any tree up to 21 levels deep (4²¹ leaves).
 const INLINE_STACK: usize = 64;
 /// Children per node.
 const WIDTH: usize = 4;
-/// Cost of visiting a node relative to testing one primitive.
-const TRAVERSAL_COST: Real = 1.0;
 
-/// One bounded primitive in a leaf: a mesh triangle with its corners copied
-/// in (so testing it reads nothing else), or a whole object.
+/// A child slot of a [`Node`]: an inner node (`lanes` 0), or the leaf
+/// `leaves[index]` with its [`Lanes`].
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Leaf {
-    /// Triangle `index` of the mesh `object`, corners a, b, c.
-    Triangle { corners: [Vec3; 3], object: u32, index: u32 },
-    /// Any other bounded primitive.
-    Object { object: u32 },
+pub(super) struct Child {
+    index: u32,
+    lanes: Lanes,
 }
 
-/// A child slot of a [`Node`]: an inner node (`count == 0`), or a leaf of
-/// `count` primitives at `leaves[index..]`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Child {
-    index: u32,
-    count: u32,
+impl Child {
+    /// The inner node `nodes[index]`.
+    const fn node(index: u32) -> Self {
+        Self { index, lanes: Lanes(0) }
+    }
+    fn is_leaf(self) -> bool {
+        self.lanes.0 != 0
+    }
 }
 
 /// A 4-wide node: the boxes of its children, stored axis by axis
@@ -67,7 +73,7 @@ struct Child {
 /// enters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
-struct Node {
+pub(super) struct Node {
     /// `bounds[0]` are the minima, `bounds[1]` the maxima.
     bounds: [[[Real; WIDTH]; 3]; 2],
     children: [Child; WIDTH],
@@ -83,8 +89,16 @@ pub struct BvhStats {
     pub nodes: usize,
     /// Nodes on the longest path from the root to a leaf.
     pub depth: usize,
-    /// Bytes of nodes and leaf primitives.
+    /// Leaves in the tree (each holds up to four primitives).
+    pub leaves: usize,
+    /// Bytes of nodes and leaves.
     pub bytes: usize,
+    /// The tree's surface-area-heuristic cost: the expected cost of a ray
+    /// that crosses the scene's box, `Σ A(node)/A(root)·c_node + Σ
+    /// A(leaf)/A(root)·c_leaf` with `c_node` = 1 per 4-wide node visit and
+    /// `c_leaf` = 1 per leaf (its up to four primitives are tested at once).
+    /// Lower is a better tree.
+    pub sah_cost: f64,
     /// Wall time of the build.
     pub build_time: Duration,
 }
@@ -105,79 +119,68 @@ pub struct Bvh {
     stats: BvhStats,
 }
 
-/// A primitive during the build: object `object`, and the triangle `index`
-/// inside it for meshes.
-#[derive(Clone, Copy)]
-struct Item {
-    bounds: Aabb,
-    centroid: Vec3,
-    object: u32,
-    index: u32,
-}
-
-/// A node of the binary tree the build makes first: two adjacent children at
-/// `offset` and `offset + 1` (`count == 0`), or `count` items at `offset`.
-#[derive(Clone, Copy)]
-struct BinaryNode {
-    bounds: Aabb,
-    offset: u32,
-    count: u32,
-}
-
 impl Bvh {
-    /// Builds the hierarchy over `objects`.
+    /// Builds the hierarchy over `objects`, on rayon's current pool.
     pub fn build(objects: &[Object]) -> Self {
         let start = Instant::now();
-        let mut items = Vec::new();
-        let mut unbounded = Vec::new();
+        let unbounded: Vec<u32> =
+            (0..objects.len() as u32).filter(|&o| objects[o as usize].primitive.bounds().is_none()).collect();
+        // One item per bounded primitive, a mesh's triangles one by one
+        // (degenerate ones left out); a million triangles' boxes on all threads.
+        let mut candidates: Vec<(u32, u32)> = Vec::new();
         for (o, object) in objects.iter().enumerate() {
-            let (primitive, object) = (&object.primitive, o as u32);
-            match primitive {
+            match &object.primitive {
                 Primitive::Mesh(mesh) => {
-                    for i in 0..mesh.triangle_count() {
-                        if mesh.normal(i) != Vec3::ZERO {
-                            let bounds = Aabb::from_points(mesh.triangle(i)).expect("three corners");
-                            items.push(Item::new(bounds, object, i as u32));
-                        }
-                    }
+                    candidates.extend((0..mesh.triangle_count() as u32).map(|i| (o as u32, i)))
                 }
-                p => match p.bounds() {
-                    Some(bounds) => items.push(Item::new(bounds, object, 0)),
-                    None => unbounded.push(object),
-                },
+                p if p.bounds().is_some() => candidates.push((o as u32, 0)),
+                _ => {}
             }
         }
+        let mut items: Vec<Item> = candidates
+            .into_par_iter()
+            .filter_map(|(o, i)| match &objects[o as usize].primitive {
+                Primitive::Mesh(mesh) => (mesh.normal(i as usize) != Vec3::ZERO).then(|| {
+                    Item::new(Aabb::from_points(mesh.triangle(i as usize)).expect("three corners"), o, i)
+                }),
+                p => p.bounds().map(|b| Item::whole(b, o)),
+            })
+            .collect();
         let mut nodes = Vec::new();
-        let (mut depth, mut stack_bound) = (0, 0);
+        let mut leaf_items = Vec::new();
+        let (mut depth, mut stack_bound, mut sah_cost) = (0, 0, 0.0);
         let mut bounds = None;
         if !items.is_empty() {
-            let mut binary = vec![BinaryNode::placeholder()];
-            build_binary(&mut binary, &mut items, 0, 0, 0);
-            bounds = Some(binary[0].bounds);
-            let root;
-            (root, depth, stack_bound) = child_of(&binary, 0, &mut nodes);
-            if root.count > 0 {
+            let tree = build::build(&mut items);
+            let root_box = tree.bounds();
+            bounds = Some(root_box);
+            // Leaves get their slots in tree order; they are filled below, on all threads.
+            let mut leaf = |first: u32, count: u32| {
+                let range = first as usize..(first + count) as usize;
+                let lanes = Leaf::lanes(&items[range.clone()], objects);
+                leaf_items.push(range);
+                Child { index: leaf_items.len() as u32 - 1, lanes }
+            };
+            let root = collapse::collapse(&tree, &mut nodes, &mut leaf);
+            (depth, stack_bound) = (root.depth, root.stack);
+            if root.child.is_leaf() {
                 // The whole tree is one leaf: a root node with it as its only child.
                 let mut node = Node::EMPTY;
-                node.set(0, binary[0].bounds, root);
+                node.set(0, root_box, root.child);
                 nodes.push(node);
                 depth = 1;
             }
+            sah_cost = root.cost / to_f64(root_box.surface_area()).max(f64::MIN_POSITIVE);
         }
-        let leaves: Vec<Leaf> = items
-            .iter()
-            .map(|&Item { object, index, .. }| match object_primitive(objects, object) {
-                Primitive::Mesh(mesh) => {
-                    Leaf::Triangle { corners: mesh.triangle(index as usize), object, index }
-                }
-                _ => Leaf::Object { object },
-            })
-            .collect();
+        let leaves: Vec<Leaf> =
+            leaf_items.into_par_iter().map(|range| Leaf::new(&items[range], objects).0).collect();
         let stats = BvhStats {
-            primitives: leaves.len(),
+            primitives: items.len(),
             nodes: nodes.len(),
+            leaves: leaves.len(),
             depth,
             bytes: nodes.len() * size_of::<Node>() + leaves.len() * size_of::<Leaf>(),
+            sah_cost,
             build_time: start.elapsed(),
         };
         Self { nodes, leaves, stack_bound, unbounded, bounds, stats }
@@ -202,47 +205,30 @@ impl Bvh {
         range: Interval,
         methods: Methods,
     ) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
-        let prepared = TriangleRay::new(ray);
-        let consider = |leaf: &Leaf, best: &mut Option<Hit>| {
-            // Accept t equal to the best so far, so that ties can go to the lower index.
-            let max = best.map_or(range.max, |b| b.t.next_up());
-            if let Some(h) = intersect_leaf(objects, leaf, &prepared, Interval::new(range.min, max), methods)
-            {
-                let better = best.is_none_or(|b| {
-                    h.t < b.t || (h.t == b.t && (h.object, h.primitive) < (b.object, b.primitive))
-                });
-                if better {
-                    *best = Some(h);
-                }
-            }
-        };
-        for &object in &self.unbounded {
-            consider(&Leaf::Object { object }, &mut best);
-        }
+        let mut query = Query::new(ray, range);
+        query.test_unbounded(self, objects, methods);
         // Boxes entering beyond the best hit so far cannot improve on it (one
         // entering exactly there can still win a tie, and is visited).
-        let t_max = best.map_or(range.max, |b| b.t);
-        self.traverse(ray, Interval::new(range.min, t_max), |leaves| {
-            for leaf in leaves {
-                consider(leaf, &mut best);
-            }
-            best.map(|b| b.t)
+        self.traverse(ray, Interval::new(range.min, query.t_max()), |leaf, lanes| {
+            query.test_leaf(objects, leaf, lanes, methods);
+            query.best_t()
         });
-        best
+        query.finish(objects)
     }
 
     /// Whether anything is hit with `t` in `range` (shadow rays): stops at
     /// the first hit found.
     pub fn any_hit(&self, objects: &[Object], ray: &Ray, range: Interval, methods: Methods) -> bool {
         let prepared = TriangleRay::new(ray);
-        let hits = |leaf: &Leaf| intersect_leaf(objects, leaf, &prepared, range, methods).is_some();
-        if self.unbounded.iter().any(|&object| hits(&Leaf::Object { object })) {
+        let hits =
+            |object: u32| object_primitive(objects, object).intersect_with(ray, range, methods).is_some();
+        if self.unbounded.iter().any(|&object| hits(object)) {
             return true;
         }
         let mut found = false;
-        self.traverse(ray, range, |leaves| {
-            found = leaves.iter().any(hits);
+        self.traverse(ray, range, |leaf, lanes| {
+            found = leaf.intersect_triangles(lanes.triangles(), &prepared, range, methods.triangle).1 != 0
+                || lanes_of(lanes.objects()).any(|lane| hits(leaf.object(lane)));
             // −∞ as the new limit: no box can be entered before it, so the traversal ends.
             found.then_some(Real::NEG_INFINITY)
         });
@@ -252,19 +238,17 @@ impl Bvh {
     /// Visits the leaves whose boxes the ray enters within `range`, always
     /// going on with the nearest child entered at each node. `leaf` tests a leaf's primitives and returns the `t` of the
     /// closest hit so far, which prunes boxes that start beyond it.
-    fn traverse(&self, ray: &Ray, range: Interval, leaf: impl FnMut(&[Leaf]) -> Option<Real>) {
+    fn traverse(&self, ray: &Ray, range: Interval, leaf: impl FnMut(&Leaf, Lanes) -> Option<Real>) {
         if self.nodes.is_empty() {
             return;
         }
-        // The stack is an array on the machine stack, no bigger than the
-        // tree needs (clearing it is part of every ray's cost), unless the
-        // tree is unusually deep.
-        const EMPTY: (Child, Real) = (Child { index: 0, count: 0 }, 0.0);
-        match self.stack_bound {
-            0..=16 => self.traverse_with(&mut [EMPTY; 16], ray, range, leaf),
-            17..=32 => self.traverse_with(&mut [EMPTY; 32], ray, range, leaf),
-            33..=INLINE_STACK => self.traverse_with(&mut [EMPTY; INLINE_STACK], ray, range, leaf),
-            needed => self.traverse_with(&mut vec![EMPTY; needed], ray, range, leaf),
+        // The stack is an uninitialised array on the machine stack (setting
+        // it up costs nothing), unless the tree is unusually deep.
+        let uninit = const { MaybeUninit::uninit() };
+        if self.stack_bound <= INLINE_STACK {
+            self.traverse_with(&mut [uninit; INLINE_STACK], ray, range, leaf)
+        } else {
+            self.traverse_with(&mut vec![uninit; self.stack_bound], ray, range, leaf)
         }
     }
 
@@ -272,17 +256,17 @@ impl Bvh {
     /// the t where the ray enters them.
     fn traverse_with(
         &self,
-        stack: &mut [(Child, Real)],
+        stack: &mut [MaybeUninit<(Child, Real)>],
         ray: &Ray,
         range: Interval,
-        mut leaf: impl FnMut(&[Leaf]) -> Option<Real>,
+        mut leaf: impl FnMut(&Leaf, Lanes) -> Option<Real>,
     ) {
         let slabs = Slabs::new(ray);
         let mut t_max = range.max;
         let mut sp = 0;
-        let mut current = Child { index: 0, count: 0 };
+        let mut current = Child::node(0);
         loop {
-            if current.count == 0 {
+            if !current.is_leaf() {
                 let node = &self.nodes[current.index as usize];
                 let (near, entered) = slabs.entries(node, range.min, t_max);
                 // Go on with the nearest entered child; the others wait on the
@@ -292,22 +276,23 @@ impl Bvh {
                     let slot = entered.trailing_zeros() as usize;
                     let mut rest = entered & (entered - 1);
                     let mut nearest = (node.children[slot], near[slot]);
+                    self.prefetch(nearest.0);
                     while rest != 0 {
                         let slot = rest.trailing_zeros() as usize;
                         rest &= rest - 1;
                         let mut entry = (node.children[slot], near[slot]);
+                        self.prefetch(entry.0);
                         if entry.1 < nearest.1 {
                             std::mem::swap(&mut entry, &mut nearest);
                         }
-                        stack[sp] = entry;
+                        stack[sp].write(entry);
                         sp += 1;
                     }
                     current = nearest.0;
                     continue;
                 }
             } else {
-                let first = current.index as usize;
-                if let Some(t) = leaf(&self.leaves[first..first + current.count as usize]) {
+                if let Some(t) = leaf(&self.leaves[current.index as usize], current.lanes) {
                     t_max = t_max.min(t);
                 }
             }
@@ -317,10 +302,32 @@ impl Bvh {
                     return;
                 }
                 sp -= 1;
-                if stack[sp].1 <= t_max {
-                    current = stack[sp].0;
+                // SAFETY: entries below `sp` were all written above.
+                let (child, near) = unsafe { stack[sp].assume_init() };
+                if near <= t_max {
+                    current = child;
                     break;
                 }
+            }
+        }
+    }
+}
+
+impl Bvh {
+    /// Asks the CPU to start loading `child`'s node or leaf into the cache.
+    #[inline(always)]
+    fn prefetch(&self, child: Child) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+            let (ptr, bytes) = if child.is_leaf() {
+                (self.leaves.as_ptr().wrapping_add(child.index as usize) as *const i8, size_of::<Leaf>())
+            } else {
+                (self.nodes.as_ptr().wrapping_add(child.index as usize) as *const i8, size_of::<Node>())
+            };
+            for line in (0..bytes).step_by(64) {
+                // SAFETY: prefetching never faults, whatever the address.
+                unsafe { _mm_prefetch::<_MM_HINT_T0>(ptr.wrapping_add(line)) };
             }
         }
     }
@@ -331,133 +338,11 @@ fn object_primitive(objects: &[Object], o: u32) -> &Primitive {
     &objects[o as usize].primitive
 }
 
-/// Splits binary node `node`, which holds `items` (starting at `first` in
-/// the final order), by the binned SAH, or leaves it a leaf.
-fn build_binary(nodes: &mut Vec<BinaryNode>, items: &mut [Item], node: usize, first: usize, depth: usize) {
-    let n = items.len();
-    let bounds = items.iter().map(|i| i.bounds).reduce(Aabb::union).expect("non-empty");
-    nodes[node] = BinaryNode { bounds, offset: first as u32, count: n as u32 };
-    if n <= 1 {
-        return;
-    }
-    let centroids = Aabb::from_points(items.iter().map(|i| i.centroid)).expect("non-empty");
-    let axis = centroids.size().max_position();
-    let (lo, extent) = (centroids.min()[axis], centroids.size()[axis]);
-    let mid = if extent <= 0.0 || depth >= SAH_DEPTH {
-        // Coincident centroids, or deep enough: a leaf if small, else the median.
-        if n <= MAX_LEAF && extent <= 0.0 {
-            return;
-        }
-        items.sort_unstable_by(|a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
-        n / 2
-    } else {
-        let bin_of = |c: Vec3| (((c[axis] - lo) / extent * BINS as Real) as usize).min(BINS - 1);
-        let mut bins = [(None::<Aabb>, 0usize); BINS];
-        for item in items.iter() {
-            let b = &mut bins[bin_of(item.centroid)];
-            b.0 = Some(b.0.map_or(item.bounds, |x| x.union(item.bounds)));
-            b.1 += 1;
-        }
-        // Sweep from the right for the right-hand areas, then from the left.
-        let mut right_area = [0.0 as Real; BINS];
-        let (mut acc, mut count) = (None::<Aabb>, 0);
-        let mut right_count = [0usize; BINS];
-        for k in (1..BINS).rev() {
-            acc = union_opt(acc, bins[k].0);
-            count += bins[k].1;
-            right_area[k] = acc.map_or(0.0, |b| b.surface_area());
-            right_count[k] = count;
-        }
-        let (mut best, mut best_cost) = (0, Real::INFINITY);
-        let (mut acc, mut count) = (None::<Aabb>, 0);
-        for k in 1..BINS {
-            acc = union_opt(acc, bins[k - 1].0);
-            count += bins[k - 1].1;
-            let cost = count as Real * acc.map_or(0.0, |b| b.surface_area())
-                + right_count[k] as Real * right_area[k];
-            if cost < best_cost && count > 0 && right_count[k] > 0 {
-                (best, best_cost) = (k, cost);
-            }
-        }
-        let split_cost = TRAVERSAL_COST + best_cost / bounds.surface_area().max(Real::MIN_POSITIVE);
-        if best == 0 || (n <= MAX_LEAF && split_cost >= n as Real) {
-            if n <= MAX_LEAF {
-                return;
-            }
-            items.sort_unstable_by(|a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
-            n / 2
-        } else {
-            partition(items, |i| bin_of(i.centroid) < best)
-        }
-    };
-    let children = nodes.len();
-    // Filled in by the recursive calls below, which compute their bounds.
-    nodes.push(BinaryNode::placeholder());
-    nodes.push(BinaryNode::placeholder());
-    nodes[node].count = 0;
-    nodes[node].offset = children as u32;
-    let (left, right) = items.split_at_mut(mid);
-    build_binary(nodes, left, children, first, depth + 1);
-    build_binary(nodes, right, children + 1, first + mid, depth + 1);
-}
-
-/// The 4-wide child for binary node `b`: a leaf as it is, or a new node
-/// (appended to `nodes`) whose children are the up to four binary subtrees
-/// found by repeatedly opening the inner child with the largest surface
-/// area (the usual collapse; it keeps the SAH tree's splits).
-///
-/// Also returns the number of 4-wide nodes on the longest path down, and the
-/// stack bound of the subtree (see [`Bvh::stack_bound`]).
-fn child_of(binary: &[BinaryNode], b: usize, nodes: &mut Vec<Node>) -> (Child, usize, usize) {
-    let node = binary[b];
-    if node.count > 0 {
-        return (Child { index: node.offset, count: node.count }, 0, 0);
-    }
-    let mut open = vec![node.offset as usize, node.offset as usize + 1];
-    while open.len() < WIDTH {
-        let widest =
-            open.iter().enumerate().filter(|&(_, &c)| binary[c].count == 0).max_by(|a, b| {
-                binary[*a.1].bounds.surface_area().total_cmp(&binary[*b.1].bounds.surface_area())
-            });
-        let Some((slot, &c)) = widest else { break };
-        let first = binary[c].offset as usize;
-        open[slot] = first;
-        open.insert(slot + 1, first + 1);
-    }
-    let index = nodes.len();
-    nodes.push(Node::EMPTY);
-    let (mut depth, mut stack) = (0, 0);
-    for (slot, &c) in open.iter().enumerate() {
-        let (child, below, child_stack) = child_of(binary, c, nodes);
-        nodes[index].set(slot, binary[c].bounds, child);
-        depth = depth.max(below);
-        stack = stack.max(child_stack);
-    }
-    (Child { index: index as u32, count: 0 }, depth + 1, stack + open.len() - 1)
-}
-
-impl Item {
-    fn new(bounds: Aabb, object: u32, index: u32) -> Self {
-        // Widen by a few ulps, so that rounding in a primitive's own bounds
-        // can never cut off a hit its intersection routine finds.
-        let pad = Vec3::splat(4.0 * Real::EPSILON) * bounds.min().abs().max(bounds.max().abs());
-        let bounds = Aabb::from_corners(bounds.min() - pad, bounds.max() + pad);
-        Self { bounds, centroid: bounds.center(), object, index }
-    }
-}
-
-impl BinaryNode {
-    /// A slot reserved for a node that `build_binary` fills in.
-    fn placeholder() -> Self {
-        Self { bounds: Aabb::from_corners(Vec3::ZERO, Vec3::ZERO), offset: 0, count: 0 }
-    }
-}
-
 impl Node {
     /// A node with four empty slots.
     const EMPTY: Node = Node {
         bounds: [[[Real::INFINITY; WIDTH]; 3], [[Real::NEG_INFINITY; WIDTH]; 3]],
-        children: [Child { index: 0, count: 0 }; WIDTH],
+        children: [Child::node(0); WIDTH],
     };
 
     /// Puts `child` with `bounds` into `slot`.
@@ -518,59 +403,11 @@ impl Slabs {
     }
 }
 
-/// The hit on one leaf primitive: a single triangle of a mesh, or the whole
-/// primitive otherwise.
-#[inline]
-fn intersect_leaf(
-    objects: &[Object],
-    leaf: &Leaf,
-    ray: &TriangleRay,
-    range: Interval,
-    methods: Methods,
-) -> Option<Hit> {
-    match *leaf {
-        Leaf::Triangle { corners: [a, b, c], object, index } => {
-            let hit = intersect_by(methods.triangle, a, b, c, ray, range)?;
-            let Primitive::Mesh(mesh) = object_primitive(objects, object) else {
-                unreachable!("triangle leaves come from meshes")
-            };
-            let index = index as usize;
-            Some(Hit::new(
-                object as usize,
-                PrimitiveHit { t: hit.t, primitive: index, normal: mesh.normal(index) },
-            ))
-        }
-        Leaf::Object { object } => object_primitive(objects, object)
-            .intersect_with(&ray.ray, range, methods)
-            .map(|h| Hit::new(object as usize, h)),
-    }
-}
-
-fn union_opt(a: Option<Aabb>, b: Option<Aabb>) -> Option<Aabb> {
-    match (a, b) {
-        (Some(a), Some(b)) => Some(a.union(b)),
-        (a, b) => a.or(b),
-    }
-}
-
-/// Moves the items for which `left` holds to the front; returns how many.
-fn partition(items: &mut [Item], left: impl Fn(&Item) -> bool) -> usize {
-    let mut i = 0;
-    for j in 0..items.len() {
-        if left(&items[j]) {
-            items.swap(i, j);
-            i += 1;
-        }
-    }
-    i
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::Mesh;
     use crate::test_support::{
-        primitives_of, random_parts, random_primitive as primitive, scene_of as scene, v,
+        grid_mesh, primitives_of, random_parts, random_primitive as primitive, scene_of as scene, v,
     };
     use proptest::prelude::*;
 
@@ -653,25 +490,38 @@ mod tests {
     #[test]
     fn a_tree_too_deep_for_the_inline_stack_still_finds_every_hit() {
         // Boxes at exponentially growing distances: each SAH split peels off
-        // only the farthest few, so the tree is a long chain.
-        let boxes: Vec<Primitive> = (0..100)
+        // only the farthest few, so the tree is a long chain whose stack
+        // bound is past the inline stack: every query takes the
+        // heap-allocated stack (and packets fall back to single rays).
+        let boxes: Vec<Primitive> = (0..300)
             .map(|k| {
-                let s = (1.5 as Real).powi(k);
+                let s = (1.3 as Real).powi(k);
                 Primitive::Aabb(Aabb::new(Vec3::splat(s), Vec3::splat(1.2 * s)).unwrap())
             })
             .collect();
         let s = scene(boxes);
-        let depth = s.bvh_stats().depth;
-        let bound = Bvh::build(s.objects()).stack_bound;
-        assert!(bound > INLINE_STACK, "depth {depth}, stack bound {bound}");
-        for k in 0..100 {
-            let target = Vec3::splat(1.1 * (1.5 as Real).powi(k));
+        let bvh = Bvh::build(s.objects());
+        assert!(bvh.stack_bound > INLINE_STACK, "stack bound {}", bvh.stack_bound);
+        for k in 0..300 {
+            let target = Vec3::splat(1.1 * (1.3 as Real).powi(k));
+            let mut rays = Vec::new();
             for origin in [Vec3::new(-1.0, 0.0, 0.5), Vec3::splat(1e30)] {
                 let ray = Ray::new(origin, target - origin);
                 let range = s.cast_range(&ray);
-                assert_eq!(s.closest_hit(&ray, range), s.closest_hit_brute_force(&ray, range), "box {k}");
-                assert!(s.any_hit(&ray, range));
+                let expected = s.closest_hit_brute_force(&ray, range);
+                assert!(expected.is_some());
+                assert_eq!(
+                    bvh.closest_hit(s.objects(), &ray, range, Methods::default()),
+                    expected,
+                    "box {k}"
+                );
+                assert!(bvh.any_hit(s.objects(), &ray, range, Methods::default()));
+                rays.push((ray, range, expected));
             }
+            let mut hits = [None; 2];
+            let (only, ranges): (Vec<Ray>, Vec<Interval>) = rays.iter().map(|r| (r.0, r.1)).unzip();
+            bvh.closest_hits(s.objects(), &only, &ranges, Methods::default(), &mut hits);
+            assert_eq!(hits.to_vec(), rays.iter().map(|r| r.2).collect::<Vec<_>>());
         }
     }
 
@@ -686,25 +536,16 @@ mod tests {
     #[test]
     fn a_large_mesh_builds_a_shallow_tree_and_stats_add_up() {
         // A 100×100 grid: 20 000 triangles.
-        let n = 100u32;
-        let positions =
-            (0..=n).flat_map(|j| (0..=n).map(move |i| Vec3::new(i as Real, j as Real, 0.0))).collect();
-        let at = |i: u32, j: u32| j * (n + 1) + i;
-        let triangles = (0..n)
-            .flat_map(|j| {
-                (0..n).flat_map(move |i| {
-                    [[at(i, j), at(i + 1, j), at(i + 1, j + 1)], [at(i, j), at(i + 1, j + 1), at(i, j + 1)]]
-                })
-            })
-            .collect();
-        let s = scene(vec![Primitive::Mesh(Mesh::new(positions, triangles).unwrap())]);
+        let grid = grid_mesh(100, |i, j| Vec3::new(i as Real, j as Real, 0.0));
+        let s = scene(vec![Primitive::Mesh(grid)]);
         let stats = s.bvh_stats();
         assert_eq!(stats.primitives, 20_000);
         // A 4-wide tree over leaves of up to MAX_LEAF triangles: about a
         // third as many nodes as leaves.
-        let leaves_min = 20_000 / MAX_LEAF;
+        let leaves_min = 20_000 / build::MAX_LEAF;
         assert!(stats.nodes > leaves_min / 4 && stats.nodes < 20_000 / 2, "{} nodes", stats.nodes);
-        assert_eq!(stats.bytes, stats.nodes * size_of::<Node>() + 20_000 * size_of::<Leaf>());
+        assert!(stats.leaves >= 20_000 / leaf::LANES && stats.leaves < 20_000);
+        assert_eq!(stats.bytes, stats.nodes * size_of::<Node>() + stats.leaves * size_of::<Leaf>());
         let ray = Ray::new(Vec3::new(37.3, 61.2, -10.0), Vec3::Z);
         let hit = s.cast(&ray).unwrap();
         assert_eq!(Some(hit), s.closest_hit_brute_force(&ray, s.cast_range(&ray)));

@@ -1,0 +1,358 @@
+//! The first step of the build: a binary tree by the binned surface-area
+//! heuristic (Wald, "On fast Construction of SAH-based Bounding Volume
+//! Hierarchies", 2007), in parallel.
+//!
+//! Each node's items are binned into [`BINS`] bins along the axis where
+//! their centroids spread most; the split between bins that minimises
+//! `n_left·A_left + n_right·A_right` wins, unless making a leaf costs less.
+//! Large nodes bin their items on every thread (each thread bins a share,
+//! then the bins are merged), and the two halves of a split are built at
+//! the same time (`rayon::join`). Every decision depends only on the node's
+//! items, and merging bins (box unions, counts) is exact whatever the order,
+//! so the tree is the same, node for node, on any number of threads
+//! (tested).
+
+use rayon::prelude::*;
+
+use crate::aabb::Aabb;
+use crate::real::{Real, Vec3};
+
+/// Leaves hold at most this many primitives.
+pub(super) const MAX_LEAF: usize = super::leaf::LANES;
+/// SAH bins per split.
+const BINS: usize = 16;
+/// Below this depth the SAH chooses splits; from here on, splits are at the
+/// median, so the depth stays under SAH_DEPTH plus log₂ of the primitive count.
+const SAH_DEPTH: usize = 64;
+/// Cost of visiting a node relative to testing one primitive.
+pub(super) const TRAVERSAL_COST: Real = 1.0;
+/// Nodes with more items than this bin them on all threads and build their
+/// halves in parallel; smaller ones are built by one thread.
+const PARALLEL_ITEMS: usize = 8 * 1024;
+
+/// A primitive during the build: triangle `index` of the mesh `object`, or
+/// the whole object `object` (`whole`, with `index` 0).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Item {
+    pub bounds: Aabb,
+    pub object: u32,
+    pub index: u32,
+    pub whole: bool,
+}
+
+impl Item {
+    /// Triangle `index` of the mesh `object`, with `bounds`.
+    pub fn new(bounds: Aabb, object: u32, index: u32) -> Self {
+        Self::padded(bounds, object, index, false)
+    }
+
+    /// The whole object `object` (any bounded primitive but a mesh), with `bounds`.
+    pub fn whole(bounds: Aabb, object: u32) -> Self {
+        Self::padded(bounds, object, 0, true)
+    }
+
+    fn padded(bounds: Aabb, object: u32, index: u32, whole: bool) -> Self {
+        // Widen by a few ulps, so that rounding in a primitive's own bounds
+        // can never cut off a hit its intersection routine finds.
+        let pad = Vec3::splat(4.0 * Real::EPSILON) * bounds.min().abs().max(bounds.max().abs());
+        let bounds = Aabb::from_corners(bounds.min() - pad, bounds.max() + pad);
+        Self { bounds, object, index, whole }
+    }
+
+    /// The centre of its box (computed when needed: the build moves items
+    /// around a lot, and smaller ones move faster).
+    #[inline(always)]
+    pub fn centroid(&self) -> Vec3 {
+        self.bounds.center()
+    }
+}
+
+/// A node of the binary tree.
+#[derive(Debug, PartialEq)]
+pub(super) enum BuildNode {
+    /// `count` items at `first` in the final item order.
+    Leaf { bounds: Aabb, first: u32, count: u32 },
+    /// Two subtrees.
+    Inner { bounds: Aabb, children: Box<[BuildNode; 2]> },
+}
+
+impl BuildNode {
+    /// The box around everything below.
+    pub fn bounds(&self) -> Aabb {
+        match self {
+            Self::Leaf { bounds, .. } | Self::Inner { bounds, .. } => *bounds,
+        }
+    }
+}
+
+/// Builds the binary tree over `items` (non-empty), reordering them so that
+/// every leaf's items are contiguous.
+pub(super) fn build(items: &mut [Item]) -> BuildNode {
+    let all = Bin::of(items, items.len() > PARALLEL_ITEMS);
+    build_node(items, all, 0, 0)
+}
+
+/// The boxes of a set of items: around the items, and around their
+/// centroids.
+#[derive(Clone, Copy)]
+struct Bin {
+    /// Box around the items (empty: min = +∞, max = −∞).
+    min: Wide,
+    max: Wide,
+    /// Box around their centroids.
+    centroid_min: Wide,
+    centroid_max: Wide,
+    count: usize,
+    /// How many of them are whole objects (the rest are mesh triangles).
+    whole: usize,
+}
+
+/// The vector type bins keep their boxes in: with f32 geometry glam's
+/// 16-byte `Vec3A`, whose min and max are one SSE instruction each.
+#[cfg(not(feature = "f64"))]
+type Wide = glam::Vec3A;
+#[cfg(feature = "f64")]
+type Wide = Vec3;
+
+impl Bin {
+    const EMPTY: Bin = Bin {
+        min: Wide::INFINITY,
+        max: Wide::NEG_INFINITY,
+        centroid_min: Wide::INFINITY,
+        centroid_max: Wide::NEG_INFINITY,
+        count: 0,
+        whole: 0,
+    };
+
+    #[inline(always)]
+    fn add(&mut self, item: &Item) {
+        let (min, max) = (Wide::from(item.bounds.min()), Wide::from(item.bounds.max()));
+        // The same sum and product as Aabb::center, so the same centroid.
+        let centroid = 0.5 * (min + max);
+        self.min = self.min.min(min);
+        self.max = self.max.max(max);
+        self.centroid_min = self.centroid_min.min(centroid);
+        self.centroid_max = self.centroid_max.max(centroid);
+        self.count += 1;
+        self.whole += usize::from(item.whole);
+    }
+
+    fn merge(&mut self, other: &Bin) {
+        self.min = self.min.min(other.min);
+        self.max = self.max.max(other.max);
+        self.centroid_min = self.centroid_min.min(other.centroid_min);
+        self.centroid_max = self.centroid_max.max(other.centroid_max);
+        self.count += other.count;
+        self.whole += other.whole;
+    }
+
+    /// What testing these items in leaves costs, relative to one node
+    /// visit: leaves test up to [`MAX_LEAF`] mesh triangles at once with
+    /// SIMD, so triangles cost by the block (Embree's SAH counts blocks the
+    /// same way); every other primitive is tested on its own.
+    fn leaf_cost(&self) -> Real {
+        (self.count - self.whole).div_ceil(MAX_LEAF) as Real + self.whole as Real
+    }
+
+    /// The items of `items`, on all threads if `parallel` (min and max are
+    /// exact in any order, so the result is the same).
+    fn of(items: &[Item], parallel: bool) -> Bin {
+        let all = |chunk: &[Item]| {
+            let mut bin = Bin::EMPTY;
+            chunk.iter().for_each(|item| bin.add(item));
+            bin
+        };
+        if parallel {
+            items.par_chunks(PARALLEL_ITEMS / 2).map(all).reduce(|| Bin::EMPTY, |a, b| a.merged(&b))
+        } else {
+            all(items)
+        }
+    }
+
+    fn merged(mut self, other: &Bin) -> Bin {
+        self.merge(other);
+        self
+    }
+
+    // `Wide` is `Real`'s vector in the f64 build: the conversions are the
+    // identity there.
+    #[allow(clippy::useless_conversion)]
+    fn bounds(&self) -> Aabb {
+        Aabb::from_corners(self.min.into(), self.max.into())
+    }
+
+    #[allow(clippy::useless_conversion)]
+    fn centroids(&self) -> Aabb {
+        Aabb::from_corners(self.centroid_min.into(), self.centroid_max.into())
+    }
+
+    /// The surface area of the box, 0 when empty.
+    fn area(&self) -> Real {
+        if self.count == 0 { 0.0 } else { self.bounds().surface_area() }
+    }
+}
+
+fn merge_bins(mut a: [Bin; BINS], b: [Bin; BINS]) -> [Bin; BINS] {
+    for (x, y) in a.iter_mut().zip(&b) {
+        x.merge(y);
+    }
+    a
+}
+
+/// The node over `items` (`all` is their [`Bin`]), which start at `first`
+/// in the final order.
+fn build_node(items: &mut [Item], all: Bin, first: usize, depth: usize) -> BuildNode {
+    let n = items.len();
+    let parallel = n > PARALLEL_ITEMS;
+    let (bounds, centroids) = (all.bounds(), all.centroids());
+    let leaf = BuildNode::Leaf { bounds, first: first as u32, count: n as u32 };
+    if n <= 1 {
+        return leaf;
+    }
+    let axis = centroids.size().max_position();
+    let (lo, extent) = (centroids.min()[axis], centroids.size()[axis]);
+    let median = |items: &mut [Item]| {
+        sort_by_centroid(items, axis, parallel);
+        let (left, right) = items.split_at(n / 2);
+        (n / 2, Bin::of(left, parallel), Bin::of(right, parallel))
+    };
+    let (mid, left_bin, right_bin) = if extent <= 0.0 || depth >= SAH_DEPTH {
+        // Coincident centroids, or deep enough: a leaf if small, else the median.
+        if n <= MAX_LEAF && extent <= 0.0 {
+            return leaf;
+        }
+        median(items)
+    } else {
+        let scale = BINS as Real / extent;
+        let bin_of = |c: Vec3| (((c[axis] - lo) * scale) as usize).min(BINS - 1);
+        // Each thread bins a chunk in place; merging bins is exact in any order.
+        let bin_all = |chunk: &[Item]| {
+            let mut bins = [Bin::EMPTY; BINS];
+            for item in chunk {
+                bins[bin_of(item.centroid())].add(item);
+            }
+            bins
+        };
+        let bins = if parallel {
+            items.par_chunks(PARALLEL_ITEMS / 2).map(bin_all).reduce(|| [Bin::EMPTY; BINS], merge_bins)
+        } else {
+            bin_all(items)
+        };
+        match best_split(&bins, bounds) {
+            Some(best) if !(n <= MAX_LEAF && best.1 >= all.leaf_cost()) => {
+                let mid = partition(items, |i| bin_of(i.centroid()) < best.0);
+                let side = |range: std::ops::Range<usize>| bins[range].iter().fold(Bin::EMPTY, Bin::merged);
+                (mid, side(0..best.0), side(best.0..BINS))
+            }
+            _ if n <= MAX_LEAF => return leaf,
+            _ => median(items),
+        }
+    };
+    let (left, right) = items.split_at_mut(mid);
+    let (l, r) = if parallel {
+        rayon::join(
+            || build_node(left, left_bin, first, depth + 1),
+            || build_node(right, right_bin, first + mid, depth + 1),
+        )
+    } else {
+        (build_node(left, left_bin, first, depth + 1), build_node(right, right_bin, first + mid, depth + 1))
+    };
+    BuildNode::Inner { bounds, children: Box::new([l, r]) }
+}
+
+/// The best split between bins `k − 1` and `k`, and its cost relative to
+/// testing one primitive (`TRAVERSAL_COST + Σ nᵢ·Aᵢ / A`); `None` if every
+/// item is in one bin.
+fn best_split(bins: &[Bin; BINS], bounds: Aabb) -> Option<(usize, Real)> {
+    // Sweep from the right for the right-hand areas, then from the left.
+    let mut right_area = [0.0 as Real; BINS];
+    let mut right_cost = [0.0 as Real; BINS];
+    let mut right_count = [0usize; BINS];
+    let mut acc = Bin::EMPTY;
+    for k in (1..BINS).rev() {
+        acc.merge(&bins[k]);
+        right_area[k] = acc.area();
+        right_cost[k] = acc.leaf_cost();
+        right_count[k] = acc.count;
+    }
+    let (mut best, mut best_cost) = (0, Real::INFINITY);
+    let mut acc = Bin::EMPTY;
+    for k in 1..BINS {
+        acc.merge(&bins[k - 1]);
+        let cost = acc.leaf_cost() * acc.area() + right_cost[k] * right_area[k];
+        if cost < best_cost && acc.count > 0 && right_count[k] > 0 {
+            (best, best_cost) = (k, cost);
+        }
+    }
+    (best > 0).then(|| (best, TRAVERSAL_COST + best_cost / bounds.surface_area().max(Real::MIN_POSITIVE)))
+}
+
+/// Sorts `items` by their centroids' coordinate on `axis`.
+fn sort_by_centroid(items: &mut [Item], axis: usize, parallel: bool) {
+    // Ties go by (object, index), so the order is the same whichever sort runs.
+    let key = |a: &Item, b: &Item| {
+        a.centroid()[axis].total_cmp(&b.centroid()[axis]).then((a.object, a.index).cmp(&(b.object, b.index)))
+    };
+    if parallel { items.par_sort_unstable_by(key) } else { items.sort_unstable_by(key) }
+}
+
+/// Moves the items for which `left` holds to the front; returns how many.
+fn partition(items: &mut [Item], left: impl Fn(&Item) -> bool) -> usize {
+    let mut i = 0;
+    for j in 0..items.len() {
+        if left(&items[j]) {
+            items.swap(i, j);
+            i += 1;
+        }
+    }
+    i
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Items of a noisy grid of `n`×`n` small boxes.
+    fn items(n: u32) -> Vec<Item> {
+        let mut out = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                let h = ((i * 7919 + j * 104_729) % 1000) as Real / 1000.0;
+                let p = Vec3::new(i as Real, h, j as Real);
+                out.push(Item::new(Aabb::from_corners(p, p + Vec3::splat(0.9)), 0, i * n + j));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn the_tree_is_the_same_on_one_thread_and_on_many() {
+        let mut a = items(150); // 22 500 items: the top levels go parallel.
+        let mut b = a.clone();
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| build(&mut a));
+        let four = rayon::ThreadPoolBuilder::new().num_threads(4).build().unwrap().install(|| build(&mut b));
+        assert_eq!(one, four);
+        let order = |v: &[Item]| v.iter().map(|i| i.index).collect::<Vec<_>>();
+        assert_eq!(order(&a), order(&b));
+    }
+
+    #[test]
+    fn every_item_lands_in_exactly_one_leaf_of_at_most_the_leaf_size() {
+        let mut v = items(40);
+        let tree = build(&mut v);
+        let mut seen = vec![0; v.len()];
+        fn walk(n: &BuildNode, seen: &mut [u32]) {
+            match n {
+                BuildNode::Leaf { first, count, .. } => {
+                    assert!(*count as usize <= MAX_LEAF);
+                    for i in *first..first + count {
+                        seen[i as usize] += 1;
+                    }
+                }
+                BuildNode::Inner { children, .. } => children.iter().for_each(|c| walk(c, seen)),
+            }
+        }
+        walk(&tree, &mut seen);
+        assert!(seen.iter().all(|&s| s == 1));
+    }
+}

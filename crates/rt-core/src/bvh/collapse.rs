@@ -1,0 +1,63 @@
+//! The second step of the build: the binary tree collapsed into a 4-wide
+//! one, as Embree's BVH4 (Wald, Benthin and Boulos, "Getting Rid of
+//! Packets", 2008). Each node opens its widest inner child (by surface
+//! area) until it has four children, which keeps the SAH tree's splits.
+
+use super::build::BuildNode;
+use super::{Child, Node, WIDTH};
+use crate::real::to_f64;
+
+/// What collapsing a subtree produced: its child entry, the 4-wide nodes on
+/// its longest path down, its traversal stack bound (see
+/// [`super::Bvh::stack_bound`]), and its share of the SAH cost
+/// ([`super::BvhStats::sah_cost`]) before dividing by the root's area.
+pub(super) struct Collapsed {
+    pub child: Child,
+    pub depth: usize,
+    pub stack: usize,
+    pub cost: f64,
+}
+
+/// Collapses `node` into `nodes` (appending); `leaf(first, count)` makes
+/// the child entry of the leaf over items `first..first + count`.
+pub(super) fn collapse(
+    node: &BuildNode,
+    nodes: &mut Vec<Node>,
+    leaf: &mut impl FnMut(u32, u32) -> Child,
+) -> Collapsed {
+    let area = |n: &BuildNode| to_f64(n.bounds().surface_area());
+    let BuildNode::Inner { children, .. } = node else {
+        let BuildNode::Leaf { first, count, .. } = node else { unreachable!() };
+        let child = leaf(*first, *count);
+        // One test for the triangles, one per other primitive.
+        let tests = u32::from(child.lanes.triangles() != 0) + child.lanes.objects().count_ones();
+        let cost = area(node) * f64::from(tests);
+        return Collapsed { child, depth: 0, stack: 0, cost };
+    };
+    let mut open: Vec<&BuildNode> = children.iter().collect();
+    while open.len() < WIDTH {
+        let widest = open
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| matches!(c, BuildNode::Inner { .. }))
+            .max_by(|a, b| area(a.1).total_cmp(&area(b.1)));
+        let Some((slot, BuildNode::Inner { children, .. })) = widest.map(|(slot, c)| (slot, *c)) else {
+            break;
+        };
+        open[slot] = &children[0];
+        open.insert(slot + 1, &children[1]);
+    }
+    let index = nodes.len();
+    nodes.push(Node::EMPTY);
+    // A node visit costs TRAVERSAL_COST per unit of its area.
+    let mut cost = area(node) * to_f64(super::build::TRAVERSAL_COST);
+    let (mut depth, mut stack) = (0, 0);
+    for (slot, &c) in open.iter().enumerate() {
+        let below = collapse(c, nodes, leaf);
+        nodes[index].set(slot, c.bounds(), below.child);
+        depth = depth.max(below.depth);
+        stack = stack.max(below.stack);
+        cost += below.cost;
+    }
+    Collapsed { child: Child::node(index as u32), depth: depth + 1, stack: stack + open.len() - 1, cost }
+}

@@ -1,0 +1,317 @@
+//! A leaf of the hierarchy: up to four primitives side by side.
+//!
+//! Mesh triangles have their corners stored lane by lane (a structure of
+//! arrays: `corners[corner][axis][lane]`), so that one SIMD watertight test
+//! covers all four at once, as Embree's `Triangle4` leaves do (Wald et al.,
+//! "Embree: A Kernel Framework for Efficient CPU Ray Tracing", 2014). The
+//! test uses SSE2, which every x86-64 CPU has, so one release binary runs
+//! everywhere without feature detection. It performs exactly the scalar
+//! test's operations ([`crate::triangle::intersect_watertight_prepared`]),
+//! lane by lane and in the same order, with no fused multiply-adds, so each
+//! lane's `t` has the same bits as the scalar test's (tested); a lane whose
+//! edge functions need the exact re-evaluation
+//! ([`crate::triangle::edge_functions`]) is handed to the scalar test.
+//! Elsewhere (other CPUs, `f64` geometry, the other triangle methods) the
+//! scalar test runs lane by lane.
+//!
+//! Other bounded primitives (spheres, boxes, polygons, single triangles)
+//! occupy a lane too, but only their object index is stored: they are
+//! looked up in the scene and tested whole.
+
+use super::build::Item;
+use crate::method::TriangleMethod;
+use crate::object::Object;
+use crate::primitive::Primitive;
+use crate::ray::Interval;
+use crate::real::{Real, Vec3};
+use crate::triangle::{TriangleRay, intersect_by};
+
+/// Primitives per leaf.
+pub(crate) const LANES: usize = 4;
+
+/// Up to [`LANES`] primitives. Which lanes hold mesh triangles and which
+/// whole objects is kept in the parent's child entry ([`Lanes`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(16))]
+pub(super) struct Leaf {
+    /// `corners[corner][axis][lane]`; NaN in lanes without a triangle.
+    corners: [[[Real; LANES]; 3]; 3],
+    /// The object of each lane (`u32::MAX` where unused).
+    object: [u32; LANES],
+    /// The triangle's index in its mesh (0 for whole objects).
+    index: [u32; LANES],
+}
+
+/// Lane masks of a leaf: bit `lane` set for a mesh triangle, bit
+/// `LANES + lane` for a whole object. Never 0 for a leaf.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Lanes(pub u32);
+
+impl Lanes {
+    /// The lanes holding mesh triangles.
+    pub fn triangles(self) -> u32 {
+        self.0 & ((1 << LANES) - 1)
+    }
+    /// The lanes holding whole objects.
+    pub fn objects(self) -> u32 {
+        self.0 >> LANES
+    }
+}
+
+impl Leaf {
+    /// The leaf of `items` (at most [`LANES`]), in their order, and its lanes.
+    pub fn new(items: &[Item], objects: &[Object]) -> (Self, Lanes) {
+        debug_assert!(!items.is_empty() && items.len() <= LANES);
+        let mut leaf =
+            Leaf { corners: [[[Real::NAN; LANES]; 3]; 3], object: [u32::MAX; LANES], index: [0; LANES] };
+        let mut lanes = 0;
+        for (lane, item) in items.iter().enumerate() {
+            leaf.object[lane] = item.object;
+            match &objects[item.object as usize].primitive {
+                Primitive::Mesh(mesh) => {
+                    leaf.index[lane] = item.index;
+                    for (corner, p) in mesh.triangle(item.index as usize).into_iter().enumerate() {
+                        for axis in 0..3 {
+                            leaf.corners[corner][axis][lane] = p[axis];
+                        }
+                    }
+                    lanes |= 1 << lane;
+                }
+                _ => lanes |= 1 << (LANES + lane),
+            }
+        }
+        (leaf, Lanes(lanes))
+    }
+
+    /// The lanes [`Leaf::new`] gives `items`, without making the leaf.
+    pub fn lanes(items: &[Item], objects: &[Object]) -> Lanes {
+        Lanes(items.iter().enumerate().fold(0, |lanes, (lane, item)| {
+            lanes
+                | match objects[item.object as usize].primitive {
+                    Primitive::Mesh(_) => 1 << lane,
+                    _ => 1 << (LANES + lane),
+                }
+        }))
+    }
+
+    /// The object in `lane`.
+    #[inline(always)]
+    pub fn object(&self, lane: usize) -> u32 {
+        self.object[lane]
+    }
+
+    /// The triangle index in `lane` (0 for a whole object).
+    #[inline(always)]
+    pub fn index(&self, lane: usize) -> u32 {
+        self.index[lane]
+    }
+
+    /// The corners a, b, c of the triangle in `lane`.
+    fn corners(&self, lane: usize) -> [Vec3; 3] {
+        self.corners.map(|c| Vec3::new(c[0][lane], c[1][lane], c[2][lane]))
+    }
+
+    /// The triangles of the lanes in `mask` that `ray` hits with `t` in
+    /// `range` by `method`: each lane's `t`, and the mask of the lanes hit.
+    #[inline(always)]
+    pub fn intersect_triangles(
+        &self,
+        mask: u32,
+        ray: &TriangleRay,
+        range: Interval,
+        method: TriangleMethod,
+    ) -> ([Real; LANES], u32) {
+        if mask == 0 {
+            return ([0.0; LANES], 0);
+        }
+        #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+        if method == TriangleMethod::Watertight {
+            return self.watertight_sse(mask, ray, range);
+        }
+        self.intersect_scalar(mask, ray, range, method)
+    }
+
+    /// [`Leaf::intersect_triangles`] one lane at a time.
+    pub fn intersect_scalar(
+        &self,
+        mask: u32,
+        ray: &TriangleRay,
+        range: Interval,
+        method: TriangleMethod,
+    ) -> ([Real; LANES], u32) {
+        let mut t = [0.0; LANES];
+        let mut hit = 0;
+        for lane in lanes_of(mask) {
+            let [a, b, c] = self.corners(lane);
+            if let Some(h) = intersect_by(method, a, b, c, ray, range) {
+                t[lane] = h.t;
+                hit |= 1 << lane;
+            }
+        }
+        (t, hit)
+    }
+
+    /// The watertight test on four lanes with SSE2. Every line is the
+    /// scalar test's line ([`crate::triangle::intersect_watertight_prepared`])
+    /// on four lanes at once.
+    #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+    #[inline(always)]
+    fn watertight_sse(&self, mask: u32, ray: &TriangleRay, range: Interval) -> ([Real; LANES], u32) {
+        use std::arch::x86_64::*;
+        // SAFETY: SSE and SSE2 are part of the x86-64 baseline, and every
+        // load reads 16-byte-aligned rows of `self.corners` (the struct is
+        // `repr(C, align(16))` with rows of four f32).
+        unsafe {
+            let [kx, ky, kz] = ray.axes();
+            let s = ray.shear();
+            let o = ray.ray.origin;
+            let (ox, oy, oz) = (_mm_set1_ps(o[kx]), _mm_set1_ps(o[ky]), _mm_set1_ps(o[kz]));
+            let (sx, sy, sz) = (_mm_set1_ps(s.x), _mm_set1_ps(s.y), _mm_set1_ps(s.z));
+            let load = |corner: usize, axis: usize| _mm_load_ps(self.corners[corner][axis].as_ptr());
+            // p = corner − origin, axes permuted, then sheared: (x + sx·z, y + sy·z, z).
+            let shear = |corner: usize| {
+                let (px, py, pz) = (
+                    _mm_sub_ps(load(corner, kx), ox),
+                    _mm_sub_ps(load(corner, ky), oy),
+                    _mm_sub_ps(load(corner, kz), oz),
+                );
+                (_mm_add_ps(px, _mm_mul_ps(sx, pz)), _mm_add_ps(py, _mm_mul_ps(sy, pz)), pz)
+            };
+            let ((x0, y0, z0), (x1, y1, z1), (x2, y2, z2)) = (shear(0), shear(1), shear(2));
+            let e0 = _mm_sub_ps(_mm_mul_ps(x1, y2), _mm_mul_ps(y1, x2));
+            let e1 = _mm_sub_ps(_mm_mul_ps(x2, y0), _mm_mul_ps(y2, x0));
+            let e2 = _mm_sub_ps(_mm_mul_ps(x0, y1), _mm_mul_ps(y0, x1));
+            // Lanes with an edge function that is 0 or not finite go to the
+            // scalar test, which re-evaluates them exactly.
+            let zero = _mm_setzero_ps();
+            let abs = _mm_castsi128_ps(_mm_set1_epi32(0x7fff_ffff));
+            let inf = _mm_set1_ps(Real::INFINITY);
+            let regular =
+                |e: __m128| _mm_and_ps(_mm_cmpneq_ps(e, zero), _mm_cmplt_ps(_mm_and_ps(e, abs), inf));
+            let regular = _mm_and_ps(_mm_and_ps(regular(e0), regular(e1)), regular(e2));
+            let exact = mask & !(_mm_movemask_ps(regular) as u32);
+
+            let negative =
+                _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(e0, zero), _mm_cmplt_ps(e1, zero)), _mm_cmplt_ps(e2, zero));
+            let positive =
+                _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(e0, zero), _mm_cmpgt_ps(e1, zero)), _mm_cmpgt_ps(e2, zero));
+            let det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
+            let mut reject = _mm_or_ps(_mm_and_ps(negative, positive), _mm_cmpeq_ps(det, zero));
+            let (z0, z1, z2) = (_mm_mul_ps(z0, sz), _mm_mul_ps(z1, sz), _mm_mul_ps(z2, sz));
+            let t_scaled = _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0, z0), _mm_mul_ps(e1, z1)), _mm_mul_ps(e2, z2));
+            let max_det = _mm_mul_ps(_mm_set1_ps(range.max), det);
+            let below = _mm_and_ps(
+                _mm_cmplt_ps(det, zero),
+                _mm_or_ps(_mm_cmpge_ps(t_scaled, zero), _mm_cmplt_ps(t_scaled, max_det)),
+            );
+            let above = _mm_and_ps(
+                _mm_cmpgt_ps(det, zero),
+                _mm_or_ps(_mm_cmple_ps(t_scaled, zero), _mm_cmpgt_ps(t_scaled, max_det)),
+            );
+            reject = _mm_or_ps(reject, _mm_or_ps(below, above));
+            let t = _mm_mul_ps(t_scaled, _mm_div_ps(_mm_set1_ps(1.0), det));
+            let inside =
+                _mm_and_ps(_mm_cmpgt_ps(t, _mm_set1_ps(range.min)), _mm_cmplt_ps(t, _mm_set1_ps(range.max)));
+            let mut hit = _mm_movemask_ps(_mm_andnot_ps(reject, inside)) as u32 & mask & !exact;
+            let mut out = [0.0; LANES];
+            _mm_storeu_ps(out.as_mut_ptr(), t);
+            if exact != 0 {
+                let (t, exact_hit) = self.intersect_scalar(exact, ray, range, TriangleMethod::Watertight);
+                for lane in lanes_of(exact_hit) {
+                    out[lane] = t[lane];
+                }
+                hit |= exact_hit;
+            }
+            (out, hit)
+        }
+    }
+}
+
+/// The lanes set in `mask`, lowest first.
+#[inline(always)]
+pub(super) fn lanes_of(mut mask: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let lane = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            lane
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::Mesh;
+    use crate::ray::Ray;
+    use proptest::prelude::*;
+
+    /// A leaf of four triangles with corners `corners`.
+    fn leaf_of(corners: &[[[Real; 3]; 3]]) -> (Leaf, Lanes) {
+        let positions = corners.iter().flatten().map(|&p| Vec3::from(p)).collect();
+        let triangles = (0..corners.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+        let mesh = Mesh::new(positions, triangles).unwrap();
+        let objects = vec![Object { primitive: Primitive::Mesh(mesh), material: 0 }];
+        let items: Vec<Item> = (0..corners.len() as u32)
+            .map(|i| {
+                Item::new(crate::aabb::Aabb::from_points(corners[i as usize].map(Vec3::from)).unwrap(), 0, i)
+            })
+            .collect();
+        let (leaf, lanes) = Leaf::new(&items, &objects);
+        assert_eq!(Leaf::lanes(&items, &objects), lanes);
+        (leaf, lanes)
+    }
+
+    fn bits(t: [Real; LANES], hit: u32) -> Vec<(usize, u64)> {
+        #[allow(clippy::useless_conversion)] // to_bits gives u32 for f32 geometry
+        lanes_of(hit).map(|lane| (lane, u64::from(t[lane].to_bits()))).collect()
+    }
+
+    proptest! {
+        /// The SIMD test and the scalar one agree bit for bit, on random
+        /// triangles and on triangles sharing edges and corners with rays
+        /// through them (where edge functions are 0 and the exact
+        /// re-evaluation runs).
+        #[test]
+        fn the_simd_test_gives_the_scalar_test_bits(
+            corners in prop::array::uniform4(prop::array::uniform3(prop::array::uniform3(-4i8..4))),
+            scale in prop::sample::select(vec![1.0 as Real, 0.1, 1e-3, 1e4, 1e20, 1e-20]),
+            origin in prop::array::uniform3(-6i8..6),
+            target in prop::array::uniform3(-8i8..8),
+            jitter in prop::array::uniform3(-1.0 as Real..1.0),
+            snap in any::<bool>(),
+            max in prop::sample::select(vec![Real::INFINITY, 0.5, 1.0, 2.0]),
+        ) {
+            // Small integer grids make shared edges, shared corners and rays
+            // exactly through them common.
+            let corners: Vec<[[Real; 3]; 3]> = corners.iter().map(|t| t.map(|p| p.map(|x| x as Real * scale))).collect();
+            let (leaf, lanes) = leaf_of(&corners);
+            let origin = Vec3::from(origin.map(|x| x as Real * scale));
+            let mut target = Vec3::from(target.map(|x| x as Real * scale * 0.5));
+            if !snap {
+                target += Vec3::from(jitter) * scale;
+            }
+            let dir = target - origin;
+            prop_assume!(dir != Vec3::ZERO && dir.is_finite());
+            let ray = TriangleRay::new(&Ray::new(origin, dir));
+            let range = Interval::new(0.0, max);
+            let (t, hit) = leaf.intersect_triangles(lanes.triangles(), &ray, range, TriangleMethod::Watertight);
+            let (ts, hits) = leaf.intersect_scalar(lanes.triangles(), &ray, range, TriangleMethod::Watertight);
+            prop_assert_eq!(bits(t, hit), bits(ts, hits));
+        }
+    }
+
+    #[test]
+    fn lanes_outside_the_mask_and_unused_lanes_are_never_hit() {
+        let tri = [[-1.0, -1.0, 1.0], [1.0, -1.0, 1.0], [0.0, 1.0, 1.0]];
+        let (leaf, lanes) = leaf_of(&[tri, tri, tri]);
+        assert_eq!(lanes, Lanes(0b0111));
+        let ray = TriangleRay::new(&Ray::new(Vec3::ZERO, Vec3::Z));
+        let range = Interval::new(0.0, Real::INFINITY);
+        for method in [TriangleMethod::Watertight, TriangleMethod::MollerTrumbore, TriangleMethod::AreaRatio]
+        {
+            assert_eq!(leaf.intersect_triangles(0b1111, &ray, range, method).1, 0b0111, "{method:?}");
+            assert_eq!(leaf.intersect_triangles(0b0101, &ray, range, method).1, 0b0101, "{method:?}");
+        }
+    }
+}
