@@ -105,6 +105,7 @@ def bsdf(m):
     """The Mitsuba BSDF of an rt-view material (see the module comment)."""
     kr, kt, ks, kd = m["reflectivity"], m["transparency"], m["specular"], m["diffuse"]
     color = m["color"]
+    tint = m.get("specular_color", [1.0, 1.0, 1.0])  # the glossy and mirror lobes' tint
     rest_black = kd * max(color) <= 0 and ks <= 0
     delta = kr + kt
     if delta > 0:
@@ -115,7 +116,7 @@ def bsdf(m):
             "bsdf": {
                 "type": "conductor",
                 "material": "none",
-                "specular_reflectance": {"type": "rgb", "value": [delta] * 3},
+                "specular_reflectance": {"type": "rgb", "value": [delta * t for t in tint]},
             },
         }
         glass = {
@@ -147,6 +148,7 @@ def bsdf(m):
         "distribution": "ggx",
         "alpha": m["roughness"],
         "material": "none",
+        "specular_reflectance": {"type": "rgb", "value": tint},
     }
     if ks <= 0:
         rest = diffuse
@@ -231,6 +233,13 @@ def mitsuba_scene(mi, desc, folder, width, height, plane_size):
     if max(desc["background"]) > 0:
         scene["background"] = {"type": "constant", "radiance": rgb(mi, desc["background"])}
     coi = np.array(cam["center_of_interest"])
+    unexported = [m["name"] for m in desc["materials"] if m.get("textured")]
+    unexported += [f"object {i}" for i, o in enumerate(desc["objects"]) if o.get("smooth")]
+    if unexported:
+        sys.exit(
+            "the export carries neither textures nor vertex normals, so Mitsuba would render another "
+            f"scene: {', '.join(unexported)}"
+        )
     for i, o in enumerate(desc["objects"]):
         m = materials[o["material"]]
         if o["kind"] == "Sphere":

@@ -8,10 +8,11 @@
 //! W·m⁻²·sr⁻¹, a BSDF f in sr⁻¹, and light leaving a point towards the viewer
 //! is `L_o = L_e + ∫ f(ω_o, ω_i)·L_i(ω_i)·|cos θ_i| dω_i`. A [`Material`] is a
 //! mixture of four lobes, with kr = `reflectivity`, kt = `transparency`,
-//! ks = `specular`, kd = `diffuse`:
+//! ks = `specular`, kd = `diffuse`, s = `specular_color` (the tint of the
+//! glossy and mirror lobes, white by default; a metal's colour):
 //!
 //! ```text
-//! f = (1 − kr − kt)·[(1 − ks)·kd·color/π + ks·f_ggx] + kr·f_mirror + kt·f_dielectric
+//! f = (1 − kr − kt)·[(1 − ks)·kd·color/π + ks·s·f_ggx] + kr·s·f_mirror + kt·f_dielectric
 //! ```
 //!
 //! - **Lambert**: `ρ/π` with albedo ρ = kd·color (pbrt-v4 §9.2, `DiffuseBxDF`).
@@ -20,13 +21,14 @@
 //!   `D(h) = α²/(π·(cos²θ_h·(α² − 1) + 1)²)` and Smith's separable
 //!   masking-shadowing `G = G₁(ω_o)·G₁(ω_i)`, `G₁ = 2/(1 + √(1 + α²·tan²θ))`
 //!   (Walter, Marschner, Li and Torrance, "Microfacet Models for Refraction
-//!   through Rough Surfaces", EGSR 2007), with Fresnel 1: Mitsuba 3's
-//!   `roughconductor` with `material = "none"`. Its roughness comes from the
+//!   through Rough Surfaces", EGSR 2007), with Fresnel 1 and tinted by s:
+//!   Mitsuba 3's `roughconductor` with `material = "none"` and
+//!   `specular_reflectance` s. Its roughness comes from the
 //!   Blinn–Phong exponent by Walter et al.'s correspondence
 //!   `α = √(2/(shininess + 2))`. Directions are sampled from the
 //!   distribution of visible normals (Heitz, "Sampling the GGX Distribution
 //!   of Visible Normals", JCGT 2018).
-//! - **Mirror**: a perfect, untinted reflection (a δ lobe).
+//! - **Mirror**: a perfect reflection tinted by s (a δ lobe).
 //! - **Dielectric**: a smooth boundary of index `ior`, δ reflection with the
 //!   exact Fresnel reflectance F ([`fresnel_dielectric`]) and δ refraction by
 //!   Snell's law with `(1 − F)·color`, divided by `η²` (η the ratio of the
@@ -48,6 +50,32 @@
 //! the side of the surface `ω_o` is on, and are zero for `ω_i` on the other.
 //! The dielectric is oriented: the side the geometric normal points to is
 //! outside (index 1), the other inside (index `ior`).
+//!
+//! # Shading normals
+//!
+//! A smooth mesh gives a *shading* normal `n_s` (its interpolated vertex
+//! normals) that differs from the *geometric* normal `n_g` of the flat
+//! triangle ([`Bsdf::shaded`]). The lobes are then defined about `n_s`,
+//! which hides the facets, while `n_g` keeps deciding which side of the
+//! surface a direction is on, so no light leaks through it:
+//!
+//! - **No leaks.** A reflected direction must lie on `ω_o`'s side of the
+//!   *geometric* surface and a refracted one on the other: directions the
+//!   lobes around `n_s` give on the wrong side of `n_g` carry nothing (they
+//!   are zero in [`Bsdf::eval`] and [`Bsdf::pdf`], and a sample that draws
+//!   one is refused) — pbrt-v3's rule (§9.1, `BSDF::f`).
+//! - **No black facets.** Where `ω_o` lies below the shading hemisphere but
+//!   above the geometric one (at silhouettes of coarse meshes), every lobe
+//!   about `n_s` would be zero; the BSDF falls back to `n_g` there.
+//! - **No hard terminator.** Near the shadow terminator a coarse mesh's
+//!   own facets shadow light that `n_s` says arrives; the smooth lobes are
+//!   multiplied by Chiang, Li and Burley's shadowing term
+//!   `G = min(1, (n_g·ω_i)/((n_s·ω_i)(n_g·n_s)))`, `−G³ + G² + G`
+//!   ("Taming the Shadow Terminator", SIGGRAPH 2019 Talks), which fades
+//!   the light smoothly to zero where the facet turns away.
+//!
+//! With `n_s = n_g` (every primitive but a mesh with vertex normals) all
+//! three are the plain rules above, and nothing changes.
 
 use crate::color::Color;
 use crate::material::Material;
@@ -94,8 +122,12 @@ pub struct BsdfSample {
 /// The BSDF of one material at one hit, seen from one direction `ω_o`.
 #[derive(Clone, Copy, Debug)]
 pub struct Bsdf {
-    /// The geometric normal turned to the side `ω_o` is on.
+    /// The shading normal turned to the side `ω_o` is on.
     n: Vec3,
+    /// The geometric normal turned to the side `ω_o` is on.
+    ng: Vec3,
+    /// Whether `n` differs from `ng` (the shading-normal rules apply).
+    shaded: bool,
     /// Tangents completing `n` to an orthonormal frame.
     frame: (Vec3, Vec3),
     /// `ω_o` arrives from the side the geometric normal points to (outside).
@@ -104,6 +136,8 @@ pub struct Bsdf {
     diffuse: Color,
     /// Weight of the GGX lobe: `(1 − kr − kt)·ks`.
     glossy: f32,
+    /// The glossy and mirror lobes' tint s.
+    specular_color: Color,
     /// GGX roughness α.
     alpha: Real,
     /// kr.
@@ -123,10 +157,27 @@ pub struct Bsdf {
 impl Bsdf {
     /// The BSDF of `m` at a hit with unit geometric normal `normal` (the
     /// primitive's own orientation), seen from the unit direction `wo`.
-    #[allow(clippy::unnecessary_cast)] // `Real` is f64 with the `f64` feature.
     pub fn new(m: &Material, normal: Vec3, wo: Vec3) -> Self {
         let outside = wo.dot(normal) >= 0.0;
         let n = if outside { normal } else { -normal };
+        Self::with_normals(m, n, n, outside)
+    }
+
+    /// The BSDF of `m` at a hit with unit geometric normal `geometric` and
+    /// unit shading normal `shading`, seen from `wo` (see "Shading normals"
+    /// above). The shading normal is first turned to the side the
+    /// geometric one points to.
+    pub fn shaded(m: &Material, geometric: Vec3, shading: Vec3, wo: Vec3) -> Self {
+        let outside = wo.dot(geometric) >= 0.0;
+        let ng = if outside { geometric } else { -geometric };
+        let ns = if shading.dot(ng) < 0.0 { -shading } else { shading };
+        // ω_o below the shading hemisphere: fall back to the facet.
+        let n = if ns.dot(wo) > 0.0 { ns } else { ng };
+        Self::with_normals(m, n, ng, outside)
+    }
+
+    #[allow(clippy::unnecessary_cast)] // `Real` is f64 with the `f64` feature.
+    fn with_normals(m: &Material, n: Vec3, ng: Vec3, outside: bool) -> Self {
         let rest = (1.0 - m.reflectivity - m.transparency).max(0.0);
         let diffuse = m.color * (rest * (1.0 - m.specular) * m.diffuse);
         let glossy = rest * m.specular;
@@ -137,10 +188,13 @@ impl Bsdf {
         let choose = if total > 0.0 { weights.map(|w| w / total) } else { [0.0; 4] };
         Self {
             n,
+            ng,
+            shaded: n != ng,
             frame: n.any_orthonormal_pair(),
             outside,
             diffuse,
             glossy,
+            specular_color: m.specular_color,
             alpha: m.roughness() as Real,
             mirror: m.reflectivity,
             dielectric: m.transparency,
@@ -148,6 +202,12 @@ impl Bsdf {
             ior: m.ior as Real,
             choose,
         }
+    }
+
+    /// The normal the lobes are defined about (the shading normal, or the
+    /// geometric one where it falls back), turned to `ω_o`'s side.
+    pub fn normal(&self) -> Vec3 {
+        self.n
     }
 
     /// Whether the BSDF has a smooth (non-δ) part, which light sampling can reach.
@@ -158,21 +218,35 @@ impl Bsdf {
     /// The smooth lobes' `f(ω_o, ω_i)` (δ lobes have no value to evaluate).
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Color {
         let (cos_o, cos_i) = (self.n.dot(wo), self.n.dot(wi));
-        if cos_i <= 0.0 || cos_o <= 0.0 {
+        if cos_i <= 0.0 || cos_o <= 0.0 || (self.shaded && self.ng.dot(wi) <= 0.0) {
             return Color::ZERO;
         }
         let mut f = self.diffuse * std::f32::consts::FRAC_1_PI;
         if self.glossy > 0.0 {
-            f += Color::splat(self.glossy * to_f32(self.ggx(self.local(wo), self.local(wi))));
+            f += self.specular_color * (self.glossy * to_f32(self.ggx(self.local(wo), self.local(wi))));
         }
-        f
+        if self.shaded { f * self.terminator(wi) } else { f }
+    }
+
+    /// `|n_s·ω_i|`: the cosine that weighs light arriving along `wi` (the
+    /// shading normal's, as the lobes are defined about it).
+    pub fn cosine(&self, wi: Vec3) -> Real {
+        self.n.dot(wi).abs()
+    }
+
+    /// Chiang, Li and Burley's shadowing term for `ω_i` above the surface
+    /// (see "Shading normals"): 1 where the facet does not turn away.
+    fn terminator(&self, wi: Vec3) -> f32 {
+        let g = to_f32(self.ng.dot(wi) / (self.n.dot(wi) * self.ng.dot(self.n)));
+        let g = if g.is_finite() { g.clamp(0.0, 1.0) } else { 1.0 };
+        -g * g * g + g * g + g
     }
 
     /// The density over solid angle with which [`Bsdf::sample`] draws `ω_i`
     /// from the smooth lobes (their selection probabilities included).
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> Real {
         let (cos_o, cos_i) = (self.n.dot(wo), self.n.dot(wi));
-        if cos_i <= 0.0 || cos_o <= 0.0 {
+        if cos_i <= 0.0 || cos_o <= 0.0 || (self.shaded && self.ng.dot(wi) <= 0.0) {
             return 0.0;
         }
         let mut pdf = self.choose[0] as Real * cos_i * std::f64::consts::FRAC_1_PI as Real;
@@ -186,6 +260,18 @@ impl Bsdf {
     /// `None` when the material reflects nothing or the drawn direction
     /// carries nothing (a microfacet reflection below the surface).
     pub fn sample(&self, wo: Vec3, u: Real, u2: (Real, Real)) -> Option<BsdfSample> {
+        let s = self.sample_lobes(wo, u, u2)?;
+        if self.shaded {
+            // Reflections stay on ω_o's side of the facet, refractions cross it.
+            let through = s.lobe == Lobe::Transmission;
+            if (self.ng.dot(s.wi) < 0.0) != through || self.ng.dot(s.wi) == 0.0 {
+                return None;
+            }
+        }
+        Some(s)
+    }
+
+    fn sample_lobes(&self, wo: Vec3, u: Real, u2: (Real, Real)) -> Option<BsdfSample> {
         let [p_diffuse, p_glossy, p_mirror, p_dielectric] = self.choose.map(|p| p as Real);
         if self.n.dot(wo) <= 0.0 && p_dielectric == 0.0 {
             return None;
@@ -211,7 +297,8 @@ impl Bsdf {
         let total = self.diffuse.element_sum() / 3.0 + self.glossy + self.mirror + self.dielectric;
         if u < p_mirror {
             let wi = reflect(-wo, self.n);
-            return Some(BsdfSample { wi, weight: Color::splat(total), pdf: p_mirror, lobe: Lobe::Mirror });
+            let weight = self.specular_color * total;
+            return Some(BsdfSample { wi, weight, pdf: p_mirror, lobe: Lobe::Mirror });
         }
         u -= p_mirror;
         if p_dielectric <= 0.0 {
@@ -387,6 +474,90 @@ mod tests {
                 assert!(total <= 1.0 + 2e-3, "{name} at {degrees}°: albedo {smooth} + {delta}");
             }
         }
+    }
+
+    #[test]
+    fn with_shading_normals_no_lobe_reflects_more_than_arrives_or_leaks_below_the_facet() {
+        // The facet faces +y; shading normals lean up to 60° away from it.
+        let mut rng = SampleRng::new(1, 2, 3);
+        for (name, m) in materials() {
+            for (lean, degrees) in [(20.0 as Real, 30.0 as Real), (60.0, 10.0), (45.0, 70.0)] {
+                let l = lean.to_radians();
+                let ns = Vec3::new(l.sin(), l.cos(), 0.0);
+                let a = degrees.to_radians();
+                let wo = Vec3::new(-a.sin(), a.cos(), 0.0);
+                let b = Bsdf::shaded(&m, Vec3::Y, ns, wo);
+                let side = 600;
+                let channel = |k: usize| {
+                    integrate(
+                        |wi| {
+                            let f = b.eval(wo, wi)[k];
+                            if wi.y <= 0.0 {
+                                assert_eq!(f, 0.0, "{name}: light from below the facet leaks through");
+                            }
+                            (f * to_f32(b.cosine(wi))) as f64
+                        },
+                        side,
+                    ) as f32
+                };
+                let smooth = Color::new(channel(0), channel(1), channel(2));
+                let total = smooth.max_element() + m.reflectivity + m.transparency;
+                assert!(total <= 1.0 + 2e-3, "{name}, lean {lean}°, view {degrees}°: albedo {smooth}");
+                // Sampled directions reflect on the viewer's side of the
+                // facet and refract to the other.
+                for _ in 0..2000 {
+                    let (u, _) = rng.next_pair();
+                    if let Some(s) = b.sample(wo, u, rng.next_pair()) {
+                        let through = s.lobe == Lobe::Transmission;
+                        assert!(
+                            (s.wi.y < 0.0) == through && s.wi.y != 0.0,
+                            "{name}: {:?} to {}",
+                            s.lobe,
+                            s.wi
+                        );
+                        assert!(s.weight.is_finite() && s.weight.min_element() >= 0.0);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn where_the_viewer_is_below_the_shading_normal_the_facet_shades_instead_of_black() {
+        let m = Material::flat(Color::ONE);
+        // Shading normal leaning 60° to +x, viewer 70° to −x: below it.
+        let a = (70.0 as Real).to_radians();
+        let wo = Vec3::new(-a.sin(), a.cos(), 0.0);
+        let lean = (60.0 as Real).to_radians();
+        let ns = Vec3::new(lean.sin(), lean.cos(), 0.0);
+        assert!(ns.dot(wo) < 0.0);
+        let b = Bsdf::shaded(&m, Vec3::Y, ns, wo);
+        assert_eq!(b.normal(), Vec3::Y);
+        assert_eq!(b.eval(wo, Vec3::Y), Color::splat(std::f32::consts::FRAC_1_PI));
+        // With the normals equal, shaded is the plain BSDF, bit for bit.
+        let plain = Bsdf::new(&m, Vec3::Y, wo);
+        let same = Bsdf::shaded(&m, Vec3::Y, Vec3::Y, wo);
+        let wi = Vec3::new(0.3, 0.9, 0.1).normalize();
+        assert_eq!(plain.eval(wo, wi), same.eval(wo, wi));
+        assert_eq!(plain.pdf(wo, wi), same.pdf(wo, wi));
+    }
+
+    #[test]
+    fn the_terminator_term_fades_light_smoothly_where_the_facet_turns_away() {
+        // A facet facing +y whose shading normal leans 30° to +x: light
+        // grazing the facet from +x is still well above the shading horizon.
+        let m = Material::flat(Color::ONE);
+        let lean = (30.0 as Real).to_radians();
+        let b = Bsdf::shaded(&m, Vec3::Y, Vec3::new(lean.sin(), lean.cos(), 0.0), Vec3::Y);
+        let at = |deg: Real| {
+            let a = deg.to_radians();
+            b.eval(Vec3::Y, Vec3::new(a.cos(), a.sin(), 0.0)).x * std::f32::consts::PI
+        };
+        // High light: no shadowing. Towards the facet's horizon: falls to 0,
+        // monotonically.
+        assert_eq!(at(80.0), 1.0);
+        let fading: Vec<f32> = [20.0, 10.0, 5.0, 1.0, 0.0].iter().map(|&d| at(d)).collect();
+        assert!(fading.windows(2).all(|w| w[1] <= w[0]) && fading[4] == 0.0 && fading[0] > 0.5, "{fading:?}");
     }
 
     #[test]

@@ -10,10 +10,10 @@ use crate::medium::Subsurface;
 /// field is unused. With lights it is shaded by its BSDF ([`crate::bsdf`]),
 /// the mixture
 ///
-/// `f = (1 − kr − kt)·[(1 − ks)·kd·color/π + ks·f_ggx(shininess)] + kr·mirror + kt·glass(ior, color)`
+/// `f = (1 − kr − kt)·[(1 − ks)·kd·color/π + ks·s·f_ggx(shininess)] + kr·s·mirror + kt·glass(ior, color)`
 ///
 /// with `kr = reflectivity`, `kt = transparency`, `ks = specular`,
-/// `kd = diffuse`, and it gives off radiance `emission` from the side its
+/// `kd = diffuse`, `s = specular_color`, and it gives off radiance `emission` from the side its
 /// geometric normal points to. Every weight is in [0, 1] and kr + kt ≤ 1,
 /// so no material reflects more light than arrives.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -25,6 +25,9 @@ pub struct Material {
     pub diffuse: f32,
     /// Glossy (GGX) weight ks in [0, 1]; the Lambert lobe gets the rest.
     pub specular: f32,
+    /// Tint s of the glossy and mirror lobes, each component in [0, 1]
+    /// (white by default: a dielectric's highlight; a metal's is its colour).
+    pub specular_color: Color,
     /// Blinn–Phong exponent giving the glossy lobe's roughness
     /// ([`Material::roughness`]); larger is a smaller, sharper highlight.
     pub shininess: f32,
@@ -44,6 +47,11 @@ pub struct Material {
     /// around a homogeneous scattering medium, and the BSDF lobes above are
     /// not used. Only closed objects may have one.
     pub subsurface: Option<Subsurface>,
+    /// A base-colour texture: an index into the scene's textures
+    /// ([`crate::scene::Scene::texture`]). Where the surface has texture
+    /// coordinates, the texture's colour multiplies `color` (as `map_Kd`
+    /// multiplies `Kd`, and glTF's `baseColorTexture` its factor).
+    pub texture: Option<u32>,
 }
 
 impl Material {
@@ -53,12 +61,14 @@ impl Material {
             color,
             diffuse: 1.0,
             specular: 0.0,
+            specular_color: Color::ONE,
             shininess: 32.0,
             reflectivity: 0.0,
             transparency: 0.0,
             ior: 1.5,
             emission: Color::ZERO,
             subsurface: None,
+            texture: None,
         }
     }
 

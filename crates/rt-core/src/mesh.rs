@@ -2,13 +2,14 @@
 
 use std::path::{Path, PathBuf};
 
+use rayon::prelude::*;
 use thiserror::Error;
 
 use crate::aabb::Aabb;
 use crate::hit::PrimitiveHit;
 use crate::method::TriangleMethod;
 use crate::ray::{Interval, Ray};
-use crate::real::{Real, Vec3, to_f64};
+use crate::real::{Real, Vec3, narrow, normalize_robust, to_f64, widen};
 use crate::surface::SurfacePoint;
 use crate::triangle::{TriangleRay, geometric_normal, intersect_by, triangle_surface_point};
 
@@ -81,6 +82,12 @@ pub struct Mesh {
     triangles: Vec<[u32; 3]>,
     /// Per-triangle unit normal; zero for a degenerate triangle.
     normals: Vec<Vec3>,
+    /// Per-vertex shading normals (the file's `vn`), empty when it has none;
+    /// a zero entry is a vertex without one.
+    vertex_normals: Vec<Vec3>,
+    /// Per-vertex texture coordinates `(u, v)` with `v` down the image
+    /// ([`crate::texture`]), empty when the file has none.
+    uvs: Vec<[f32; 2]>,
     bounds: Aabb,
 }
 
@@ -88,91 +95,146 @@ impl Mesh {
     /// A mesh from positions and index triples. Returns `None` if there are no
     /// triangles or an index is out of range.
     pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Option<Self> {
-        if triangles.is_empty() || triangles.iter().flatten().any(|&i| i as usize >= positions.len()) {
+        // In parallel: for a million triangles these passes take longer
+        // than reading them.
+        let out_of_range =
+            |chunk: &[[u32; 3]]| chunk.iter().flatten().any(|&i| i as usize >= positions.len());
+        if triangles.is_empty() || triangles.par_chunks(4096).any(out_of_range) {
             return None;
         }
         let normals = triangles
-            .iter()
+            .par_iter()
+            .with_min_len(4096)
             .map(|&[a, b, c]| {
                 let p = |i: u32| positions[i as usize];
                 geometric_normal(p(a), p(b), p(c)).unwrap_or(Vec3::ZERO)
             })
             .collect();
-        let bounds = Aabb::from_points(triangles.iter().flatten().map(|&i| positions[i as usize]))?;
-        Some(Self { positions, triangles, normals, bounds })
+        let bounds = triangles
+            .par_chunks(4096)
+            .map(|chunk| Aabb::from_points(chunk.iter().flatten().map(|&i| positions[i as usize])))
+            .reduce(
+                || None,
+                |a, b| match (a, b) {
+                    (Some(a), Some(b)) => Some(a.union(b)),
+                    (a, b) => a.or(b),
+                },
+            )?;
+        Some(Self { positions, triangles, normals, vertex_normals: Vec::new(), uvs: Vec::new(), bounds })
     }
 
-    /// Loads an OBJ file with tobj, then scales every vertex by `scale` about
-    /// the origin and moves it by `translate` (`p' = scale·p + translate`).
-    /// Points, lines, normals, texture coordinates and materials are ignored.
+    /// The mesh with per-vertex shading normals and texture coordinates
+    /// (each list empty, or one entry per vertex). Normals are normalised
+    /// here; a zero or non-finite one marks a vertex without a normal.
+    /// `None` if a list has the wrong length.
+    pub fn with_vertex_attributes(mut self, normals: Vec<Vec3>, uvs: Vec<[f32; 2]>) -> Option<Self> {
+        let fits = |n: usize| n == 0 || n == self.positions.len();
+        if !fits(normals.len()) || !fits(uvs.len()) {
+            return None;
+        }
+        self.vertex_normals = normals
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|n| normalize_robust(n).unwrap_or(Vec3::ZERO))
+            .collect();
+        self.uvs = uvs;
+        Some(self)
+    }
+
+    /// The meshes as one: their vertices and triangles one after another
+    /// (vertex attributes kept where any mesh has them). `None` if there
+    /// are none or the vertices overflow 32-bit indices.
+    pub fn concat(mut meshes: Vec<Mesh>) -> Option<Self> {
+        if meshes.len() == 1 {
+            return meshes.pop();
+        }
+        let normals = meshes.iter().any(Mesh::has_vertex_normals);
+        let uvs = meshes.iter().any(Mesh::has_uvs);
+        let mut all = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for m in meshes {
+            let base = u32::try_from(all.0.len()).ok()?;
+            let n = m.positions.len();
+            all.1.extend(m.triangles.iter().map(|t| t.map(|i| base + i)));
+            all.0.extend(m.positions);
+            if normals {
+                all.2.extend(if m.vertex_normals.is_empty() {
+                    vec![Vec3::ZERO; n]
+                } else {
+                    m.vertex_normals
+                });
+            }
+            if uvs {
+                all.3.extend(if m.uvs.is_empty() { vec![[0.0; 2]; n] } else { m.uvs });
+            }
+        }
+        u32::try_from(all.0.len()).ok()?;
+        Self::new(all.0, all.1)?.with_vertex_attributes(all.2, all.3)
+    }
+
+    /// Loads an OBJ file with tobj as one mesh, then scales every vertex by
+    /// `scale` about the origin and moves it by `translate`
+    /// (`p' = scale·p + translate`). Vertex normals (`vn`) become shading
+    /// normals and texture coordinates (`vt`) are kept, `v` flipped to point
+    /// down the image; points, lines and materials are ignored (see
+    /// [`Mesh::load_obj_parts`] for the materials).
     pub fn load_obj(path: &Path, scale: Real, translate: Vec3) -> Result<Self, MeshError> {
         Self::load_obj_limited(path, scale, translate, MAX_OBJ_BYTES)
     }
 
     fn load_obj_limited(path: &Path, scale: Real, translate: Vec3, limit: u64) -> Result<Self, MeshError> {
-        // Opened here rather than by tobj, whose error says only "open file
-        // failed": the OS's reason (no such file, permission denied) goes
-        // into the message.
-        let open = |reason| MeshError::Open { path: path.to_owned(), reason };
-        let file = std::fs::File::open(path).map_err(open)?;
-        let bytes = file.metadata().map_err(open)?.len();
-        if bytes > limit {
-            return Err(MeshError::FileTooLarge { path: path.to_owned(), bytes, limit });
-        }
-        let options = tobj::LoadOptions {
-            triangulate: false, // We fan faces ourselves, in the order docs/conventions.md fixes.
-            single_index: false,
-            ignore_points: true,
-            ignore_lines: true,
-        };
-        let dir = path.parent().unwrap_or(Path::new("."));
-        let mut reader = std::io::BufReader::new(file);
-        let (models, _materials) =
-            tobj::load_obj_buf(&mut reader, &options, |mtl| tobj::load_mtl(dir.join(mtl)))
-                .map_err(|reason| MeshError::Load { path: path.to_owned(), reason })?;
-
-        let mut positions = Vec::new();
-        let mut triangles = Vec::new();
-        for model in &models {
-            let m = &model.mesh;
-            let base = positions.len();
-            for (i, xyz) in m.positions.chunks_exact(3).enumerate() {
-                let p = Vec3::new(xyz[0] as Real, xyz[1] as Real, xyz[2] as Real);
-                let p = scale * p + translate;
-                if !p.is_finite() {
-                    return Err(MeshError::NotFinite { path: path.to_owned(), index: base + i });
-                }
-                positions.push(p);
-            }
-            let global = |i: u32| (base + i as usize) as u32;
-            let mut fan_face = |corners: &[u32]| {
-                for k in 1..corners.len().saturating_sub(1) {
-                    triangles.push([global(corners[0]), global(corners[k]), global(corners[k + 1])]);
-                }
-            };
-            if m.face_arities.is_empty() {
-                m.indices.chunks_exact(3).for_each(&mut fan_face);
-            } else {
-                let mut start = 0;
-                for &arity in &m.face_arities {
-                    let end = start + arity as usize;
-                    fan_face(&m.indices[start..end]);
-                    start = end;
-                }
-            }
-            if triangles.len() > MAX_MESH_TRIANGLES {
-                return Err(MeshError::TooLarge { path: path.to_owned(), count: triangles.len() });
-            }
-        }
-        // tobj checks every index against the vertex count, so `new` only fails when empty.
-        Self::new(positions, triangles).ok_or_else(|| MeshError::Empty(path.to_owned()))
+        let file = ObjFile::read(path, limit)?;
+        let models: Vec<&tobj::Model> = file.models.iter().collect();
+        mesh_of(path, &models, scale, translate)
     }
 
-    /// Bytes of vertex positions, index triples and per-triangle normals.
+    /// Loads an OBJ file as one mesh per material (faces with no `usemtl`
+    /// form a part without one), in the order each material is first used,
+    /// with the materials its MTL files define, or why they could not be
+    /// read. Transformed as by [`Mesh::load_obj`].
+    pub fn load_obj_parts(path: &Path, scale: Real, translate: Vec3) -> Result<ObjParts, MeshError> {
+        let file = ObjFile::read(path, MAX_OBJ_BYTES)?;
+        let mut order: Vec<Option<usize>> = Vec::new();
+        for model in &file.models {
+            if !order.contains(&model.mesh.material_id) {
+                order.push(model.mesh.material_id);
+            }
+        }
+        let mut parts = Vec::new();
+        for material in order {
+            let models: Vec<&tobj::Model> =
+                file.models.iter().filter(|m| m.mesh.material_id == material).collect();
+            match mesh_of(path, &models, scale, translate) {
+                Ok(mesh) => parts.push((mesh, material)),
+                // A material whose faces are all points or lines has no part.
+                Err(MeshError::Empty(_)) => {}
+                Err(e) => return Err(e),
+            }
+        }
+        if parts.is_empty() {
+            return Err(MeshError::Empty(path.to_owned()));
+        }
+        let materials = file.materials.map_err(|e| e.to_string());
+        Ok(ObjParts { parts, materials, mtl_files: file.mtl_files })
+    }
+
+    /// Bytes of vertex positions, index triples, per-triangle normals and
+    /// vertex attributes.
     pub fn memory_bytes(&self) -> usize {
         self.positions.len() * size_of::<Vec3>()
             + self.triangles.len() * size_of::<[u32; 3]>()
             + self.normals.len() * size_of::<Vec3>()
+            + self.vertex_normals.len() * size_of::<Vec3>()
+            + self.uvs.len() * size_of::<[f32; 2]>()
+    }
+
+    /// Whether the mesh has per-vertex shading normals.
+    pub fn has_vertex_normals(&self) -> bool {
+        !self.vertex_normals.is_empty()
+    }
+
+    /// Whether the mesh has texture coordinates.
+    pub fn has_uvs(&self) -> bool {
+        !self.uvs.is_empty()
     }
 
     /// Number of triangles, degenerate ones included.
@@ -261,6 +323,55 @@ impl Mesh {
         triangle_surface_point(self.triangle(i), self.normals[i], p)
     }
 
+    /// The barycentric coordinates `(b₀, b₁, b₂)` of `p` (a point on
+    /// triangle `i`'s plane) with respect to its corners:
+    /// `p = b₀·a + b₁·b + b₂·c`, from the areas of the sub-triangles
+    /// (Cramer's rule on the edge vectors; pbrt-v4 §6.5.3 gets the same
+    /// weights from its edge functions). Computed in f64, so they are good
+    /// to about 1e-7 relative for f32 hits; they only weigh vertex
+    /// attributes, never decide a hit.
+    pub fn barycentric(&self, i: usize, p: Vec3) -> [f64; 3] {
+        let [a, b, c] = self.triangle(i).map(widen);
+        let (e1, e2, d) = (b - a, c - a, widen(p) - a);
+        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let (d1p, d2p) = (e1.dot(d), e2.dot(d));
+        let det = d11 * d22 - d12 * d12;
+        if !(det > 0.0 && det.is_finite()) {
+            return [1.0, 0.0, 0.0];
+        }
+        let b1 = (d22 * d1p - d12 * d2p) / det;
+        let b2 = (d11 * d2p - d12 * d1p) / det;
+        [1.0 - b1 - b2, b1, b2]
+    }
+
+    /// The shading normal at `p` on triangle `i`: the vertex normals
+    /// weighted by `p`'s barycentric coordinates and normalised (Phong
+    /// shading), or `None` when the mesh has none, a corner lacks one, or
+    /// they cancel.
+    pub fn shading_normal(&self, i: usize, p: Vec3) -> Option<Vec3> {
+        if self.vertex_normals.is_empty() {
+            return None;
+        }
+        let corners = self.triangles[i].map(|v| widen(self.vertex_normals[v as usize]));
+        if corners.contains(&glam::DVec3::ZERO) {
+            return None;
+        }
+        let [b0, b1, b2] = self.barycentric(i, p);
+        normalize_robust(narrow(b0 * corners[0] + b1 * corners[1] + b2 * corners[2]))
+    }
+
+    /// The texture coordinates at `p` on triangle `i`, interpolated like
+    /// the normals; `None` when the mesh has none.
+    pub fn uv(&self, i: usize, p: Vec3) -> Option<(Real, Real)> {
+        if self.uvs.is_empty() {
+            return None;
+        }
+        let corners = self.triangles[i].map(|v| self.uvs[v as usize].map(f64::from));
+        let [b0, b1, b2] = self.barycentric(i, p);
+        let at = |k: usize| (b0 * corners[0][k] + b1 * corners[1][k] + b2 * corners[2][k]) as Real;
+        Some((at(0), at(1)))
+    }
+
     /// The hit on triangle `i` alone with `t` in `range`. Degenerate
     /// triangles are never hit.
     pub fn intersect_triangle(
@@ -302,6 +413,152 @@ impl Mesh {
         }
         closest
     }
+}
+
+/// An OBJ file split by material ([`Mesh::load_obj_parts`]).
+#[derive(Debug)]
+pub struct ObjParts {
+    /// Each part's mesh, and the index of its material in `materials`
+    /// (`None`: faces before any `usemtl`, or naming a material no MTL
+    /// file defines).
+    pub parts: Vec<(Mesh, Option<usize>)>,
+    /// The materials of the file's MTL files (tobj's reading of them), or
+    /// why they could not be read.
+    pub materials: Result<Vec<tobj::Material>, String>,
+    /// The MTL files the OBJ file names, whether they could be read or not.
+    pub mtl_files: Vec<PathBuf>,
+}
+
+/// The `i`-th group of `width` values of `values`, if there is one.
+fn nth(values: &[f32], i: u32, width: usize) -> Option<&[f32]> {
+    values.get(width * i as usize..width * i as usize + width)
+}
+
+/// A parsed OBJ file: tobj's models and materials.
+struct ObjFile {
+    models: Vec<tobj::Model>,
+    materials: Result<Vec<tobj::Material>, tobj::LoadError>,
+    /// The MTL files it names (read or not).
+    mtl_files: Vec<PathBuf>,
+}
+
+impl ObjFile {
+    fn read(path: &Path, limit: u64) -> Result<Self, MeshError> {
+        // Opened here rather than by tobj, whose error says only "open file
+        // failed": the OS's reason (no such file, permission denied) goes
+        // into the message.
+        let open = |reason| MeshError::Open { path: path.to_owned(), reason };
+        let file = std::fs::File::open(path).map_err(open)?;
+        let bytes = file.metadata().map_err(open)?.len();
+        if bytes > limit {
+            return Err(MeshError::FileTooLarge { path: path.to_owned(), bytes, limit });
+        }
+        let options = tobj::LoadOptions {
+            triangulate: false, // We fan faces ourselves, in the order docs/conventions.md fixes.
+            single_index: false,
+            ignore_points: true,
+            ignore_lines: true,
+        };
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let mut reader = std::io::BufReader::new(file);
+        let mtl_files = std::cell::RefCell::new(Vec::new());
+        let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |mtl| {
+            mtl_files.borrow_mut().push(dir.join(mtl));
+            tobj::load_mtl(dir.join(mtl))
+        })
+        .map_err(|reason| MeshError::Load { path: path.to_owned(), reason })?;
+        Ok(Self { models, materials, mtl_files: mtl_files.into_inner() })
+    }
+}
+
+/// One mesh from `models` of the OBJ file at `path`, transformed.
+///
+/// A vertex is a position, or, where the faces give normals or texture
+/// coordinates, a distinct (position, normal, texture coordinate) triple:
+/// positions are then repeated bit for bit, so shared edges stay shared
+/// for the watertight test. A model whose faces give normals (or texture
+/// coordinates) for only some corners gets none.
+fn mesh_of(path: &Path, models: &[&tobj::Model], scale: Real, translate: Vec3) -> Result<Mesh, MeshError> {
+    use std::collections::HashMap;
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    let mut uvs = Vec::new();
+    let mut triangles = Vec::new();
+    let any_normals = models.iter().any(|m| !m.mesh.normal_indices.is_empty());
+    let any_uvs = models.iter().any(|m| !m.mesh.texcoord_indices.is_empty());
+    let mut file_vertices = 0; // vertices of the models before this one
+    for model in models {
+        let m = &model.mesh;
+        let mut local = Vec::with_capacity(m.positions.len() / 3);
+        for (i, xyz) in m.positions.chunks_exact(3).enumerate() {
+            let p = Vec3::new(xyz[0] as Real, xyz[1] as Real, xyz[2] as Real);
+            let p = scale * p + translate;
+            if !p.is_finite() {
+                return Err(MeshError::NotFinite { path: path.to_owned(), index: file_vertices + i });
+            }
+            local.push(p);
+        }
+        file_vertices += local.len();
+        let has_normals = m.normal_indices.len() == m.indices.len();
+        let has_uvs = m.texcoord_indices.len() == m.indices.len();
+        // Corner k of the model's faces → a vertex of the mesh.
+        let corner_vertex: Vec<u32> = if !any_normals && !any_uvs {
+            let base = positions.len() as u32;
+            positions.extend_from_slice(&local);
+            m.indices.iter().map(|&i| base + i).collect()
+        } else {
+            let mut seen: HashMap<(u32, u32, u32), u32> = HashMap::new();
+            (0..m.indices.len())
+                .map(|k| {
+                    let n = if has_normals { m.normal_indices[k] } else { u32::MAX };
+                    let t = if has_uvs { m.texcoord_indices[k] } else { u32::MAX };
+                    *seen.entry((m.indices[k], n, t)).or_insert_with(|| {
+                        positions.push(local[m.indices[k] as usize]);
+                        // tobj checks the indices; a bad one would still only
+                        // lose the attribute.
+                        normals.push(match nth(&m.normals, n, 3) {
+                            Some(n) if has_normals => Vec3::new(n[0] as Real, n[1] as Real, n[2] as Real),
+                            _ => Vec3::ZERO,
+                        });
+                        // OBJ's v points up the image; ours down.
+                        uvs.push(match nth(&m.texcoords, t, 2) {
+                            Some(t) if has_uvs => [t[0], 1.0 - t[1]],
+                            _ => [0.0, 0.0],
+                        });
+                        (positions.len() - 1) as u32
+                    })
+                })
+                .collect()
+        };
+        let mut fan_face = |corners: &[u32]| {
+            for k in 1..corners.len().saturating_sub(1) {
+                triangles.push([corners[0], corners[k], corners[k + 1]]);
+            }
+        };
+        if m.face_arities.is_empty() {
+            corner_vertex.chunks_exact(3).for_each(&mut fan_face);
+        } else {
+            let mut start = 0;
+            for &arity in &m.face_arities {
+                let end = start + arity as usize;
+                fan_face(&corner_vertex[start..end]);
+                start = end;
+            }
+        }
+        if triangles.len() > MAX_MESH_TRIANGLES {
+            return Err(MeshError::TooLarge { path: path.to_owned(), count: triangles.len() });
+        }
+    }
+    if !any_normals {
+        normals.clear();
+    }
+    if !any_uvs {
+        uvs.clear();
+    }
+    // tobj checks every index against the vertex count, so `new` only fails when empty.
+    Mesh::new(positions, triangles)
+        .and_then(|m| m.with_vertex_attributes(normals, uvs))
+        .ok_or_else(|| MeshError::Empty(path.to_owned()))
 }
 
 /// The regular icosahedron centred at the origin: its 12 corners, the cyclic
@@ -560,5 +817,58 @@ mod tests {
             let hit = grid.intersect(&Ray::new(eye, target - eye), ALL);
             assert!(hit.is_some(), "ray to {target} slipped through the grid");
         }
+    }
+
+    #[test]
+    fn vertex_normals_and_texture_coordinates_are_read_and_interpolated_at_a_hit() {
+        // A unit quad in z = 0; normals tilt towards ±x, texture coordinates
+        // span [0, 1]² with OBJ's v up.
+        let f = obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n\
+                     vn -1 0 -1\nvn 1 0 -1\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+                     f 1/1/1 2/2/2 3/3/2 4/4/1\n");
+        let m = Mesh::load_obj(f.path(), 1.0, Vec3::ZERO).unwrap();
+        assert!(m.has_vertex_normals() && m.has_uvs());
+        assert_eq!(m.triangle_count(), 2);
+        // Halfway across, the normals average to −z; a quarter of the way, a
+        // quarter tilt.
+        let n = m.shading_normal(0, Vec3::new(0.5, 0.25, 0.0)).unwrap();
+        assert!((n - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6, "{n}");
+        let n = m.shading_normal(1, Vec3::new(0.25, 0.5, 0.0)).unwrap();
+        let want = Vec3::new(-0.5, 0.0, -1.0).normalize();
+        assert!((n - want).length() < 1e-6, "{n}");
+        // (x, y) → (u, 1 − v) = (x, 1 − y).
+        let (u, v) = m.uv(1, Vec3::new(0.25, 0.75, 0.0)).unwrap();
+        assert!((u - 0.25).abs() < 1e-6 && (v - 0.25).abs() < 1e-6, "{u} {v}");
+        let b = m.barycentric(0, Vec3::new(0.75, 0.25, 0.0));
+        assert!(
+            (b[0] - 0.25).abs() < 1e-12 && (b[1] - 0.5).abs() < 1e-12 && (b[2] - 0.25).abs() < 1e-12,
+            "{b:?}"
+        );
+        // Positions shared by corners with different normals stay bit-identical.
+        assert_eq!(m.triangle(0)[0], m.triangle(1)[0]);
+    }
+
+    #[test]
+    fn a_mesh_without_attributes_keeps_one_vertex_per_position_and_flat_shading() {
+        let f = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+        let m = Mesh::load_obj(f.path(), 1.0, Vec3::ZERO).unwrap();
+        assert!(!m.has_vertex_normals() && !m.has_uvs());
+        assert_eq!(m.shading_normal(0, Vec3::new(0.2, 0.2, 0.0)), None);
+        assert_eq!(m.memory_bytes(), 3 * size_of::<Vec3>() + size_of::<[u32; 3]>() + size_of::<Vec3>());
+    }
+
+    #[test]
+    fn meshes_concatenate_with_their_attributes_padded() {
+        let a = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]])
+            .unwrap()
+            .with_vertex_attributes(vec![Vec3::Z; 3], Vec::new())
+            .unwrap();
+        let b = Mesh::new(vec![Vec3::ZERO, Vec3::Y, Vec3::Z], vec![[0, 1, 2]]).unwrap();
+        let c = Mesh::concat(vec![a, b]).unwrap();
+        assert_eq!(c.triangle_count(), 2);
+        assert_eq!(c.triangle(1), [Vec3::ZERO, Vec3::Y, Vec3::Z]);
+        assert!(c.shading_normal(0, Vec3::new(0.2, 0.2, 0.0)).is_some());
+        assert_eq!(c.shading_normal(1, Vec3::new(0.0, 0.2, 0.2)), None);
+        assert!(Mesh::concat(Vec::new()).is_none());
     }
 }

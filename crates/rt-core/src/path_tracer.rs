@@ -141,18 +141,12 @@ impl<'s> PathTracer<'s> {
                 break;
             };
             let object = &scene.objects()[h.object];
-            let material = scene.material(object.material);
+            let sp = object.primitive.surface_point(h.primitive, h.normal, ray.at(h.t));
+            let material = scene.material_at(h.object, h.primitive, sp.p);
             // A translucent object's surface is its dielectric boundary; the
             // medium inside does the rest (step 6).
             let medium = material.subsurface.filter(|_| self.subsurface);
-            let boundary;
-            let m = if medium.is_some() {
-                boundary = material.boundary();
-                &boundary
-            } else {
-                material
-            };
-            let sp = object.primitive.surface_point(h.primitive, h.normal, ray.at(h.t));
+            let m = &if medium.is_some() { material.boundary() } else { material };
             let wo = -d;
 
             // 1. Emission found by this ray.
@@ -178,7 +172,10 @@ impl<'s> PathTracer<'s> {
             if bounce > self.settings.max_bounces {
                 break;
             }
-            let bsdf = Bsdf::new(m, sp.normal, wo);
+            // A translucent object's boundary stays flat: the walk's inside
+            // and outside are the facets' (step 6).
+            let shading = object.primitive.shading_normal(h.primitive, sp.p).filter(|_| medium.is_none());
+            let bsdf = Bsdf::shaded(m, sp.normal, shading.unwrap_or(sp.normal), wo);
 
             // 3. Next-event estimation.
             if bsdf.has_smooth_lobes() {
@@ -431,8 +428,7 @@ impl<'s> PathTracer<'s> {
                 return Color::ZERO;
             }
         }
-        let cos = wi.dot(sp.normal).abs();
-        f * arriving * to_f32(cos * w / chosen)
+        f * arriving * to_f32(bsdf.cosine(wi) * w / chosen)
     }
 }
 
@@ -863,12 +859,14 @@ mod tests {
                     color: Color::new(c, 1.0 - c, 0.5),
                     diffuse: kd,
                     specular: ks,
+                    specular_color: Color::new(1.0, c, 1.0 - c * 0.5),
                     shininess: s * s * 10_000.0,
                     reflectivity: kr,
                     transparency: kt,
                     ior: 0.5 + 3.0 * ior,
                     emission: if e > 0.7 { Color::splat(e * 5.0) } else { Color::ZERO },
                     subsurface: None,
+                    texture: None,
                 };
                 b = b.material(format!("m{i}"), m);
             }

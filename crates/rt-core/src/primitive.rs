@@ -7,7 +7,7 @@ use crate::method::{BoxMethod, Methods, SphereMethod};
 use crate::plane::Plane;
 use crate::polygon::Polygon;
 use crate::ray::{Interval, Ray};
-use crate::real::Vec3;
+use crate::real::{Real, Vec3};
 use crate::sphere::Sphere;
 use crate::surface::SurfacePoint;
 use crate::triangle::Triangle;
@@ -52,6 +52,25 @@ impl Primitive {
             Self::Triangle(t) => t.intersect_with(ray, range, methods.triangle),
             Self::Polygon(p) => p.intersect(ray, range),
             Self::Mesh(m) => m.intersect_with(ray, range, methods.triangle),
+        }
+    }
+
+    /// The shading normal at `p` on `primitive` (a mesh's interpolated
+    /// vertex normals, [`Mesh::shading_normal`]), or `None` where it is the
+    /// geometric normal.
+    pub fn shading_normal(&self, primitive: usize, p: Vec3) -> Option<Vec3> {
+        match self {
+            Self::Mesh(m) => m.shading_normal(primitive, p),
+            _ => None,
+        }
+    }
+
+    /// The texture coordinates at `p` on `primitive` ([`Mesh::uv`]); `None`
+    /// for primitives without them.
+    pub fn uv(&self, primitive: usize, p: Vec3) -> Option<(Real, Real)> {
+        match self {
+            Self::Mesh(m) => m.uv(primitive, p),
+            _ => None,
         }
     }
 

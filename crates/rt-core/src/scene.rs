@@ -6,6 +6,7 @@
 //! when it is made, so its objects can be read but not changed.
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use thiserror::Error;
 
@@ -23,6 +24,7 @@ use crate::primitive::Primitive;
 use crate::ray::{Interval, Ray, rescale_t};
 use crate::real::{Real, Vec3, cast_min_t, scale_pow2};
 use crate::sampler::MAX_SAMPLES_PER_PIXEL;
+use crate::texture::Texture;
 use crate::view_plane::{ViewPlane, ViewPlaneError, check_image_size};
 
 /// A scene ready to render. Every field is validated; the plain settings are
@@ -47,6 +49,7 @@ pub struct Scene {
     pub methods: Methods,
     materials: Vec<Material>,
     material_names: Vec<String>,
+    textures: Vec<Arc<Texture>>,
     objects: Vec<Object>,
     bvh: Bvh,
     /// The emissive objects, as lights for global illumination.
@@ -55,6 +58,7 @@ pub struct Scene {
     emitter_of: Vec<Option<u32>>,
     light_sampler: LightSampler,
     source_files: Vec<PathBuf>,
+    warnings: Vec<String>,
 }
 
 /// Why a [`SceneBuilder`] cannot make a scene.
@@ -69,6 +73,16 @@ pub enum SceneBuildError {
     /// Two materials share a name.
     #[error("material \"{0}\" is defined twice")]
     DuplicateMaterial(String),
+    /// A material names a texture that was not added.
+    #[error("material \"{material}\": texture {texture} does not exist ({count} added)")]
+    UnknownTexture {
+        /// The material's name.
+        material: String,
+        /// The texture index it names.
+        texture: u32,
+        /// How many textures were added.
+        count: usize,
+    },
     /// An object names a material that was not added.
     #[error("objects[{index}] ({kind}): unknown material \"{name}\" (defined: {defined})")]
     UnknownMaterial {
@@ -105,6 +119,23 @@ pub enum SceneBuildError {
     },
 }
 
+impl SceneBuildError {
+    /// The error with its object index mapped by `map` (from the built
+    /// scene's objects to, say, the entries of the file they came from).
+    pub fn with_object_index(self, map: impl Fn(usize) -> usize) -> Self {
+        match self {
+            Self::UnknownMaterial { index, kind, name, defined } => {
+                Self::UnknownMaterial { index: map(index), kind, name, defined }
+            }
+            Self::Subsurface { index, kind, material, reason } => {
+                Self::Subsurface { index: map(index), kind, material, reason }
+            }
+            Self::Emitter { index, kind, reason } => Self::Emitter { index: map(index), kind, reason },
+            other => other,
+        }
+    }
+}
+
 /// Builds a [`Scene`] step by step: a camera, then any of the settings,
 /// materials by name and objects that name them, then [`SceneBuilder::build`].
 ///
@@ -133,8 +164,10 @@ pub struct SceneBuilder {
     color_space: ColorSpace,
     methods: Methods,
     materials: Vec<(String, Material)>,
+    textures: Vec<Arc<Texture>>,
     objects: Vec<(Primitive, String)>,
     source_files: Vec<PathBuf>,
+    warnings: Vec<String>,
 }
 
 impl SceneBuilder {
@@ -152,8 +185,10 @@ impl SceneBuilder {
             color_space: ColorSpace::default(),
             methods: Methods::default(),
             materials: Vec::new(),
+            textures: Vec::new(),
             objects: Vec::new(),
             source_files: Vec::new(),
+            warnings: Vec::new(),
         }
     }
 
@@ -207,6 +242,24 @@ impl SceneBuilder {
         self
     }
 
+    /// Adds a texture; the first is texture 0 ([`Material::texture`]).
+    pub fn texture(mut self, texture: Arc<Texture>) -> Self {
+        self.textures.push(texture);
+        self
+    }
+
+    /// How many textures have been added: the index the next one gets.
+    pub fn texture_count(&self) -> usize {
+        self.textures.len()
+    }
+
+    /// Records something the scene's sources hold that the scene does not
+    /// use, to be shown to whoever loads it ([`Scene::warnings`]).
+    pub fn warning(mut self, warning: impl Into<String>) -> Self {
+        self.warnings.push(warning.into());
+        self
+    }
+
     /// Checks the parts and builds the scene's BVH.
     pub fn build(self) -> Result<Scene, SceneBuildError> {
         check_image_size(self.width, self.height)?;
@@ -217,6 +270,12 @@ impl SceneBuilder {
         for (i, name) in material_names.iter().enumerate() {
             if material_names[..i].contains(name) {
                 return Err(SceneBuildError::DuplicateMaterial(name.clone()));
+            }
+            if let Some(texture) = materials[i].texture
+                && texture as usize >= self.textures.len()
+            {
+                let count = self.textures.len();
+                return Err(SceneBuildError::UnknownTexture { material: name.clone(), texture, count });
             }
         }
         let objects = self
@@ -289,12 +348,14 @@ impl SceneBuilder {
             methods: self.methods,
             materials,
             material_names,
+            textures: self.textures,
             objects,
             bvh,
             emitters,
             emitter_of,
             light_sampler,
             source_files: self.source_files,
+            warnings: self.warnings,
         })
     }
 }
@@ -414,9 +475,45 @@ impl Scene {
         }
     }
 
-    /// The colour a hit shows: its object's material colour.
-    pub fn hit_color(&self, hit: &Hit) -> Color {
-        self.materials[self.objects[hit.object].material].color
+    /// The colour `hit` (found along `ray`) shows without lights: its
+    /// material's colour, textured where the surface has texture coordinates.
+    pub fn hit_color(&self, hit: &Hit, ray: &Ray) -> Color {
+        let m = self.object_material(hit.object);
+        if m.texture.is_none() {
+            m.color
+        } else {
+            self.material_at(hit.object, hit.primitive, ray.at(hit.t)).color
+        }
+    }
+
+    /// The material of `object` at the point `p` of its `primitive`: the
+    /// object's material, with its texture's colour multiplying `color`
+    /// where the surface has texture coordinates ([`crate::texture`]).
+    pub fn material_at(&self, object: usize, primitive: usize, p: Vec3) -> Material {
+        let o = &self.objects[object];
+        let mut m = self.materials[o.material];
+        if let Some(t) = m.texture
+            && let Some((u, v)) = o.primitive.uv(primitive, p)
+        {
+            m.color *= self.textures[t as usize].sample(u, v);
+        }
+        m
+    }
+
+    /// How many textures the scene holds, and their bytes.
+    pub fn texture_stats(&self) -> (usize, usize) {
+        (self.textures.len(), self.textures.iter().map(|t| t.memory_bytes()).sum())
+    }
+
+    /// Texture `index` ([`Material::texture`]).
+    pub fn texture(&self, index: usize) -> &Texture {
+        &self.textures[index]
+    }
+
+    /// What the scene's sources hold that it does not use (MTL statements
+    /// it ignores, missing textures), in a sentence each.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
     }
 
     /// Material `index` ([`Object::material`]).

@@ -15,7 +15,7 @@
 //!   every unblocked direction, reflected by a Lambert surface;
 //! - direct light: `Σ vis·f(ω_o, ω_i)·cos θ_i·E` over every light sample
 //!   ([`crate::light::LightSample`]), `vis` 0 or 1 from a shadow ray;
-//! - reflection: `(kr + kt·F)·L(reflected ray)`;
+//! - reflection: `(kr·s + kt·F)·L(reflected ray)`, s the `specular_color`;
 //! - refraction: `kt·(1 − F)·color·η²·L(refracted ray)` (η = ηᵢ/ηₜ, see
 //!   [`crate::bsdf`]), nothing on total internal reflection (F = 1 then).
 //!
@@ -88,7 +88,7 @@ impl<'s> Tracer<'s> {
             return self.scene.background;
         };
         if !self.plan.shading {
-            return self.scene.hit_color(&hit);
+            return self.scene.hit_color(&hit, ray);
         }
         self.shade(ray, &hit, Path { depth: 0, weight: 1.0 }, rng, counts)
     }
@@ -103,18 +103,19 @@ impl<'s> Tracer<'s> {
 
     fn shade(&self, ray: &Ray, hit: &Hit, path: Path, rng: &mut SampleRng, counts: &mut RayCounts) -> Color {
         let object = &self.scene.objects()[hit.object];
-        let m = self.scene.material(object.material);
         let Some(d) = normalize_robust(ray.dir) else {
             return self.scene.background;
         };
         let sp = object.primitive.surface_point(hit.primitive, hit.normal, ray.at(hit.t));
+        let m = &self.scene.material_at(hit.object, hit.primitive, sp.p);
         let wo = -d;
         let front = wo.dot(sp.normal) > 0.0;
         let n = if front { sp.normal } else { -sp.normal };
         let lighting = &self.scene.lighting;
 
         let mut color = if front { m.emission } else { Color::ZERO };
-        let bsdf = Bsdf::new(m, sp.normal, wo);
+        let shading = object.primitive.shading_normal(hit.primitive, sp.p);
+        let bsdf = Bsdf::shaded(m, sp.normal, shading.unwrap_or(sp.normal), wo);
         if bsdf.has_smooth_lobes() {
             let lambert =
                 m.color * ((1.0 - m.reflectivity - m.transparency) * (1.0 - m.specular) * m.diffuse);
@@ -138,20 +139,24 @@ impl<'s> Tracer<'s> {
                             continue;
                         }
                     }
-                    color += f * s.irradiance * to_f32(n.dot(s.to_light));
+                    color += f * s.irradiance * to_f32(bsdf.cosine(s.to_light));
                 }
             }
         }
 
         if path.depth < self.plan.max_depth && (self.plan.reflection || self.plan.refraction) {
+            // Mirror and glass directions turn about the shading normal, as
+            // long as they leave on the right side of the facet (else about
+            // the facet's own normal): see `bsdf`'s "Shading normals".
+            let ns = if shading.is_some() { bsdf.normal() } else { n };
             let (eta_i, eta_t) = if front { (1.0, m.ior as Real) } else { (m.ior as Real, 1.0) };
             let fresnel =
-                if m.transparency > 0.0 { to_f32(fresnel_dielectric(-d.dot(n), eta_i, eta_t)) } else { 0.0 };
-            let reflected = m.reflectivity + m.transparency * fresnel;
-            let next = path.then(reflected);
+                if m.transparency > 0.0 { to_f32(fresnel_dielectric(-d.dot(ns), eta_i, eta_t)) } else { 0.0 };
+            let reflected = m.reflectivity * m.specular_color + Color::splat(m.transparency * fresnel);
+            let next = path.then(reflected.max_element());
             if self.plan.reflection && next.weight >= MIN_WEIGHT {
                 counts.reflection += 1;
-                let r = reflect(d, n);
+                let r = Some(reflect(d, ns)).filter(|r| r.dot(n) > 0.0).unwrap_or_else(|| reflect(d, n));
                 let ray = Ray::new(sp.spawn_origin(r), r);
                 color += reflected * self.trace_secondary(&ray, next, rng, counts);
             }
@@ -163,7 +168,9 @@ impl<'s> Tracer<'s> {
             let transmitted = transmitted * (eta * eta);
             if self.plan.refraction
                 && next.weight >= MIN_WEIGHT
-                && let Some(t) = refract(d, n, eta_i, eta_t)
+                && let Some(t) = refract(d, ns, eta_i, eta_t)
+                    .filter(|t| t.dot(n) < 0.0)
+                    .or_else(|| refract(d, n, eta_i, eta_t))
             {
                 counts.refraction += 1;
                 let ray = Ray::new(sp.spawn_origin(t), t);
@@ -469,5 +476,76 @@ mod tests {
         for distance in [0.0, 1e4, 1e5] {
             assert_eq!(acne_pixels(distance), 0, "at {distance}");
         }
+    }
+
+    /// A lit sphere of radius 1 at the origin, as `primitive`, 48×48 pixels
+    /// with a point light up and to the left (no shadows: only shading differs).
+    fn lit_sphere(primitive: crate::primitive::Primitive) -> Vec<Color> {
+        use crate::camera::{Camera, Projection};
+        use crate::effects::Lighting;
+        use crate::light::{Light, LightKind};
+        use crate::material::Material;
+        let camera =
+            Camera::new(Vec3::new(0.0, 0.0, -4.0), Vec3::ZERO, Vec3::Y, 35.0, 1.0, Projection::Perspective)
+                .unwrap();
+        let light = Light {
+            kind: LightKind::Point { position: Vec3::new(-3.0, 3.0, -3.0) },
+            power: Color::splat(40.0),
+            shadows: false,
+        };
+        let scene = crate::scene::SceneBuilder::new(camera)
+            .image_size(48, 48)
+            .lighting(Lighting { lights: vec![light], ..Lighting::default() })
+            .material("m", Material { specular: 0.3, shininess: 60.0, ..Material::flat(Color::splat(0.8)) })
+            .object(primitive, "m")
+            .build()
+            .unwrap();
+        Renderer::new(&scene, 48, 48, 1).unwrap().render(|_| {}).pixels
+    }
+
+    #[test]
+    fn vertex_normals_shade_a_coarse_mesh_like_the_smooth_surface_it_stands_for() {
+        use crate::mesh::Mesh;
+        use crate::primitive::Primitive;
+        use crate::sphere::Sphere;
+        // A UV sphere of 12 × 6 quads, its vertices on the unit sphere; the
+        // exact normal there is the position.
+        let (around, up) = (12u32, 6u32);
+        let mut positions = Vec::new();
+        for j in 0..=up {
+            let t = std::f64::consts::PI * j as f64 / up as f64;
+            for i in 0..=around {
+                let a = 2.0 * std::f64::consts::PI * i as f64 / around as f64;
+                positions.push(crate::real::narrow(glam::DVec3::new(
+                    t.sin() * a.cos(),
+                    t.cos(),
+                    t.sin() * a.sin(),
+                )));
+            }
+        }
+        let mut triangles = Vec::new();
+        for j in 0..up {
+            for i in 0..around {
+                let (a, b) = (j * (around + 1) + i, j * (around + 1) + i + 1);
+                triangles.extend([[a, b, b + around + 1], [a, b + around + 1, a + around + 1]]);
+            }
+        }
+        let flat = Mesh::new(positions.clone(), triangles).unwrap();
+        let smooth = flat.clone().with_vertex_attributes(positions, Vec::new()).unwrap();
+        let exact = lit_sphere(Primitive::Sphere(Sphere::new(Vec3::ZERO, 1.0).unwrap()));
+        let rmse = |img: &[Color]| {
+            // Only pixels where both show the sphere (the silhouettes differ).
+            let (mut sum, mut n) = (0.0f64, 0);
+            for (a, b) in img.iter().zip(&exact) {
+                if *a != Color::ZERO && *b != Color::ZERO {
+                    sum += (*a - *b).length_squared() as f64;
+                    n += 1;
+                }
+            }
+            (sum / n as f64).sqrt()
+        };
+        let (e_flat, e_smooth) =
+            (rmse(&lit_sphere(Primitive::Mesh(flat))), rmse(&lit_sphere(Primitive::Mesh(smooth))));
+        assert!(e_smooth < e_flat / 3.0, "smooth {e_smooth} against flat {e_flat}");
     }
 }

@@ -66,3 +66,20 @@ fn the_cast_session_in_the_docs_is_what_cast_prints() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(stdout(&o), expected);
 }
+
+#[test]
+fn the_model_objects_in_the_models_page_load() {
+    let block = blocks("docs/models.md", "ron").into_iter().next().expect("a ron block");
+    let mut checked = 0;
+    for line in block.lines().filter(|l| l.trim_start().starts_with("Mesh(")) {
+        let object = line.split("//").next().unwrap().trim().trim_end_matches(',');
+        let scene = format!(
+            "Scene(camera: (position: (0, 1, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1), \
+             image: (width: 8, height: 6), materials: {{ \"clay\": (color: (0.7, 0.5, 0.4)) }}, objects: [ {object} ])"
+        );
+        let loaded = rt_core::parse_scene(&scene, "docs/models.md", &scenes_dir());
+        assert!(loaded.is_ok(), "{object}: {}", loaded.unwrap_err());
+        checked += 1;
+    }
+    assert_eq!(checked, 3);
+}

@@ -77,6 +77,14 @@ fn docs_subsurface_pictures_are_current_renders() {
     }
 }
 
+/// And for the models of docs/models.md (and the README): an OBJ with its
+/// MTL materials and texture, and a glTF file, docs/models/models.png.
+#[test]
+fn docs_model_pictures_are_current_renders() {
+    let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/models");
+    compare_render("models", &docs.join("models.png"), &[]);
+}
+
 /// Renders scenes/`name`.ron with `extra` arguments and compares the result
 /// with `reference`, or overwrites `reference` when `RT_BLESS` is set.
 fn compare_render(name: &str, reference: &Path, extra: &[&str]) {

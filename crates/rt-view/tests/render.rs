@@ -340,6 +340,20 @@ fn stats_count_subsurface_rays_and_walk_steps_where_a_material_is_translucent() 
     assert!(ray_count(&err, "subsurface ") > 0 && walk_steps(&err) > 0, "{err}");
 }
 
+#[test]
+fn models_with_their_own_materials_render_say_what_they_leave_out_and_count_their_size() {
+    let err = stats_of("models", 40, 24, 1);
+    // The vase's MTL file has an ambient colour, which the model does not use.
+    assert!(
+        err.contains("warning: ") && err.contains("models/vase.obj: material \"glaze\": not used: Ka"),
+        "{err}"
+    );
+    let meshes = err.lines().find(|l| l.starts_with("meshes: ")).expect("a meshes line");
+    // Two vase parts and three still-life parts; all but the gem smooth.
+    assert!(meshes.starts_with("meshes: 5 (4 with vertex normals, 3 with texture coordinates)"), "{meshes}");
+    assert!(meshes.contains("bytes per triangle") && meshes.contains("textures: 2"), "{meshes}");
+}
+
 /// The walk steps in `--stats` output.
 fn walk_steps(stats: &str) -> u64 {
     let counts = stats.lines().find_map(|l| l.strip_prefix("rays: ")).expect("rays line");

@@ -19,6 +19,8 @@ pub(super) struct MaterialFields {
     diffuse: Finite,
     #[serde(default)]
     specular: Finite,
+    #[serde(default = "super::values::white")]
+    specular_color: ColorDesc,
     #[serde(default = "default_shininess")]
     shininess: Finite,
     #[serde(default)]
@@ -89,17 +91,25 @@ impl TryFrom<MaterialFields> for MaterialDesc {
             color: f.color.0,
             diffuse: number(f.diffuse, "diffuse", unit, "0 to 1")?,
             specular: number(f.specular, "specular", unit, "0 to 1")?,
+            specular_color: f.specular_color.0,
             shininess: number(f.shininess, "shininess", |v| (0.0..=1e4).contains(&v), "0 to 10000")?,
             reflectivity: number(f.reflectivity, "reflectivity", unit, "0 to 1")?,
             transparency: number(f.transparency, "transparency", unit, "0 to 1")?,
             ior: number(f.ior, "ior", |v| v > 0.0 && v <= 100.0, "above 0 and at most 100")?,
             emission: f.emission.0,
             subsurface: f.subsurface.map(|s| s.0),
+            texture: None,
         };
         if m.color.max_element() > 1.0 {
             return Err(format!(
                 "material color is a reflectance: each component must be 0 to 1, got {}",
                 m.color
+            ));
+        }
+        if m.specular_color.max_element() > 1.0 {
+            return Err(format!(
+                "material specular_color is a reflectance: each component must be 0 to 1, got {}",
+                m.specular_color
             ));
         }
         if m.reflectivity + m.transparency > 1.0 {

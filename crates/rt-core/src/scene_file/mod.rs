@@ -11,6 +11,7 @@ mod camera;
 mod effects;
 mod light;
 mod material;
+mod model;
 mod object;
 mod values;
 
@@ -22,9 +23,8 @@ use thiserror::Error;
 
 use crate::color::ColorSpace;
 use crate::effects::Lighting;
-use crate::mesh::{Mesh, MeshError};
 use crate::method::Methods;
-use crate::primitive::Primitive;
+use crate::model::ModelError;
 use crate::scene::{Scene, SceneBuildError, SceneBuilder};
 use camera::{CameraDesc, ImageDesc, SamplesDesc};
 use effects::EffectsDesc;
@@ -66,15 +66,15 @@ pub enum SceneError {
         /// What is wrong (in the message, so not also a `source()`).
         reason: SceneBuildError,
     },
-    /// A mesh's OBJ file cannot be used.
+    /// A mesh's OBJ or glTF file cannot be used.
     #[error("{file}: objects[{index}] (Mesh): {reason}")]
-    Mesh {
+    Model {
         /// The scene file.
         file: String,
         /// 0-based object index.
         index: usize,
-        /// Why the mesh failed (in the message, so not also a `source()`).
-        reason: MeshError,
+        /// Why the model failed (in the message, so not also a `source()`).
+        reason: ModelError,
     },
 }
 
@@ -114,21 +114,27 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<Scene, Sce
     for (name, material) in desc.materials {
         scene = scene.material(name, material.0);
     }
+    // A mesh with its file's materials adds an object per material: the
+    // scene's object k came from the file's `entry_of[k]`.
+    let mut entry_of = Vec::new();
     for (index, entry) in desc.objects.into_iter().enumerate() {
-        let primitive =
-            match entry.shape {
-                Shape::Ready(p) => p,
-                Shape::Mesh { file: obj, scale, translate } => {
-                    let path = base_dir.join(obj);
-                    let mesh = Mesh::load_obj(&path, scale, translate)
-                        .map_err(|reason| SceneError::Mesh { file: file.to_owned(), index, reason })?;
-                    scene = scene.source_file(path);
-                    Primitive::Mesh(mesh)
-                }
-            };
-        scene = scene.object(primitive, entry.material);
+        match entry.0 {
+            Shape::Ready { primitive, material } => scene = scene.object(primitive, material),
+            Shape::Mesh { file: obj, scale, translate, material } => {
+                let path = base_dir.join(&obj);
+                let written = obj.display().to_string();
+                let added;
+                (scene, added) = model::add_model(scene, &path, &written, scale, translate, material)
+                    .map_err(|reason| SceneError::Model { file: file.to_owned(), index, reason })?;
+                entry_of.extend(std::iter::repeat_n(index, added.saturating_sub(1)));
+            }
+        }
+        entry_of.push(index);
     }
-    scene.build().map_err(|reason| SceneError::Invalid { file: file.to_owned(), reason })
+    scene.build().map_err(|reason| SceneError::Invalid {
+        file: file.to_owned(),
+        reason: reason.with_object_index(|k| entry_of.get(k).copied().unwrap_or(k)),
+    })
 }
 
 #[derive(Deserialize)]
@@ -189,6 +195,7 @@ mod tests {
     use crate::light::{Light, LightKind};
     use crate::material::Material;
     use crate::method::{BoxMethod, SphereMethod, TriangleMethod};
+    use crate::primitive::Primitive;
     use crate::real::Vec3;
 
     const GOOD: &str = r#"Scene(
@@ -622,5 +629,53 @@ mod tests {
     fn an_unreadable_scene_file_is_an_error_naming_it() {
         let e = load_scene(Path::new("/nonexistent/scene.ron")).unwrap_err().to_string();
         assert!(e.starts_with("/nonexistent/scene.ron: cannot read scene file"), "{e}");
+    }
+
+    #[test]
+    fn a_mesh_without_a_material_brings_its_files_materials_as_one_object_each() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("m")).unwrap();
+        std::fs::write(
+            dir.path().join("m/two.obj"),
+            "mtllib two.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 2 4 3\n",
+        )
+        .unwrap();
+        std::fs::write(dir.path().join("m/two.mtl"), "newmtl a\nKd 1 0 0\nKa 1 1 1\nnewmtl b\nKd 0 0 1\n")
+            .unwrap();
+        let text = GOOD.replace(
+            "Sphere(center: (0, 0, 0), radius: 1, material: \"red\")",
+            "Mesh(file: \"m/two.obj\"), Mesh(file: \"m/two.obj\", material: \"red\")",
+        );
+        let path = dir.path().join("scene.ron");
+        std::fs::write(&path, &text).unwrap();
+        let scene = load_scene(&path).unwrap();
+        // Two parts, then the overridden mesh as one object, then the plane.
+        let names: Vec<&str> =
+            scene.objects().iter().map(|o| scene.material_names()[o.material].as_str()).collect();
+        assert_eq!(names, ["m/two.obj:a", "m/two.obj:b", "red", "grey"]);
+        assert_eq!(scene.material(scene.objects()[1].material).color, Color::new(0.0, 0.0, 1.0));
+        assert_eq!(scene.warnings(), ["m/two.obj: material \"a\": not used: Ka"]);
+        // The OBJ and its MTL file are watched by the viewer.
+        assert!(scene.source_files().iter().any(|f| f.ends_with("m/two.obj")));
+        assert!(scene.source_files().iter().any(|f| f.ends_with("m/two.mtl")));
+
+        // An error about a later object names its place in the file, not
+        // in the scene's longer list of objects.
+        let bad = text.replace(
+            "Mesh(file: \"m/two.obj\", material: \"red\")",
+            "Mesh(file: \"m/two.obj\", material: \"nope\")",
+        );
+        std::fs::write(&path, bad).unwrap();
+        let e = load_scene(&path).unwrap_err().to_string();
+        assert!(e.contains("objects[1] (Mesh): unknown material \"nope\""), "{e}");
+
+        // A bad value in the MTL file names the object, the file, the material and the field.
+        std::fs::write(dir.path().join("m/two.mtl"), "newmtl a\nNi 0\nnewmtl b\n").unwrap();
+        std::fs::write(&path, &text).unwrap();
+        let e = load_scene(&path).unwrap_err().to_string();
+        assert!(
+            e.contains("objects[0] (Mesh): OBJ file ") && e.contains("two.obj: material \"a\": Ni"),
+            "{e}"
+        );
     }
 }

@@ -45,7 +45,9 @@ pub(super) enum ObjectDesc {
     },
     Mesh {
         file: PathBuf,
-        material: String,
+        // Written as a plain string, like every other object's material.
+        #[serde(default, deserialize_with = "some_name")]
+        material: Option<String>,
         #[serde(default = "unit_scale")]
         scale: Finite,
         #[serde(default)]
@@ -53,25 +55,27 @@ pub(super) enum ObjectDesc {
     },
 }
 
+fn some_name<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<String>, D::Error> {
+    String::deserialize(d).map(Some)
+}
+
 /// An object whose geometry is validated, except a mesh's file, which is read later.
 #[derive(Deserialize)]
 #[serde(try_from = "ObjectDesc")]
-pub(super) struct ObjectEntry {
-    pub(super) shape: Shape,
-    pub(super) material: String,
-}
+pub(super) struct ObjectEntry(pub(super) Shape);
 
-/// An object's geometry: ready, or an OBJ file still to be read.
+/// An object's geometry and material name: ready, or an OBJ file still to
+/// be read, whose own materials are used when it names none.
 pub(super) enum Shape {
-    Ready(Primitive),
-    Mesh { file: PathBuf, scale: Real, translate: Vec3 },
+    Ready { primitive: Primitive, material: String },
+    Mesh { file: PathBuf, scale: Real, translate: Vec3, material: Option<String> },
 }
 
 impl TryFrom<ObjectDesc> for ObjectEntry {
     type Error = String;
     fn try_from(o: ObjectDesc) -> Result<Self, String> {
         let ready = |p: Result<Primitive, GeometryError>, material| {
-            p.map(|p| Self { shape: Shape::Ready(p), material }).map_err(|e| e.to_string())
+            p.map(|primitive| Self(Shape::Ready { primitive, material })).map_err(|e| e.to_string())
         };
         match o {
             ObjectDesc::Sphere { center, radius, material } => {
@@ -94,10 +98,7 @@ impl TryFrom<ObjectDesc> for ObjectEntry {
                 if scale.0 <= 0.0 {
                     return Err(format!("mesh scale must be positive, got {}", scale.0));
                 }
-                Ok(Self {
-                    shape: Shape::Mesh { file, scale: scale.0, translate: translate.into() },
-                    material,
-                })
+                Ok(Self(Shape::Mesh { file, scale: scale.0, translate: translate.into(), material }))
             }
         }
     }

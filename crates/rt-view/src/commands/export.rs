@@ -9,6 +9,9 @@
 //! polygons and triangles. Positions are in rt-view's left-handed world
 //! (`docs/conventions.md`); converting to a right-handed renderer is the
 //! reader's job. Materials and lights are in the units of `docs/effects.md`.
+//! What the export leaves out is said in the JSON: `textured` on a material
+//! with a texture (its `color` is the untextured factor) and `smooth` on a
+//! mesh with vertex normals (written with its flat faces).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -71,6 +74,8 @@ struct MaterialJson {
     color: [f32; 3],
     diffuse: f32,
     specular: f32,
+    /// Tint of the glossy and mirror lobes.
+    specular_color: [f32; 3],
     shininess: f32,
     /// The GGX α the glossy lobe uses.
     roughness: f32,
@@ -78,6 +83,8 @@ struct MaterialJson {
     transparency: f32,
     ior: f32,
     emission: [f32; 3],
+    /// Whether a texture multiplies `color` (the texture is not exported).
+    textured: bool,
     /// The medium inside, if translucent.
     #[serde(skip_serializing_if = "Option::is_none")]
     subsurface: Option<SubsurfaceJson>,
@@ -94,9 +101,23 @@ struct SubsurfaceJson {
 #[derive(Serialize)]
 #[serde(tag = "kind")]
 enum ObjectJson {
-    Sphere { center: [f64; 3], radius: f64, material: String },
-    Plane { normal: [f64; 3], d: f64, material: String },
-    Triangles { file: String, triangles: usize, material: String },
+    Sphere {
+        center: [f64; 3],
+        radius: f64,
+        material: String,
+    },
+    Plane {
+        normal: [f64; 3],
+        d: f64,
+        material: String,
+    },
+    Triangles {
+        file: String,
+        triangles: usize,
+        material: String,
+        /// A mesh with vertex normals, written with its flat faces.
+        smooth: bool,
+    },
 }
 
 #[derive(Serialize)]
@@ -138,7 +159,8 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
                 let triangles = triangles_of(other)?;
                 let file = format!("{stem}.object-{i}.obj");
                 write_obj(&dir.join(&file), &triangles)?;
-                ObjectJson::Triangles { file, triangles: triangles.len(), material }
+                let smooth = matches!(other, Primitive::Mesh(m) if m.has_vertex_normals());
+                ObjectJson::Triangles { file, triangles: triangles.len(), material, smooth }
             }
         };
         objects.push(json_object);
@@ -152,12 +174,14 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
             color: c3(m.color),
             diffuse: m.diffuse,
             specular: m.specular,
+            specular_color: c3(m.specular_color),
             shininess: m.shininess,
             roughness: m.roughness(),
             reflectivity: m.reflectivity,
             transparency: m.transparency,
             ior: m.ior,
             emission: c3(m.emission),
+            textured: m.texture.is_some(),
             subsurface: m.subsurface.map(|s| SubsurfaceJson {
                 albedo: c3(s.albedo),
                 mean_free_path: c3(s.mean_free_path),

@@ -56,6 +56,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let load_start = Instant::now();
     let scene = rt_core::load_scene(&args.scene)?;
     let load_time = load_start.elapsed();
+    for warning in scene.warnings() {
+        eprintln!("warning: {}: {warning}", args.scene.display());
+    }
     let width = args.width.unwrap_or(scene.width);
     let height = args.height.unwrap_or(scene.height);
     let spp = args.spp.unwrap_or(scene.samples_per_pixel);
@@ -98,6 +101,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             bvh.bytes as f64 / 1024.0,
             bvh.bytes as f64 / bvh.primitives.max(1) as f64
         );
+        if let Some(line) = describe_geometry(&scene) {
+            eprintln!("{line}");
+        }
         eprintln!("effects: {}", describe_plan(renderer.plan()));
         if renderer.plan().global_illumination.is_some() && scene.light_sampler().is_empty() {
             eprintln!(
@@ -114,6 +120,36 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// The meshes' size for `--stats`: triangles, bytes (positions, indices,
+/// normals and vertex attributes) per triangle, and the textures; `None`
+/// when the scene has no mesh.
+pub fn describe_geometry(scene: &rt_core::Scene) -> Option<String> {
+    let meshes: Vec<&rt_core::mesh::Mesh> = scene
+        .objects()
+        .iter()
+        .filter_map(|o| match &o.primitive {
+            rt_core::Primitive::Mesh(m) => Some(m),
+            _ => None,
+        })
+        .collect();
+    if meshes.is_empty() {
+        return None;
+    }
+    let triangles: usize = meshes.iter().map(|m| m.triangle_count()).sum();
+    let bytes: usize = meshes.iter().map(|m| m.memory_bytes()).sum();
+    let smooth = meshes.iter().filter(|m| m.has_vertex_normals()).count();
+    let textured = meshes.iter().filter(|m| m.has_uvs()).count();
+    let (count, texels) = scene.texture_stats();
+    Some(format!(
+        "meshes: {} ({smooth} with vertex normals, {textured} with texture coordinates), {triangles} triangles, \
+         {:.1} MiB ({:.1} bytes per triangle); textures: {count}, {:.1} MiB",
+        meshes.len(),
+        bytes as f64 / (1 << 20) as f64,
+        bytes as f64 / triangles.max(1) as f64,
+        texels as f64 / (1 << 20) as f64,
+    ))
 }
 
 /// The plan in words: "shading, shadows, …" or "none (pure ray casting)".

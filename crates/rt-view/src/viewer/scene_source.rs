@@ -233,6 +233,17 @@ impl SceneSource {
         for problem in [&self.error, &self.watch_problem].into_iter().flatten() {
             ui.colored_label(Color32::from_rgb(220, 60, 50), problem);
         }
+        let warnings = self.scene.warnings();
+        if !warnings.is_empty() {
+            let plural = if warnings.len() == 1 { "" } else { "s" };
+            egui::CollapsingHeader::new(format!("{} warning{plural}", warnings.len()))
+                .id_salt("scene warnings")
+                .show(ui, |ui| {
+                    for w in warnings {
+                        ui.colored_label(Color32::from_rgb(200, 150, 40), w);
+                    }
+                });
+        }
         change
     }
 }
