@@ -39,8 +39,9 @@
 //! not used: textures are always filtered bilinearly.
 //!
 //! **Bad input.** Every accessor is checked before it is read (type, count,
-//! stride, and that it lies inside its buffer view and buffer), and every
-//! index against the vertex count, so a malformed or truncated file is an
+//! stride, and that it lies inside its buffer view and buffer), every index
+//! against the vertex count, and the node hierarchy's depth and instance
+//! count are bounded, so a malformed or truncated file is an
 //! error naming the mesh and primitive, never a panic. A base-colour texture
 //! that cannot be read is a warning; the material keeps its factor.
 
@@ -63,6 +64,9 @@ use crate::texture::{Texture, Wrap};
 pub const MAX_GLTF_BYTES: u64 = 1 << 31;
 /// Deepest node hierarchy followed (deeper is most likely a cycle).
 pub const MAX_NODE_DEPTH: usize = 64;
+/// Most node instances placed: a hierarchy that reuses nodes can place a
+/// mesh exponentially often in its depth.
+pub const MAX_NODE_INSTANCES: usize = 1 << 20;
 
 /// The extensions whose data is used.
 const KNOWN_EXTENSIONS: [&str; 3] =
@@ -138,9 +142,18 @@ pub fn from_slice(bytes: &[u8], path: &Path, scale: Real, translate: Vec3) -> Re
     let mut triangles = 0usize;
     let mut stack: Vec<(::gltf::Node, DMat4, usize)> =
         scene.nodes().map(|n| (n, place * mirror, 1)).collect();
+    let mut visits = 0usize;
     while let Some((node, parent, depth)) = stack.pop() {
         if depth > MAX_NODE_DEPTH {
             return Err(err(format!("its node hierarchy is deeper than {MAX_NODE_DEPTH} levels (a cycle?)")));
+        }
+        // A node may be reached along many paths (a child listed twice, or
+        // by several parents): each is an instance. Bound the work.
+        visits += 1;
+        if visits > MAX_NODE_INSTANCES {
+            return Err(err(format!(
+                "its node hierarchy places more than {MAX_NODE_INSTANCES} node instances"
+            )));
         }
         let matrix = parent * DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
         if let Some(mesh) = node.mesh() {
@@ -785,6 +798,13 @@ mod tests {
         assert!(e.starts_with("glTF file ") && e.contains("m.glb: "), "{e}");
         let e = error_of(|doc, _| doc["buffers"][0]["uri"] = json!("data%AA.bin"));
         assert!(e.contains("buffer 0: its URI \"data%AA.bin\" is not percent-encoded UTF-8"), "{e}");
+        // 40 levels, each node listing the next twice: 2⁴⁰ instances.
+        let e = error_of(|doc, _| {
+            let mut nodes: Vec<Value> = (0..40).map(|k| json!({ "children": [k + 1, k + 1] })).collect();
+            nodes.push(json!({ "mesh": 0 }));
+            doc["nodes"] = json!(nodes);
+        });
+        assert!(e.contains("more than 1048576 node instances"), "{e}");
         let e = error_of(|doc, _| doc["scenes"] = json!([{ "nodes": [] }]));
         assert!(e.ends_with("its scene has no meshes"), "{e}");
         // Truncated anywhere: an error, never a panic.
