@@ -168,6 +168,9 @@ impl Bsdf {
     /// above). The shading normal is first turned to the side the
     /// geometric one points to.
     pub fn shaded(m: &Material, geometric: Vec3, shading: Vec3, wo: Vec3) -> Self {
+        if shading == geometric {
+            return Self::new(m, geometric, wo);
+        }
         let outside = wo.dot(geometric) >= 0.0;
         let ng = if outside { geometric } else { -geometric };
         let ns = if shading.dot(ng) < 0.0 { -shading } else { shading };

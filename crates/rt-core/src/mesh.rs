@@ -82,13 +82,21 @@ pub struct Mesh {
     triangles: Vec<[u32; 3]>,
     /// Per-triangle unit normal; zero for a degenerate triangle.
     normals: Vec<Vec3>,
-    /// Per-vertex shading normals (the file's `vn`), empty when it has none;
-    /// a zero entry is a vertex without one.
-    vertex_normals: Vec<Vec3>,
-    /// Per-vertex texture coordinates `(u, v)` with `v` down the image
+    bounds: Aabb,
+    /// Boxed: most meshes have none, and every `Primitive` is as large as
+    /// a mesh (inline, these two lists made it 144 bytes instead of 104).
+    attributes: Option<Box<VertexAttributes>>,
+}
+
+/// A mesh's per-vertex attributes.
+#[derive(Clone, Debug, Default, PartialEq)]
+struct VertexAttributes {
+    /// Shading normals (the file's `vn`), empty when it has none; a zero
+    /// entry is a vertex without one.
+    normals: Vec<Vec3>,
+    /// Texture coordinates `(u, v)` with `v` down the image
     /// ([`crate::texture`]), empty when the file has none.
     uvs: Vec<[f32; 2]>,
-    bounds: Aabb,
 }
 
 impl Mesh {
@@ -120,7 +128,7 @@ impl Mesh {
                     (a, b) => a.or(b),
                 },
             )?;
-        Some(Self { positions, triangles, normals, vertex_normals: Vec::new(), uvs: Vec::new(), bounds })
+        Some(Self { positions, triangles, normals, bounds, attributes: None })
     }
 
     /// The mesh with per-vertex shading normals and texture coordinates
@@ -132,12 +140,16 @@ impl Mesh {
         if !fits(normals.len()) || !fits(uvs.len()) {
             return None;
         }
-        self.vertex_normals = normals
+        if normals.is_empty() && uvs.is_empty() {
+            self.attributes = None;
+            return Some(self);
+        }
+        let normals = normals
             .into_par_iter()
             .with_min_len(4096)
             .map(|n| normalize_robust(n).unwrap_or(Vec3::ZERO))
             .collect();
-        self.uvs = uvs;
+        self.attributes = Some(Box::new(VertexAttributes { normals, uvs }));
         Some(self)
     }
 
@@ -156,15 +168,12 @@ impl Mesh {
             let n = m.positions.len();
             all.1.extend(m.triangles.iter().map(|t| t.map(|i| base + i)));
             all.0.extend(m.positions);
+            let a = m.attributes.map(|a| *a).unwrap_or_default();
             if normals {
-                all.2.extend(if m.vertex_normals.is_empty() {
-                    vec![Vec3::ZERO; n]
-                } else {
-                    m.vertex_normals
-                });
+                all.2.extend(if a.normals.is_empty() { vec![Vec3::ZERO; n] } else { a.normals });
             }
             if uvs {
-                all.3.extend(if m.uvs.is_empty() { vec![[0.0; 2]; n] } else { m.uvs });
+                all.3.extend(if a.uvs.is_empty() { vec![[0.0; 2]; n] } else { a.uvs });
             }
         }
         u32::try_from(all.0.len()).ok()?;
@@ -223,18 +232,26 @@ impl Mesh {
         self.positions.len() * size_of::<Vec3>()
             + self.triangles.len() * size_of::<[u32; 3]>()
             + self.normals.len() * size_of::<Vec3>()
-            + self.vertex_normals.len() * size_of::<Vec3>()
-            + self.uvs.len() * size_of::<[f32; 2]>()
+            + size_of_val(self.vertex_normals())
+            + size_of_val(self.uvs())
     }
 
     /// Whether the mesh has per-vertex shading normals.
     pub fn has_vertex_normals(&self) -> bool {
-        !self.vertex_normals.is_empty()
+        !self.vertex_normals().is_empty()
+    }
+
+    fn vertex_normals(&self) -> &[Vec3] {
+        self.attributes.as_ref().map_or(&[], |a| &a.normals)
+    }
+
+    fn uvs(&self) -> &[[f32; 2]] {
+        self.attributes.as_ref().map_or(&[], |a| &a.uvs)
     }
 
     /// Whether the mesh has texture coordinates.
     pub fn has_uvs(&self) -> bool {
-        !self.uvs.is_empty()
+        !self.uvs().is_empty()
     }
 
     /// Number of triangles, degenerate ones included.
@@ -349,10 +366,11 @@ impl Mesh {
     /// shading), or `None` when the mesh has none, a corner lacks one, or
     /// they cancel.
     pub fn shading_normal(&self, i: usize, p: Vec3) -> Option<Vec3> {
-        if self.vertex_normals.is_empty() {
+        let normals = self.vertex_normals();
+        if normals.is_empty() {
             return None;
         }
-        let corners = self.triangles[i].map(|v| widen(self.vertex_normals[v as usize]));
+        let corners = self.triangles[i].map(|v| widen(normals[v as usize]));
         if corners.contains(&glam::DVec3::ZERO) {
             return None;
         }
@@ -363,10 +381,11 @@ impl Mesh {
     /// The texture coordinates at `p` on triangle `i`, interpolated like
     /// the normals; `None` when the mesh has none.
     pub fn uv(&self, i: usize, p: Vec3) -> Option<(Real, Real)> {
-        if self.uvs.is_empty() {
+        let uvs = self.uvs();
+        if uvs.is_empty() {
             return None;
         }
-        let corners = self.triangles[i].map(|v| self.uvs[v as usize].map(f64::from));
+        let corners = self.triangles[i].map(|v| uvs[v as usize].map(f64::from));
         let [b0, b1, b2] = self.barycentric(i, p);
         let at = |k: usize| (b0 * corners[0][k] + b1 * corners[1][k] + b2 * corners[2][k]) as Real;
         Some((at(0), at(1)))

@@ -146,7 +146,13 @@ impl<'s> PathTracer<'s> {
             // A translucent object's surface is its dielectric boundary; the
             // medium inside does the rest (step 6).
             let medium = material.subsurface.filter(|_| self.subsurface);
-            let m = &if medium.is_some() { material.boundary() } else { material };
+            let boundary;
+            let m = if medium.is_some() {
+                boundary = material.boundary();
+                &boundary
+            } else {
+                &*material
+            };
             let wo = -d;
 
             // 1. Emission found by this ray.

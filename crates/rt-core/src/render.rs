@@ -151,6 +151,9 @@ impl<'s> Renderer<'s> {
     }
 
     /// The primary ray of sample `k` of pixel (x, y).
+    // Inlined into the packet loop, where the sample count's stratification
+    // is loop-invariant: as a call it cost 14 % of a flat 64-spp render.
+    #[inline(always)]
     fn primary_ray(&self, x: u32, y: u32, k: u32) -> Ray {
         if self.spp == 1 {
             self.view.center_ray(x, y)

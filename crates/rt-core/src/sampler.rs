@@ -19,6 +19,7 @@ pub const MAX_SAMPLES_PER_PIXEL: u32 = 1 << 16;
 
 /// The sub-pixel offset of sample `sample` of `spp` at pixel (`x`, `y`), in
 /// the image of seed `seed` ([`SampleRng::seeded`]).
+#[inline]
 pub fn subpixel_offset(x: u32, y: u32, sample: u32, spp: u32, seed: u64) -> (Real, Real) {
     if spp <= 1 {
         return (0.5, 0.5);
@@ -36,6 +37,7 @@ pub fn subpixel_offset(x: u32, y: u32, sample: u32, spp: u32, seed: u64) -> (Rea
 /// number of cells over n, so every cell has area exactly 1/n and a uniform
 /// `jitter` gives a uniform point (a grid with empty cells would not). For
 /// n = m² this is the m × m grid, cell (k mod m, k div m).
+#[inline]
 pub fn stratified(k: u32, n: u32, jitter: (Real, Real)) -> (Real, Real) {
     let n = n.max(1);
     let k = k.min(n - 1);

@@ -5,6 +5,7 @@
 //! [`SceneBuilder`] in code, and is read-only afterwards: its BVH is built
 //! when it is made, so its objects can be read but not changed.
 
+use std::borrow::Cow;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -489,15 +490,17 @@ impl Scene {
     /// The material of `object` at the point `p` of its `primitive`: the
     /// object's material, with its texture's colour multiplying `color`
     /// where the surface has texture coordinates ([`crate::texture`]).
-    pub fn material_at(&self, object: usize, primitive: usize, p: Vec3) -> Material {
+    /// Borrowed when there is nothing to change, so an untextured scene
+    /// pays nothing for textures.
+    pub fn material_at(&self, object: usize, primitive: usize, p: Vec3) -> Cow<'_, Material> {
         let o = &self.objects[object];
-        let mut m = self.materials[o.material];
-        if let Some(t) = m.texture
-            && let Some((u, v)) = o.primitive.uv(primitive, p)
-        {
-            m.color *= self.textures[t as usize].sample(u, v);
+        let m = &self.materials[o.material];
+        match (m.texture, m.texture.and_then(|_| o.primitive.uv(primitive, p))) {
+            (Some(t), Some((u, v))) => {
+                Cow::Owned(Material { color: m.color * self.textures[t as usize].sample(u, v), ..*m })
+            }
+            _ => Cow::Borrowed(m),
         }
-        m
     }
 
     /// How many textures the scene holds, and their bytes.
