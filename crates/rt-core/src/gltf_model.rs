@@ -84,8 +84,8 @@ pub fn load(path: &Path, scale: Real, translate: Vec3) -> Result<Model, ModelErr
 /// its folder is where the files it refers to are looked for.
 pub fn from_slice(bytes: &[u8], path: &Path, scale: Real, translate: Vec3) -> Result<Model, ModelError> {
     let err = |reason: String| ModelError::Gltf { path: path.to_owned(), reason };
-    let ::gltf::Gltf { document, blob } =
-        ::gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| err(e.to_string()))?;
+    let ::gltf::Gltf { document, blob } = ::gltf::Gltf::from_slice_without_validation(bytes)
+        .map_err(|e| err(format!("it cannot be read as glTF ({e}): a truncated or damaged file?")))?;
     // gltf-json's validation indexes the accessors with a POSITION
     // attribute's index unchecked (1.4.1, `primitive_validate_hook`): check
     // those first, then validate.
@@ -103,7 +103,7 @@ pub fn from_slice(bytes: &[u8], path: &Path, scale: Real, translate: Vec3) -> Re
     {
         if let Some(uri) = uri
             && !uri.contains(':')
-            && !percent_decodes_to_utf8(uri)
+            && percent_decode(uri).is_none()
         {
             return Err(err(format!("{what} {k}: its URI {uri:?} is not percent-encoded UTF-8")));
         }
@@ -128,7 +128,17 @@ pub fn from_slice(bytes: &[u8], path: &Path, scale: Real, translate: Vec3) -> Re
     }
     let base = path.parent().unwrap_or(Path::new("."));
     let ::gltf::Gltf { document, blob } = gltf;
-    let buffer_data = ::gltf::import_buffers(&document, Some(base), blob).map_err(|e| err(e.to_string()))?;
+    // A buffer file that cannot be read is named (the crate's error does not).
+    for buffer in document.buffers() {
+        if let ::gltf::buffer::Source::Uri(uri) = buffer.source()
+            && !uri.contains(':')
+            && let Err(e) = std::fs::metadata(base.join(percent_decode(uri).unwrap_or_default()))
+        {
+            return Err(err(format!("buffer {} ({uri}) cannot be read: {e}", buffer.index())));
+        }
+    }
+    let buffer_data = ::gltf::import_buffers(&document, Some(base), blob)
+        .map_err(|e| err(format!("its buffers cannot be read: {e}")))?;
     let buffers: Vec<&[u8]> = buffer_data.iter().map(|b| &b.0[..]).collect();
 
     let Some(scene) = document.default_scene().or_else(|| document.scenes().next()) else {
@@ -265,8 +275,8 @@ struct Group {
     has_uvs: bool,
 }
 
-/// Whether `uri` with its `%XX` escapes decoded is UTF-8 text.
-fn percent_decodes_to_utf8(uri: &str) -> bool {
+/// `uri` with its `%XX` escapes decoded, if that is UTF-8 text.
+fn percent_decode(uri: &str) -> Option<String> {
     let bytes = uri.as_bytes();
     let mut out = Vec::with_capacity(bytes.len());
     let mut i = 0;
@@ -283,7 +293,7 @@ fn percent_decodes_to_utf8(uri: &str) -> bool {
             }
         }
     }
-    std::str::from_utf8(&out).is_ok()
+    String::from_utf8(out).ok()
 }
 
 /// "3 (name)" or "3".
@@ -805,6 +815,11 @@ mod tests {
             doc["nodes"] = json!(nodes);
         });
         assert!(e.contains("more than 1048576 node instances"), "{e}");
+        let e = error_of(|doc, _| doc["buffers"][0]["uri"] = json!("gone.bin"));
+        assert!(
+            e.ends_with("buffer 0 (gone.bin) cannot be read: No such file or directory (os error 2)"),
+            "{e}"
+        );
         let e = error_of(|doc, _| doc["scenes"] = json!([{ "nodes": [] }]));
         assert!(e.ends_with("its scene has no meshes"), "{e}");
         // Truncated anywhere: an error, never a panic.
