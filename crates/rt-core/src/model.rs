@@ -74,10 +74,3 @@ pub fn is_gltf(path: &Path) -> bool {
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
 }
-
-impl Model {
-    /// Triangles over all parts.
-    pub fn triangle_count(&self) -> usize {
-        self.parts.iter().map(|(m, _)| m.triangle_count()).sum()
-    }
-}

@@ -20,7 +20,7 @@ pub fn load(path: &Path, scale: Real, translate: Vec3) -> Result<Model, ModelErr
     let obj = Mesh::load_obj_parts(path, scale, translate)?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut warnings = Vec::new();
-    let mut files = obj.mtl_files.clone();
+    let mut files = obj.mtl_files;
     let mtl = match obj.materials {
         Ok(m) if m.is_empty() => {
             warnings.push(

@@ -24,9 +24,10 @@ use std::path::{Path, PathBuf};
 use crate::color::Color;
 use crate::real::{Real, to_f64};
 
-/// Largest texture accepted, in texels (a 16384 × 16384 image): 3 GiB of
-/// linear colour at most.
-pub const MAX_TEXELS: u64 = 1 << 28;
+/// Largest texture side accepted, in texels: the decoder refuses a larger
+/// image before allocating it (and the `image` crate's own limit on one
+/// decode's allocation, 512 MiB, applies too).
+pub const MAX_TEXTURE_SIDE: u32 = 16384;
 
 /// Why a texture could not be read.
 #[derive(Debug, thiserror::Error)]
@@ -39,8 +40,8 @@ pub enum TextureError {
         /// What the decoder said.
         reason: String,
     },
-    /// The image has no texels or more than [`MAX_TEXELS`].
-    #[error("texture {path} is {width}×{height}: it must have at least one texel and at most {MAX_TEXELS}")]
+    /// The image has no texels.
+    #[error("texture {path} is {width}×{height}: it has no texels")]
     Size {
         /// The image file.
         path: PathBuf,
@@ -121,21 +122,19 @@ impl Texture {
     /// Reads an sRGB-encoded image file and decodes it to linear colour.
     pub fn load(path: &Path) -> Result<Self, TextureError> {
         let read = |reason: String| TextureError::Read { path: path.to_owned(), reason };
-        let reader = image::ImageReader::open(path)
+        let mut reader = image::ImageReader::open(path)
             .map_err(|e| read(e.to_string()))?
             .with_guessed_format()
             .map_err(|e| read(e.to_string()))?;
-        let (width, height) = reader.into_dimensions().map_err(|e| read(e.to_string()))?;
-        if width == 0 || height == 0 || u64::from(width) * u64::from(height) > MAX_TEXELS {
+        let mut limits = image::Limits::default();
+        limits.max_image_width = Some(MAX_TEXTURE_SIDE);
+        limits.max_image_height = Some(MAX_TEXTURE_SIDE);
+        reader.limits(limits);
+        let image = reader.decode().map_err(|e| read(e.to_string()))?.into_rgb8();
+        let (width, height) = image.dimensions();
+        if width == 0 || height == 0 {
             return Err(TextureError::Size { path: path.to_owned(), width, height });
         }
-        let image = image::ImageReader::open(path)
-            .map_err(|e| read(e.to_string()))?
-            .with_guessed_format()
-            .map_err(|e| read(e.to_string()))?
-            .decode()
-            .map_err(|e| read(e.to_string()))?
-            .into_rgb8();
         // One table lookup per channel value.
         let table: Vec<f32> = (0..=255u8).map(|b| srgb_decode(f32::from(b) / 255.0)).collect();
         let texels = image
@@ -289,6 +288,14 @@ mod tests {
         let missing = dir.path().join("missing.png");
         let e = Texture::load(&missing).unwrap_err().to_string();
         assert!(e.starts_with("cannot read texture ") && e.contains("missing.png"), "{e}");
+        // One texel too wide: refused before its pixels are allocated.
+        let wide = dir.path().join("wide.png");
+        image::GrayImage::new(MAX_TEXTURE_SIDE + 1, 1).save(&wide).unwrap();
+        let e = Texture::load(&wide).unwrap_err().to_string();
+        assert!(
+            e.starts_with("cannot read texture ") && e.contains("wide.png") && e.contains("limit"),
+            "{e}"
+        );
         let junk = dir.path().join("junk.png");
         std::fs::write(&junk, b"\x89PNG\r\n\x1a\nnot really").unwrap();
         let e = Texture::load(&junk).unwrap_err().to_string();
