@@ -46,7 +46,7 @@
 //! that cannot be read is a warning; the material keeps its factor.
 
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::mesh::Mode;
@@ -83,6 +83,30 @@ pub fn load(path: &Path, scale: Real, translate: Vec3) -> Result<Model, ModelErr
 /// [`load`] for a file's bytes already read; `path` names it in errors, and
 /// its folder is where the files it refers to are looked for.
 pub fn from_slice(bytes: &[u8], path: &Path, scale: Real, translate: Vec3) -> Result<Model, ModelError> {
+    read(bytes, path, scale, translate, true)
+}
+
+/// The glTF file at `path` as one mesh, for a scene that gives it its own
+/// material: [`load`] without reading the materials or decoding textures,
+/// the parts concatenated in their order; with the files it refers to
+/// ([`Model::files`]).
+pub fn load_geometry(path: &Path, scale: Real, translate: Vec3) -> Result<(Mesh, Vec<PathBuf>), ModelError> {
+    let err = |reason: String| ModelError::Gltf { path: path.to_owned(), reason };
+    let bytes = read_limited(path, MAX_GLTF_BYTES).map_err(err)?;
+    let model = read(&bytes, path, scale, translate, false)?;
+    let mesh = Mesh::concat(model.parts.into_iter().map(|(m, _)| m).collect())
+        .ok_or_else(|| err("it has too many vertices".into()))?;
+    Ok((mesh, model.files))
+}
+
+/// [`from_slice`], reading the materials and textures only `with_materials`.
+fn read(
+    bytes: &[u8],
+    path: &Path,
+    scale: Real,
+    translate: Vec3,
+    with_materials: bool,
+) -> Result<Model, ModelError> {
     let err = |reason: String| ModelError::Gltf { path: path.to_owned(), reason };
     let ::gltf::Gltf { document, blob } = ::gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| err(format!("it cannot be read as glTF ({e}): a truncated or damaged file?")))?;
@@ -204,7 +228,7 @@ pub fn from_slice(bytes: &[u8], path: &Path, scale: Real, translate: Vec3) -> Re
         let mesh = Mesh::new(g.positions, g.triangles)
             .and_then(|m| m.with_vertex_attributes(g.normals, g.uvs))
             .ok_or_else(|| err("a mesh has no triangles".into()))?;
-        let Some(index) = g.material else {
+        let Some(index) = g.material.filter(|_| with_materials) else {
             parts.push((mesh, None));
             continue;
         };
@@ -248,7 +272,7 @@ pub fn from_slice(bytes: &[u8], path: &Path, scale: Real, translate: Vec3) -> Re
     }
     // External buffers and images, to watch.
     let base_file = |uri: Option<&str>| uri.filter(|u| !u.contains(':')).map(|u| base.join(u));
-    let mut files: Vec<std::path::PathBuf> = document
+    let mut files: Vec<PathBuf> = document
         .buffers()
         .filter_map(|b| match b.source() {
             ::gltf::buffer::Source::Uri(u) => base_file(Some(u)),
@@ -785,6 +809,25 @@ mod tests {
             "{:?}",
             model.warnings
         );
+    }
+
+    #[test]
+    fn geometry_alone_is_the_models_parts_in_one_mesh_without_reading_textures() {
+        // A texture that cannot be decoded: a warning for the model, not even
+        // read for the geometry.
+        let bytes = triangle_glb(|doc, _| {
+            doc["images"] = json!([{ "uri": "nowhere.png" }]);
+            doc["textures"] = json!([{ "source": 0 }]);
+            doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": 0 });
+        });
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.glb");
+        std::fs::write(&path, bytes).unwrap();
+        let model = load(&path, 1.0, Vec3::ZERO).unwrap();
+        assert_eq!(model.warnings.len(), 1);
+        let (mesh, files) = load_geometry(&path, 1.0, Vec3::ZERO).unwrap();
+        assert_eq!(mesh, model.parts[0].0);
+        assert_eq!(files, model.files);
     }
 
     /// The error `edit` leads to.

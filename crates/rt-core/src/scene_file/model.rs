@@ -40,13 +40,11 @@ pub(super) fn add_model(
     let mut scene = scene.source_file(path);
     if let Some(material) = material {
         let mesh = if is_gltf(path) {
-            let model = load(path, scale, translate)?;
-            for file in &model.files {
+            let (mesh, files) = gltf_model::load_geometry(path, scale, translate)?;
+            for file in &files {
                 scene = scene.source_file(file);
             }
-            Mesh::concat(model.parts.into_iter().map(|(m, _)| m).collect()).ok_or_else(|| {
-                ModelError::Gltf { path: path.to_owned(), reason: "it has too many vertices".into() }
-            })?
+            mesh
         } else {
             Mesh::load_obj(path, scale, translate)?
         };
