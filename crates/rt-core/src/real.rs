@@ -94,6 +94,21 @@ pub fn to_f64(x: Real) -> f64 {
     x as f64
 }
 
+/// `n / d` component by component, each quotient correctly rounded (IEEE
+/// 754 division), exactly what three scalar divisions give; with `f32`
+/// geometry as one 4-lane SIMD division instead of three in a row.
+#[inline(always)]
+pub fn divide(n: Vec3, d: Vec3) -> Vec3 {
+    #[cfg(not(feature = "f64"))]
+    {
+        (glam::Vec3A::from(n) / glam::Vec3A::from(d)).into()
+    }
+    #[cfg(feature = "f64")]
+    {
+        n / d
+    }
+}
+
 /// A geometric vector widened to f64 (exactly).
 pub fn widen(v: Vec3) -> glam::DVec3 {
     glam::DVec3::new(to_f64(v.x), to_f64(v.y), to_f64(v.z))

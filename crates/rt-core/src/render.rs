@@ -21,7 +21,7 @@ use crate::hit::Hit;
 use crate::path_tracer::PathTracer;
 use crate::ray::Ray;
 use crate::real::Vec3;
-use crate::sampler::{MAX_SAMPLES_PER_PIXEL, SampleRng, subpixel_offset};
+use crate::sampler::{MAX_SAMPLES_PER_PIXEL, SampleRng, Strata};
 use crate::scene::Scene;
 use crate::tracer::Tracer;
 use crate::view_plane::{ViewPlane, ViewPlaneError};
@@ -71,6 +71,8 @@ pub struct Renderer<'s> {
     path_tracer: Option<PathTracer<'s>>,
     view: ViewPlane,
     spp: u32,
+    /// The pixel's cells of `spp` stratified samples.
+    strata: Strata,
     seed: u64,
     color_space: ColorSpace,
 }
@@ -111,6 +113,7 @@ impl<'s> Renderer<'s> {
             path_tracer: plan.global_illumination.map(|gi| PathTracer::new(scene, gi, plan.subsurface)),
             view: ViewPlane::new(camera, width, height)?,
             spp,
+            strata: Strata::new(spp),
             seed: 0,
             color_space: scene.color_space,
         })
@@ -158,7 +161,7 @@ impl<'s> Renderer<'s> {
         if self.spp == 1 {
             self.view.center_ray(x, y)
         } else {
-            let (sx, sy) = subpixel_offset(x, y, k, self.spp, self.seed);
+            let (sx, sy) = self.strata.subpixel_offset(x, y, k, self.seed);
             self.view.primary_ray(x, y, sx, sy)
         }
     }

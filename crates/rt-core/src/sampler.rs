@@ -21,42 +21,77 @@ pub const MAX_SAMPLES_PER_PIXEL: u32 = 1 << 16;
 /// the image of seed `seed` ([`SampleRng::seeded`]).
 #[inline]
 pub fn subpixel_offset(x: u32, y: u32, sample: u32, spp: u32, seed: u64) -> (Real, Real) {
-    if spp <= 1 {
-        return (0.5, 0.5);
-    }
-    let h = hash(x, y, sample) ^ seed_bits(seed);
-    stratified(sample, spp, (unit_float(h as u32), unit_float((h >> 32) as u32)))
+    Strata::new(spp).subpixel_offset(x, y, sample, seed)
 }
 
 /// Point `k` of `n` stratified over [0,1)²: the square is cut into `n`
 /// cells of equal area, one per point, and the point is placed at `jitter`
-/// ∈ [0,1)² inside its cell.
+/// ∈ [0,1)² inside its cell ([`Strata`]).
+#[inline]
+pub fn stratified(k: u32, n: u32, jitter: (Real, Real)) -> (Real, Real) {
+    Strata::new(n).point(k, jitter)
+}
+
+/// The cells of `n` stratified points over [0,1)²: cut into `n` cells of
+/// equal area, one per point.
 ///
 /// The cells lie in `rows = ⌊√n⌋` rows; the first `n mod rows` rows hold
 /// `⌊n/rows⌋ + 1` cells, the others `⌊n/rows⌋`, and each row's height is its
 /// number of cells over n, so every cell has area exactly 1/n and a uniform
 /// `jitter` gives a uniform point (a grid with empty cells would not). For
-/// n = m² this is the m × m grid, cell (k mod m, k div m).
-#[inline]
-pub fn stratified(k: u32, n: u32, jitter: (Real, Real)) -> (Real, Real) {
-    let n = n.max(1);
-    let k = k.min(n - 1);
-    let rows = (n as f64).sqrt().floor().max(1.0) as u32;
-    let (base, extra) = (n / rows, n % rows);
-    // Cells before row `row`, the row, the cell in it and the row's width.
-    let wide = extra * (base + 1);
-    let (row, col, count) = if k < wide {
-        (k / (base + 1), k % (base + 1), base + 1)
-    } else {
-        (extra + (k - wide) / base, (k - wide) % base, base)
-    };
-    let before = if row < extra { row * (base + 1) } else { wide + (row - extra) * base };
-    // `(c + j) / n < 1` for j < 1 in exact arithmetic; `min` keeps it so after rounding.
-    let below_one = 1.0 - Real::EPSILON / 2.0;
-    (
-        ((col as Real + jitter.0) / count as Real).min(below_one),
-        ((before as Real + jitter.1 * count as Real) / n as Real).min(below_one),
-    )
+/// n = m² this is the m × m grid, cell (k mod m, k div m). Made once per
+/// sample count (a renderer keeps its pixels'), so the square root and
+/// divisions that lay out the rows are not paid per sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Strata {
+    n: u32,
+    /// Cells per row in the first `extra` rows is `base + 1`, then `base`.
+    base: u32,
+    extra: u32,
+    /// Cells in the first `extra` rows: `extra · (base + 1)`.
+    wide: u32,
+}
+
+impl Strata {
+    /// The cells of `n` points (`n` = 0 counts as 1).
+    pub fn new(n: u32) -> Self {
+        let n = n.max(1);
+        let rows = (n as f64).sqrt().floor().max(1.0) as u32;
+        let (base, extra) = (n / rows, n % rows);
+        Self { n, base, extra, wide: extra * (base + 1) }
+    }
+
+    /// Point `k` placed at `jitter` ∈ [0,1)² inside its cell.
+    #[inline]
+    pub fn point(&self, k: u32, jitter: (Real, Real)) -> (Real, Real) {
+        let Strata { n, base, extra, wide } = *self;
+        let k = k.min(n - 1);
+        // Cells before row `row`, the row, the cell in it and the row's width.
+        let (row, col, count) = if k < wide {
+            (k / (base + 1), k % (base + 1), base + 1)
+        } else {
+            (extra + (k - wide) / base, (k - wide) % base, base)
+        };
+        let before = if row < extra { row * (base + 1) } else { wide + (row - extra) * base };
+        // `(c + j) / n < 1` for j < 1 in exact arithmetic; `min` keeps it so after rounding.
+        let below_one = 1.0 - Real::EPSILON / 2.0;
+        (
+            ((col as Real + jitter.0) / count as Real).min(below_one),
+            ((before as Real + jitter.1 * count as Real) / n as Real).min(below_one),
+        )
+    }
+
+    /// The sub-pixel offset of sample `sample` of these cells at pixel
+    /// (`x`, `y`), in the image of seed `seed`: the pixel centre for one
+    /// sample, else the sample's cell jittered by the pixel's random stream.
+    #[inline]
+    pub fn subpixel_offset(&self, x: u32, y: u32, sample: u32, seed: u64) -> (Real, Real) {
+        if self.n <= 1 {
+            return (0.5, 0.5);
+        }
+        let h = hash(x, y, sample) ^ seed_bits(seed);
+        self.point(sample, (unit_float(h as u32), unit_float((h >> 32) as u32)))
+    }
 }
 
 /// Shirley and Chiu's concentric map ("A Low Distortion Map Between Disk and

@@ -88,6 +88,8 @@ pub struct ViewPlane {
     height: u32,
     plane_w: Real,
     plane_h: Real,
+    /// `(plane_w / W, plane_h / H)`, divided once here rather than per ray.
+    pixel: (Real, Real),
 }
 
 impl ViewPlane {
@@ -96,7 +98,8 @@ impl ViewPlane {
         check_image_size(width, height)?;
         let plane_h = camera.view_plane_height();
         let plane_w = plane_h * (width as Real / height as Real);
-        let view = Self { camera, width, height, plane_w, plane_h };
+        let pixel = (plane_w / width as Real, plane_h / height as Real);
+        let view = Self { camera, width, height, plane_w, plane_h, pixel };
         let (pixel_w, pixel_h) = view.pixel_size();
         if !(plane_w.is_finite() && plane_h.is_finite()) {
             return Err(ViewPlaneError::PlaneTooLarge { plane_w, plane_h });
@@ -135,7 +138,7 @@ impl ViewPlane {
     }
     /// `(plane_w / W, plane_h / H)`: one pixel's size in world units.
     pub fn pixel_size(&self) -> (Real, Real) {
-        (self.plane_w / self.width as Real, self.plane_h / self.height as Real)
+        self.pixel
     }
 
     /// `O`, the world point of pixel corner (0, 0): the plane's upper-left corner.

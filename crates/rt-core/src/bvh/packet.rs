@@ -25,12 +25,12 @@ use std::mem::MaybeUninit;
 
 use super::leaf::lanes_of;
 use super::query::Query;
-use super::{Bvh, Child, INLINE_STACK, Node, Slabs, WIDTH};
+use super::{Bvh, Child, INLINE_STACK, Node, WIDTH};
 use crate::hit::Hit;
 use crate::method::Methods;
 use crate::object::Object;
 use crate::ray::{Interval, Ray};
-use crate::real::{Real, gamma};
+use crate::real::{Real, Vec3, divide, gamma};
 
 /// The most rays a packet holds: a pixel's 64 samples, or a run of 64
 /// pixels of a row at one sample each.
@@ -48,29 +48,43 @@ struct Frustum {
 }
 
 impl Frustum {
-    /// The bounds of `slabs`, or `None` if their direction signs differ or
-    /// an inverse direction is not finite.
-    fn new(slabs: &[Slabs]) -> Option<Self> {
-        let first = slabs.first()?;
-        let mut f = Frustum {
-            origin_lo: first.origin,
-            origin_hi: first.origin,
-            inv_lo: first.inv,
-            inv_hi: first.inv,
-            enter: first.enter,
+    /// The bounds of the rays in `blocks`, or `None` if their direction
+    /// signs differ or an inverse direction is not finite. Lane-wise minima
+    /// and maxima over the blocks first (SIMD), then across the lanes.
+    #[inline(always)]
+    fn new(blocks: &[RayBlock]) -> Option<Self> {
+        let lo = |x: [Real; BLOCK], y: [Real; BLOCK]| {
+            std::array::from_fn(|l| if y[l] < x[l] { y[l] } else { x[l] })
         };
-        for s in slabs {
+        let hi = |x: [Real; BLOCK], y: [Real; BLOCK]| {
+            std::array::from_fn(|l| if y[l] > x[l] { y[l] } else { x[l] })
+        };
+        let first = blocks.first()?;
+        let (mut o_lo, mut o_hi, mut i_lo, mut i_hi) = (first.origin, first.origin, first.inv, first.inv);
+        for b in &blocks[1..] {
             for axis in 0..3 {
-                if s.enter[axis] != f.enter[axis] || !s.inv[axis].is_finite() {
-                    return None;
-                }
-                f.origin_lo[axis] = f.origin_lo[axis].min(s.origin[axis]);
-                f.origin_hi[axis] = f.origin_hi[axis].max(s.origin[axis]);
-                f.inv_lo[axis] = f.inv_lo[axis].min(s.inv[axis]);
-                f.inv_hi[axis] = f.inv_hi[axis].max(s.inv[axis]);
+                o_lo[axis] = lo(o_lo[axis], b.origin[axis]);
+                o_hi[axis] = hi(o_hi[axis], b.origin[axis]);
+                i_lo[axis] = lo(i_lo[axis], b.inv[axis]);
+                i_hi[axis] = hi(i_hi[axis], b.inv[axis]);
             }
         }
-        Some(f)
+        let min = |x: [Real; BLOCK]| x.into_iter().fold(Real::INFINITY, Real::min);
+        let max = |x: [Real; BLOCK]| x.into_iter().fold(Real::NEG_INFINITY, Real::max);
+        let f = Frustum {
+            origin_lo: o_lo.map(min),
+            origin_hi: o_hi.map(max),
+            inv_lo: i_lo.map(min),
+            inv_hi: i_hi.map(max),
+            enter: i_hi.map(|i| usize::from(max(i) < 0.0)),
+        };
+        // An inverse is never ±0 (directions are finite), so a sign change
+        // shows as a negative minimum with a positive maximum.
+        (0..3)
+            .all(|a| {
+                f.inv_lo[a].is_finite() && f.inv_hi[a].is_finite() && (f.inv_lo[a] > 0.0 || f.inv_hi[a] < 0.0)
+            })
+            .then_some(f)
     }
 
     /// For each of the node's boxes, a lower bound on where any ray enters
@@ -143,37 +157,42 @@ struct Cone {
 }
 
 impl Cone {
-    /// The cone of `queries`' rays, or `None` if their origins differ or
-    /// their `d_k` differ in sign or are 0.
-    fn new(queries: &[Query]) -> Option<Self> {
-        let first = queries.first()?.prepared.ray;
+    /// The cone of the rays in `blocks` (bounded by `frustum`), whose first
+    /// ray is `first`, or `None` if their origins differ. All `d_k` have
+    /// one sign (the frustum's), none is 0. The slopes are computed from the
+    /// inverse directions, `u = (1/d_k)/(1/d_i)`: three roundings, a relative
+    /// error under `2·10⁻⁷`, far inside the margin.
+    #[inline(always)]
+    fn new(blocks: &[RayBlock], frustum: &Frustum, first: &Ray) -> Option<Self> {
+        if frustum.origin_lo != frustum.origin_hi {
+            return None;
+        }
         let k = first.dir.abs().max_position();
         let (i, j) = ((k + 1) % 3, (k + 2) % 3);
-        let sign = if first.dir[k] > 0.0 { 1.0 } else { -1.0 };
-        let mut cone = Cone {
-            origin: first.origin.into(),
+        let sign = if frustum.enter[k] == 0 { 1.0 } else { -1.0 };
+        let (mut u_lo, mut u_hi) = ([Real::INFINITY; BLOCK], [Real::NEG_INFINITY; BLOCK]);
+        let (mut v_lo, mut v_hi) = (u_lo, u_hi);
+        for b in blocks {
+            for lane in 0..BLOCK {
+                let (u, v) = (b.inv[k][lane] / b.inv[i][lane], b.inv[k][lane] / b.inv[j][lane]);
+                u_lo[lane] = if u < u_lo[lane] { u } else { u_lo[lane] };
+                u_hi[lane] = if u > u_hi[lane] { u } else { u_hi[lane] };
+                v_lo[lane] = if v < v_lo[lane] { v } else { v_lo[lane] };
+                v_hi[lane] = if v > v_hi[lane] { v } else { v_hi[lane] };
+            }
+        }
+        let min = |x: [Real; BLOCK]| x.into_iter().fold(Real::INFINITY, Real::min);
+        let max = |x: [Real; BLOCK]| x.into_iter().fold(Real::NEG_INFINITY, Real::max);
+        let (u, v) = ((min(u_lo), max(u_hi)), (min(v_lo), max(v_hi)));
+        let reach = u.0.abs().max(u.1.abs()).max(v.0.abs()).max(v.1.abs());
+        (u.0.is_finite() && u.1.is_finite() && v.0.is_finite() && v.1.is_finite()).then_some(Cone {
+            origin: frustum.origin_lo,
             axes: [i, j, k],
             sign,
-            u: (Real::INFINITY, Real::NEG_INFINITY),
-            v: (Real::INFINITY, Real::NEG_INFINITY),
-            margin: 0.0,
-        };
-        for q in queries {
-            let r = q.prepared.ray;
-            if r.origin != first.origin || r.dir[k] * sign <= 0.0 || r.dir[k].is_nan() {
-                return None;
-            }
-            // Rounding the slopes (here by multiplying with 1/d_k) is far
-            // inside the margin.
-            let inv_k = 1.0 / r.dir[k];
-            let (u, v) = (r.dir[i] * inv_k, r.dir[j] * inv_k);
-            cone.u = (cone.u.0.min(u), cone.u.1.max(u));
-            cone.v = (cone.v.0.min(v), cone.v.1.max(v));
-        }
-        let reach = cone.u.0.abs().max(cone.u.1.abs()).max(cone.v.0.abs()).max(cone.v.1.abs());
-        cone.margin = 1e-6 * (1.0 + reach);
-        (cone.u.0.is_finite() && cone.u.1.is_finite() && cone.v.0.is_finite() && cone.v.1.is_finite())
-            .then_some(cone)
+            u,
+            v,
+            margin: 1e-6 * (1.0 + reach),
+        })
     }
 
     /// The mask of the node's boxes that no ray of the packet comes near.
@@ -243,13 +262,31 @@ impl RayBlock {
         t_max: [Real::NEG_INFINITY; BLOCK],
     };
 
-    fn set(&mut self, lane: usize, slabs: &Slabs, query: &Query) {
+    /// Puts the ray with `origin`, inverse direction `inv` and range
+    /// `[t_min, t_max]` into `lane`.
+    #[inline(always)]
+    fn set(&mut self, lane: usize, origin: Vec3, inv: Vec3, t_min: Real, t_max: Real) {
         for axis in 0..3 {
-            self.origin[axis][lane] = slabs.origin[axis];
-            self.inv[axis][lane] = slabs.inv[axis];
+            self.origin[axis][lane] = origin[axis];
+            self.inv[axis][lane] = inv[axis];
         }
-        self.t_min[lane] = query.range.min;
-        self.t_max[lane] = query.t_max();
+        self.t_min[lane] = t_min;
+        self.t_max[lane] = t_max;
+    }
+
+    /// Fills the lanes from `used` on with lane 0's ray and an empty range:
+    /// they never enter a box, and bounds over all four lanes are the used
+    /// lanes' bounds.
+    #[inline(always)]
+    fn pad(&mut self, used: usize) {
+        for lane in used..BLOCK {
+            for axis in 0..3 {
+                self.origin[axis][lane] = self.origin[axis][0];
+                self.inv[axis][lane] = self.inv[axis][0];
+            }
+            self.t_min[lane] = Real::INFINITY;
+            self.t_max[lane] = Real::NEG_INFINITY;
+        }
     }
 
     /// The lanes whose rays enter the box with planes `enter` and `leave`
@@ -304,7 +341,49 @@ impl Bvh {
     }
 
     /// [`Bvh::closest_hits`] for at most [`PACKET_RAYS`] rays.
+    ///
+    /// The packet code is compiled twice: for baseline x86-64 (SSE2), and
+    /// with AVX2 enabled, which the CPU is asked for at run time (one
+    /// release binary for every x86-64). AVX2 brings three-operand
+    /// instructions and 8-lane loops where the compiler finds them; no fused
+    /// multiply-add (Rust never contracts `a·b + c`), so both give the same
+    /// bits (tested).
     fn closest_hits_packet(
+        &self,
+        objects: &[Object],
+        rays: &[Ray],
+        ranges: &[Interval],
+        methods: Methods,
+        hits: &mut [Option<Hit>],
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            return unsafe { self.closest_hits_packet_avx2(objects, rays, ranges, methods, hits) };
+        }
+        self.closest_hits_packet_baseline(objects, rays, ranges, methods, hits)
+    }
+
+    /// [`Bvh::closest_hits_packet`] compiled for AVX2.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn closest_hits_packet_avx2(
+        &self,
+        objects: &[Object],
+        rays: &[Ray],
+        ranges: &[Interval],
+        methods: Methods,
+        hits: &mut [Option<Hit>],
+    ) {
+        self.closest_hits_packet_baseline(objects, rays, ranges, methods, hits)
+    }
+
+    /// [`Bvh::closest_hits_packet`] for any CPU of the target.
+    #[inline(always)]
+    fn closest_hits_packet_baseline(
         &self,
         objects: &[Object],
         rays: &[Ray],
@@ -314,19 +393,36 @@ impl Bvh {
     ) {
         let n = rays.len();
         let mut queries: [MaybeUninit<Query>; PACKET_RAYS] = [const { MaybeUninit::uninit() }; PACKET_RAYS];
-        let mut slabs: [MaybeUninit<Slabs>; PACKET_RAYS] = [const { MaybeUninit::uninit() }; PACKET_RAYS];
-        for i in 0..n {
-            let mut query = Query::new(&rays[i], ranges[i]);
-            query.test_unbounded(self, objects, methods);
-            queries[i].write(query);
-            slabs[i].write(Slabs::new(&rays[i]));
+        let mut blocks = [const { MaybeUninit::<RayBlock>::uninit() }; PACKET_RAYS / BLOCK];
+        let count = n.div_ceil(BLOCK);
+        for block in &mut blocks[..count] {
+            block.write(RayBlock::EMPTY);
         }
-        // SAFETY: the first n entries of both were written just above.
+        // SAFETY: the first `count` blocks were written just above.
+        let blocks =
+            unsafe { &mut *(&mut blocks[..count] as *mut [MaybeUninit<RayBlock>] as *mut [RayBlock]) };
+        for i in 0..n {
+            // Made in place: a query copied in after a call had written it
+            // would be read back in wider pieces than it was written, which
+            // stalls the store-to-load forwarding.
+            let query = queries[i].write(Query::new(&rays[i], ranges[i]));
+            if !self.unbounded.is_empty() {
+                query.test_unbounded(self, objects, methods);
+            }
+            // The single-ray test's inverse direction (`Slabs::new`).
+            let inv = divide(Vec3::ONE, rays[i].dir);
+            blocks[i / BLOCK].set(i % BLOCK, rays[i].origin, inv, query.range.min, query.t_max());
+        }
+        if !n.is_multiple_of(BLOCK) {
+            blocks[count - 1].pad(n % BLOCK);
+        }
+        // SAFETY: the first n entries were written just above.
         let queries = unsafe { &mut *(&mut queries[..n] as *mut [MaybeUninit<Query>] as *mut [Query]) };
-        let slabs = unsafe { &*(&slabs[..n] as *const [MaybeUninit<Slabs>] as *const [Slabs]) };
-        match Frustum::new(slabs) {
+        match Frustum::new(blocks) {
             Some(frustum) if !self.nodes.is_empty() && self.stack_bound <= INLINE_STACK => {
-                self.traverse_packet(objects, &frustum, slabs, queries, methods)
+                // One ray's frustum test is its own slab test already.
+                let cone = if n > 1 { Cone::new(blocks, &frustum, &rays[0]) } else { None };
+                self.traverse_packet(objects, &frustum, cone.as_ref(), blocks, queries, methods)
             }
             _ => {
                 for query in queries.iter_mut() {
@@ -340,40 +436,46 @@ impl Bvh {
             }
         }
         for (hit, query) in hits.iter_mut().zip(queries.iter()) {
-            *hit = query.finish(objects);
+            query.finish_into(objects, hit);
         }
     }
 
     /// Descends the tree with the packet, nearest child first by the
     /// packet's entry bound; at each leaf the rays that enter its box test
     /// its primitives.
+    #[inline(always)]
     fn traverse_packet(
         &self,
         objects: &[Object],
         frustum: &Frustum,
-        slabs: &[Slabs],
+        cone: Option<&Cone>,
+        blocks: &mut [RayBlock],
         queries: &mut [Query],
         methods: Methods,
     ) {
-        let t_min = queries.iter().map(|q| q.range.min).fold(Real::INFINITY, Real::min);
-        let mut blocks = [const { MaybeUninit::<RayBlock>::uninit() }; PACKET_RAYS / BLOCK];
-        let count = queries.len().div_ceil(BLOCK);
-        for block in &mut blocks[..count] {
-            block.write(RayBlock::EMPTY);
-        }
-        // SAFETY: the first `count` blocks were written just above.
-        let blocks =
-            unsafe { &mut *(&mut blocks[..count] as *mut [MaybeUninit<RayBlock>] as *mut [RayBlock]) };
-        for (i, (query, slabs)) in queries.iter().zip(slabs).enumerate() {
-            blocks[i / BLOCK].set(i % BLOCK, slabs, query);
-        }
+        let lanes = |blocks: &[RayBlock],
+                     init: Real,
+                     pick: fn(&RayBlock) -> [Real; BLOCK],
+                     keep: fn(Real, Real) -> bool| {
+            let mut acc = [init; BLOCK];
+            for b in blocks {
+                let x = pick(b);
+                for l in 0..BLOCK {
+                    acc[l] = if keep(x[l], acc[l]) { x[l] } else { acc[l] };
+                }
+            }
+            acc
+        };
+        let t_min = lanes(blocks, Real::INFINITY, |b| b.t_min, |x, m| x < m)
+            .into_iter()
+            .fold(Real::INFINITY, Real::min);
         // The packet goes on while any ray could still find a closer hit.
         let farthest = |blocks: &[RayBlock]| {
-            blocks.iter().flat_map(|b| b.t_max).fold(Real::NEG_INFINITY, |m, t| if t > m { t } else { m })
+            lanes(blocks, Real::NEG_INFINITY, |b| b.t_max, |x, m| x > m)
+                .into_iter()
+                .fold(Real::NEG_INFINITY, Real::max)
         };
         let mut t_max = farthest(blocks);
-        // One ray's frustum test is its own slab test already.
-        let cone = if queries.len() > 1 { Cone::new(queries) } else { None };
         let mut stack = [const { MaybeUninit::<Pending>::uninit() }; INLINE_STACK];
         let mut sp = 0;
         let mut current = Pending { child: Child::node(0), near: t_min, parent: 0, slot: 0 };
@@ -382,7 +484,7 @@ impl Bvh {
                 let index = current.child.index;
                 let node = &self.nodes[index as usize];
                 let (near, mut entered) = frustum.entries(node, t_min, t_max);
-                if let Some(cone) = &cone
+                if let Some(cone) = cone
                     && entered != 0
                 {
                     entered &= !cone.culled(node);
@@ -455,13 +557,26 @@ mod tests {
     /// A hit as comparable bits: object, primitive, `t`.
     type Key = Option<(usize, usize, u64)>;
 
-    /// The packet results and the single-ray results.
+    /// The packet results and the single-ray results. The packet code
+    /// compiled for the baseline CPU must agree with the one the CPU runs
+    /// (AVX2 where it has it) bit for bit.
     fn both(s: &crate::scene::Scene, rays: &[Ray]) -> (Vec<Key>, Vec<Key>) {
         let ranges: Vec<Interval> = rays.iter().map(|r| s.cast_range(r)).collect();
         let mut hits = vec![None; rays.len()];
         s.bvh().closest_hits(s.objects(), rays, &ranges, s.methods(), &mut hits);
         #[allow(clippy::useless_conversion)] // to_bits gives u32 for f32 geometry
         let key = |h: Option<Hit>| h.map(|h| (h.object, h.primitive, u64::from(h.t.to_bits())));
+        let mut baseline = vec![None; rays.len()];
+        for ((rays, ranges), hits) in
+            rays.chunks(PACKET_RAYS).zip(ranges.chunks(PACKET_RAYS)).zip(baseline.chunks_mut(PACKET_RAYS))
+        {
+            s.bvh().closest_hits_packet_baseline(s.objects(), rays, ranges, s.methods(), hits);
+        }
+        assert_eq!(
+            baseline.iter().map(|&h| key(h)).collect::<Vec<_>>(),
+            hits.iter().map(|&h| key(h)).collect::<Vec<_>>(),
+            "baseline and dispatched packet code differ"
+        );
         let single = rays
             .iter()
             .zip(&ranges)

@@ -23,6 +23,7 @@ pub(super) struct Query {
 }
 
 impl Query {
+    #[inline(always)]
     pub fn new(ray: &Ray, range: Interval) -> Self {
         Self { prepared: TriangleRay::new(ray), range, best: None }
     }
@@ -91,10 +92,22 @@ impl Query {
 
     /// The closest hit, with its normal.
     pub fn finish(self, objects: &[Object]) -> Option<Hit> {
-        let mut best = self.best?;
-        if let Primitive::Mesh(mesh) = object_primitive(objects, best.object as u32) {
+        let mut hit = None;
+        self.finish_into(objects, &mut hit);
+        hit
+    }
+
+    /// [`Query::finish`] into `out`, the normal written straight into its
+    /// field: a hit put together on the stack first would be read back in
+    /// wider pieces than it was written, which stalls the store-to-load
+    /// forwarding (packets finish 64 at a time).
+    #[inline(always)]
+    pub fn finish_into(&self, objects: &[Object], out: &mut Option<Hit>) {
+        *out = self.best;
+        if let Some(best) = out
+            && let Primitive::Mesh(mesh) = object_primitive(objects, best.object as u32)
+        {
             best.normal = mesh.normal(best.primitive);
         }
-        Some(best)
     }
 }
