@@ -36,7 +36,7 @@ use crate::method::Methods;
 use crate::object::Object;
 use crate::primitive::Primitive;
 use crate::ray::{Interval, Ray};
-use crate::real::{Real, Vec3, divide, gamma, to_f64};
+use crate::real::{Real, Vec3, gamma, to_f64};
 use crate::triangle::TriangleRay;
 use build::Item;
 use leaf::{Lanes, Leaf, lanes_of};
@@ -366,7 +366,7 @@ struct Slabs {
 
 impl Slabs {
     fn new(ray: &Ray) -> Self {
-        let inv = divide(Vec3::ONE, ray.dir);
+        let inv = Vec3::ONE / ray.dir;
         let enter = [inv.x, inv.y, inv.z].map(|i| usize::from(i < 0.0));
         Self { origin: ray.origin.into(), inv: inv.into(), enter }
     }
