@@ -27,8 +27,9 @@ use crate::scene::Scene;
 use crate::tracer::Tracer;
 use crate::view_plane::{ViewPlane, ViewPlaneError};
 
-/// Rows [`Renderer::render`] renders together, their rays cast in tiles
-/// eight pixels square at one sample per pixel.
+/// The most rows [`Renderer::render`] renders together, their rays cast in
+/// tiles eight pixels square at one sample per pixel (fewer rows at more
+/// than eight samples per pixel, one at 64 or more).
 pub const BAND_ROWS: u32 = 8;
 
 /// An 8-bit RGB pixel.
@@ -271,7 +272,7 @@ impl<'s> Renderer<'s> {
 
     /// Renders every row in parallel (rayon's current pool), calling
     /// `row_done` once after each row is finished, from the worker thread.
-    /// Rows go in bands of [`BAND_ROWS`], whose rays are cast in tiles
+    /// Rows go in bands of up to [`BAND_ROWS`], whose rays are cast in tiles
     /// ([`Renderer::accumulate_rows`]).
     pub fn render(&self, row_done: impl Fn(u32) + Sync) -> Frame {
         self.render_until(row_done, &AtomicBool::new(false)).expect("never stopped")
@@ -282,15 +283,19 @@ impl<'s> Renderer<'s> {
     pub fn render_until(&self, row_done: impl Fn(u32) + Sync, stop: &AtomicBool) -> Option<Frame> {
         let (width, height) = (self.view.width(), self.view.height());
         let mut pixels = vec![Color::ZERO; width as usize * height as usize];
+        // Bands as tall as a packet's worth of samples per pixel fills:
+        // with 64 or more a pixel fills packets on its own, and single rows
+        // share the work out more finely among the threads.
+        let band_rows = (PACKET_RAYS as u32 / self.spp).clamp(1, BAND_ROWS);
         let rays = pixels
-            .par_chunks_mut(width as usize * BAND_ROWS as usize)
+            .par_chunks_mut(width as usize * band_rows as usize)
             .enumerate()
             .map(|(band, sums)| {
                 if stop.load(Ordering::Relaxed) {
                     return RayCounts::default();
                 }
-                let first = band as u32 * BAND_ROWS;
-                let rows = first..(first + BAND_ROWS).min(height);
+                let first = band as u32 * band_rows;
+                let rows = first..(first + band_rows).min(height);
                 let counts = self.accumulate_rows(rows.clone(), 0..self.spp, sums);
                 for out in sums.iter_mut() {
                     *out /= self.spp as f32;
