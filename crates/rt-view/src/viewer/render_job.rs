@@ -3,9 +3,11 @@
 //! The job knows nothing about the UI beyond its row type: each finished row
 //! is an [`egui::Color32`] vector tagged with the job's generation, sent over
 //! a channel, followed by a call to the `on_row` hook (the viewer passes
-//! `request_repaint`). Workers take rows from a shared counter, so rows finish
-//! roughly top to bottom, like the course's line-at-a-time renderer, while
-//! every rayon thread is busy.
+//! `request_repaint`). Workers take bands of [`BAND_ROWS`] rows from a shared
+//! counter, so rows finish roughly top to bottom, like the course's
+//! line-at-a-time renderer, while every rayon thread is busy; a band's rays
+//! go out in square tiles ([`Renderer::accumulate_rows`]), tighter packets
+//! than runs of one row.
 //!
 //! With several samples per pixel the image refines progressively: the job
 //! runs passes over the whole image with samples `0..1`, `1..4`, `4..16`, …
@@ -15,7 +17,7 @@
 //! the samples are added in the same order.
 //!
 //! Cancelling (or dropping the job, or dropping its receiver) stops the
-//! workers after the row each is on; rows already in the channel keep their
+//! workers after the band of rows each is on; rows already in the channel keep their
 //! old generation, and [`super::canvas::Canvas`] refuses them.
 
 use std::ops::Range;
@@ -28,7 +30,7 @@ use std::time::{Duration, Instant};
 use egui::Color32;
 use rt_core::color::Color;
 use rt_core::effects::{EffectPlan, RayCounts};
-use rt_core::render::RenderError;
+use rt_core::render::{BAND_ROWS, RenderError};
 use rt_core::{Camera, Renderer, Scene};
 
 /// The sample ranges of the progressive passes for `spp` samples per pixel:
@@ -52,8 +54,9 @@ struct RowSums {
     sums: Vec<Color>,
 }
 
-/// The row function: adds `samples` of row `y` to `sums` (tests replace it).
-type RowFn = dyn Fn(&Renderer, u32, Range<u32>, &mut [Color]) -> RayCounts + Send + Sync;
+/// The band function: adds `samples` of the rows `rows` to `sums`, which
+/// holds them one after the other (tests replace it).
+type BandFn = dyn Fn(&Renderer, Range<u32>, Range<u32>, &mut [Color]) -> RayCounts + Send + Sync;
 
 /// What to render: a scene seen by a camera at a size and sample count.
 #[derive(Clone, Debug)]
@@ -126,7 +129,7 @@ pub struct Progress {
 struct Shared {
     /// Each row's running sums of linear colour.
     sums: Vec<Mutex<RowSums>>,
-    /// Set to stop the workers after their current row.
+    /// Set to stop the workers after their current band of rows.
     cancel: AtomicBool,
     /// Rays cast so far, all kinds.
     rays: AtomicU64,
@@ -134,7 +137,7 @@ struct Shared {
     rows_rendered: AtomicU32,
     /// Wall time from start to the last row, once every row is rendered.
     elapsed: Mutex<Option<Duration>>,
-    /// "row Y: message" of the first row that panicked.
+    /// "rows A–B: message" of the first band that panicked.
     failure: Mutex<Option<String>>,
 }
 
@@ -178,25 +181,25 @@ impl RenderJob {
             spec,
             generation,
             on_row,
-            Box::new(|renderer, y, samples, sums| renderer.accumulate_row(y, samples, sums)),
+            Box::new(|renderer, rows, samples, sums| renderer.accumulate_rows(rows, samples, sums)),
         )
     }
 
-    /// [`RenderJob::start`] with the row function as a parameter (tests use it
-    /// to make a row panic). A panic while rendering a row is caught: the job
-    /// stops, and [`RenderJob::failure`] reports the panic's message.
+    /// [`RenderJob::start`] with the band function as a parameter (tests use
+    /// it to make a band panic). A panic while rendering a band is caught: the
+    /// job stops, and [`RenderJob::failure`] reports the panic's message.
     fn spawn(
         spec: JobSpec,
         generation: u64,
         on_row: impl Fn() + Send + Sync + 'static,
-        render_row: Box<RowFn>,
+        render_band: Box<BandFn>,
     ) -> Result<Self, RenderError> {
         // Validate on the caller's thread, so errors are returned, not lost.
         spec.renderer()?;
         let shared = Arc::new(Shared::new(spec.width, spec.height));
         let (tx, rows) = mpsc::channel();
         let worker =
-            Worker { spec: spec.clone(), generation, shared: shared.clone(), tx, on_row, render_row };
+            Worker { spec: spec.clone(), generation, shared: shared.clone(), tx, on_row, render_band };
         std::thread::Builder::new()
             .name(format!("render-job-{generation}"))
             .spawn(move || worker.run())
@@ -255,7 +258,7 @@ impl RenderJob {
         }
     }
 
-    /// Why the job stopped on its own, if a row panicked: "row Y: message".
+    /// Why the job stopped on its own, if a band panicked: "rows A–B: message".
     pub fn failure(&self) -> Option<String> {
         self.shared.failure.lock().unwrap_or_else(|e| e.into_inner()).clone()
     }
@@ -265,7 +268,7 @@ impl RenderJob {
         &self.spec
     }
 
-    /// Asks the workers to stop after their current row.
+    /// Asks the workers to stop after their current band of rows.
     pub fn cancel(&self) {
         self.shared.cancel.store(true, Ordering::Relaxed);
     }
@@ -288,7 +291,7 @@ impl RenderJob {
     }
 }
 
-/// The job's background thread: hands (pass, row) tasks to every rayon
+/// The job's background thread: hands (pass, band) tasks to every rayon
 /// thread in order, so rows finish roughly top to bottom, pass after pass.
 struct Worker<F> {
     spec: JobSpec,
@@ -296,7 +299,7 @@ struct Worker<F> {
     shared: Arc<Shared>,
     tx: Sender<Row>,
     on_row: F,
-    render_row: Box<RowFn>,
+    render_band: Box<BandFn>,
 }
 
 impl<F: Fn() + Send + Sync> Worker<F> {
@@ -304,9 +307,9 @@ impl<F: Fn() + Send + Sync> Worker<F> {
         let s = &self.spec;
         let renderer = s.renderer().expect("validated before the thread started");
         let passes = sample_passes(s.spp);
-        let sums = &self.shared.sums;
         let start = Instant::now();
-        let tasks = passes.len() as u64 * s.height as u64;
+        let bands = s.height.div_ceil(BAND_ROWS) as u64;
+        let tasks = passes.len() as u64 * bands;
         let next_task = AtomicU64::new(0);
         rayon::broadcast(|_| {
             while !self.shared.cancelled() {
@@ -314,8 +317,9 @@ impl<F: Fn() + Send + Sync> Worker<F> {
                 if task >= tasks {
                     break;
                 }
-                let (pass, y) = ((task / s.height as u64) as usize, (task % s.height as u64) as u32);
-                if !self.render(&renderer, &sums[y as usize], y, passes[pass].clone()) {
+                let (pass, band) = ((task / bands) as usize, (task % bands) as u32);
+                let rows = band * BAND_ROWS..((band + 1) * BAND_ROWS).min(s.height);
+                if !self.render(&renderer, rows, passes[pass].clone()) {
                     break;
                 }
             }
@@ -326,54 +330,67 @@ impl<F: Fn() + Send + Sync> Worker<F> {
         }
     }
 
-    /// Adds `samples` to row `y`'s sums and sends the row's new mean; false
-    /// when the job is to stop (cancelled, the receiver gone, or a panic).
-    fn render(&self, renderer: &Renderer, sums: &Mutex<RowSums>, y: u32, samples: Range<u32>) -> bool {
-        // This row's previous pass may still be running on another thread.
-        let mut row = loop {
-            let row = sums.lock().unwrap_or_else(|e| e.into_inner());
-            if row.samples == samples.start || self.shared.cancelled() {
-                break row;
+    /// Adds `samples` to the sums of the band of rows `rows` and sends each
+    /// row's new mean; false when the job is to stop (cancelled, the
+    /// receiver gone, or a panic).
+    fn render(&self, renderer: &Renderer, rows: Range<u32>, samples: Range<u32>) -> bool {
+        let lock = |y: u32| self.shared.sums[y as usize].lock().unwrap_or_else(|e| e.into_inner());
+        // This band's previous pass may still be running on another thread.
+        // Every pass cuts the same bands, and a band's rows are locked in
+        // order and updated together, so its rows always hold the same count.
+        let mut band = loop {
+            let band: Vec<_> = rows.clone().map(lock).collect();
+            if band[0].samples == samples.start || self.shared.cancelled() {
+                break band;
             }
-            drop(row);
+            drop(band);
             std::thread::yield_now();
         };
-        if row.samples != samples.start {
+        if band[0].samples != samples.start {
             return false; // Cancelled while waiting.
         }
-        let rendered =
-            catch_unwind(AssertUnwindSafe(|| (self.render_row)(renderer, y, samples.clone(), &mut row.sums)));
+        let width = self.spec.width as usize;
+        let mut sums: Vec<Color> = band.iter().flat_map(|row| row.sums.iter().copied()).collect();
+        let rendered = catch_unwind(AssertUnwindSafe(|| {
+            (self.render_band)(renderer, rows.clone(), samples.clone(), &mut sums)
+        }));
         let counts = match rendered {
             Ok(counts) => counts,
             Err(payload) => {
                 let mut failure = self.shared.failure.lock().unwrap_or_else(|e| e.into_inner());
-                failure.get_or_insert_with(|| format!("row {y}: {}", panic_message(&*payload)));
+                let (first, last) = (rows.start, rows.end - 1);
+                failure.get_or_insert_with(|| format!("rows {first}–{last}: {}", panic_message(&*payload)));
                 self.shared.cancel.store(true, Ordering::Relaxed);
                 (self.on_row)(); // Wake the UI so it shows the failure.
                 return false;
             }
         };
-        row.samples = samples.end;
-        // The mean exactly as `Renderer::pixel` computes it.
+        // The means exactly as `Renderer::pixel` computes them.
         let count = samples.end as f32;
         let color_space = renderer.color_space();
-        let pixels = row
-            .sums
-            .iter()
-            .map(|&sum| {
-                let [r, g, b] = color_space.encode(sum / count);
-                Color32::from_rgb(r, g, b)
-            })
-            .collect();
-        drop(row);
-        self.shared.rays.fetch_add(counts.total(), Ordering::Relaxed);
-        self.shared.rows_rendered.fetch_add(1, Ordering::Relaxed);
-        let row = Row { generation: self.generation, y, samples: samples.end, pixels };
-        if self.shared.cancelled() || self.tx.send(row).is_err() {
-            self.shared.cancel.store(true, Ordering::Relaxed);
-            return false;
+        let mut finished = Vec::with_capacity(band.len());
+        for ((y, row), new) in rows.zip(band.iter_mut()).zip(sums.chunks_exact(width)) {
+            row.sums.copy_from_slice(new);
+            row.samples = samples.end;
+            let pixels = new
+                .iter()
+                .map(|&sum| {
+                    let [r, g, b] = color_space.encode(sum / count);
+                    Color32::from_rgb(r, g, b)
+                })
+                .collect();
+            finished.push(Row { generation: self.generation, y, samples: samples.end, pixels });
         }
-        (self.on_row)();
+        drop(band);
+        self.shared.rays.fetch_add(counts.total(), Ordering::Relaxed);
+        for row in finished {
+            self.shared.rows_rendered.fetch_add(1, Ordering::Relaxed);
+            if self.shared.cancelled() || self.tx.send(row).is_err() {
+                self.shared.cancel.store(true, Ordering::Relaxed);
+                return false;
+            }
+            (self.on_row)();
+        }
         true
     }
 }
@@ -513,16 +530,16 @@ mod tests {
     }
 
     #[test]
-    fn a_panic_in_a_row_stops_the_job_and_is_reported_not_propagated() {
+    fn a_panic_in_a_band_stops_the_job_and_is_reported_not_propagated() {
         let job = RenderJob::spawn(
             spec(50, 40),
             1,
             || {},
-            Box::new(|r, y, samples, sums| {
-                if y == 7 {
+            Box::new(|r, rows, samples, sums| {
+                if rows.contains(&7) {
                     panic!("boom at seven");
                 }
-                r.accumulate_row(y, samples, sums)
+                r.accumulate_rows(rows, samples, sums)
             }),
         )
         .unwrap();
@@ -531,7 +548,7 @@ mod tests {
             delivered += 1;
         }
         assert!(delivered < 40);
-        assert_eq!(job.failure().as_deref(), Some("row 7: boom at seven"));
+        assert_eq!(job.failure().as_deref(), Some("rows 0–7: boom at seven"));
         assert_eq!(job.elapsed(), None);
         // The pool survives: the next job renders every row.
         let next = RenderJob::start(spec(50, 40), 2, || {}).unwrap();
