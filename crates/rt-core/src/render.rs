@@ -221,6 +221,11 @@ impl<'s> Renderer<'s> {
     /// mesh, where a pixel sees about one triangle, 8 × 8 tiles trace 1.5×
     /// faster than runs of 64 ([`Renderer::render`] uses bands of
     /// [`BAND_ROWS`]).
+    ///
+    /// # Panics
+    /// If `sums` does not hold exactly the rows' pixels (`rows.len()` times
+    /// the image width); [`Renderer::accumulate_row`] likewise wants one
+    /// row's.
     pub fn accumulate_rows(&self, rows: Range<u32>, samples: Range<u32>, sums: &mut [Color]) -> RayCounts {
         let width = self.view.width();
         assert_eq!(sums.len(), rows.len() * width as usize, "one sum per pixel of the rows");
