@@ -38,7 +38,7 @@ pub const PACKET_RAYS: usize = 64;
 
 /// Bounds on a packet's rays, per axis: origins in `[origin_lo, origin_hi]`,
 /// inverse directions in `[inv_lo, inv_hi]` (all of one sign, finite), and
-/// the side each ray enters a box by (as [`Slabs`]: 0 for min, 1 for max).
+/// the side each ray enters a box by (as [`Slabs`](super::Slabs): 0 for min, 1 for max).
 struct Frustum {
     origin_lo: [Real; 3],
     origin_hi: [Real; 3],
@@ -243,7 +243,7 @@ const BLOCK: usize = 4;
 
 /// Four of the packet's rays for the box test of a leaf, stored lane by
 /// lane so that one SIMD slab test covers all four: the same arithmetic as
-/// [`Slabs::enters`], so each lane's answer is its ray's own. Unused lanes
+/// [`Slabs::entries`](super::Slabs::entries), so each lane's answer is its ray's own. Unused lanes
 /// have an empty range and never enter.
 #[derive(Clone, Copy)]
 struct RayBlock {
