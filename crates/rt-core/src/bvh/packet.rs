@@ -53,30 +53,23 @@ impl Frustum {
     /// and maxima over the blocks first (SIMD), then across the lanes.
     #[inline(always)]
     fn new(blocks: &[RayBlock]) -> Option<Self> {
-        let lo = |x: [Real; BLOCK], y: [Real; BLOCK]| {
-            std::array::from_fn(|l| if y[l] < x[l] { y[l] } else { x[l] })
-        };
-        let hi = |x: [Real; BLOCK], y: [Real; BLOCK]| {
-            std::array::from_fn(|l| if y[l] > x[l] { y[l] } else { x[l] })
-        };
         let first = blocks.first()?;
         let (mut o_lo, mut o_hi, mut i_lo, mut i_hi) = (first.origin, first.origin, first.inv, first.inv);
         for b in &blocks[1..] {
             for axis in 0..3 {
-                o_lo[axis] = lo(o_lo[axis], b.origin[axis]);
-                o_hi[axis] = hi(o_hi[axis], b.origin[axis]);
-                i_lo[axis] = lo(i_lo[axis], b.inv[axis]);
-                i_hi[axis] = hi(i_hi[axis], b.inv[axis]);
+                o_lo[axis] = lane_min(o_lo[axis], b.origin[axis]);
+                o_hi[axis] = lane_max(o_hi[axis], b.origin[axis]);
+                i_lo[axis] = lane_min(i_lo[axis], b.inv[axis]);
+                i_hi[axis] = lane_max(i_hi[axis], b.inv[axis]);
             }
         }
-        let min = |x: [Real; BLOCK]| x.into_iter().fold(Real::INFINITY, Real::min);
-        let max = |x: [Real; BLOCK]| x.into_iter().fold(Real::NEG_INFINITY, Real::max);
+        let inv_hi = i_hi.map(greatest);
         let f = Frustum {
-            origin_lo: o_lo.map(min),
-            origin_hi: o_hi.map(max),
-            inv_lo: i_lo.map(min),
-            inv_hi: i_hi.map(max),
-            enter: i_hi.map(|i| usize::from(max(i) < 0.0)),
+            origin_lo: o_lo.map(least),
+            origin_hi: o_hi.map(greatest),
+            inv_lo: i_lo.map(least),
+            inv_hi,
+            enter: inv_hi.map(|i| usize::from(i < 0.0)),
         };
         // An inverse is never ±0 (directions are finite), so a sign change
         // shows as a negative minimum with a positive maximum.
@@ -173,17 +166,12 @@ impl Cone {
         let (mut u_lo, mut u_hi) = ([Real::INFINITY; BLOCK], [Real::NEG_INFINITY; BLOCK]);
         let (mut v_lo, mut v_hi) = (u_lo, u_hi);
         for b in blocks {
-            for lane in 0..BLOCK {
-                let (u, v) = (b.inv[k][lane] / b.inv[i][lane], b.inv[k][lane] / b.inv[j][lane]);
-                u_lo[lane] = if u < u_lo[lane] { u } else { u_lo[lane] };
-                u_hi[lane] = if u > u_hi[lane] { u } else { u_hi[lane] };
-                v_lo[lane] = if v < v_lo[lane] { v } else { v_lo[lane] };
-                v_hi[lane] = if v > v_hi[lane] { v } else { v_hi[lane] };
-            }
+            let u = std::array::from_fn(|l| b.inv[k][l] / b.inv[i][l]);
+            let v = std::array::from_fn(|l| b.inv[k][l] / b.inv[j][l]);
+            (u_lo, u_hi) = (lane_min(u_lo, u), lane_max(u_hi, u));
+            (v_lo, v_hi) = (lane_min(v_lo, v), lane_max(v_hi, v));
         }
-        let min = |x: [Real; BLOCK]| x.into_iter().fold(Real::INFINITY, Real::min);
-        let max = |x: [Real; BLOCK]| x.into_iter().fold(Real::NEG_INFINITY, Real::max);
-        let (u, v) = ((min(u_lo), max(u_hi)), (min(v_lo), max(v_hi)));
+        let (u, v) = ((least(u_lo), greatest(u_hi)), (least(v_lo), greatest(v_hi)));
         let reach = u.0.abs().max(u.1.abs()).max(v.0.abs()).max(v.1.abs());
         (u.0.is_finite() && u.1.is_finite() && v.0.is_finite() && v.1.is_finite()).then_some(Cone {
             origin: frustum.origin_lo,
@@ -240,6 +228,30 @@ impl Cone {
 
 /// Rays per [`RayBlock`].
 const BLOCK: usize = 4;
+
+/// Lane by lane, `y` where it is below `x`, else `x` (one SIMD minimum).
+#[inline(always)]
+fn lane_min(x: [Real; BLOCK], y: [Real; BLOCK]) -> [Real; BLOCK] {
+    std::array::from_fn(|l| if y[l] < x[l] { y[l] } else { x[l] })
+}
+
+/// Lane by lane, `y` where it is above `x`, else `x` (one SIMD maximum).
+#[inline(always)]
+fn lane_max(x: [Real; BLOCK], y: [Real; BLOCK]) -> [Real; BLOCK] {
+    std::array::from_fn(|l| if y[l] > x[l] { y[l] } else { x[l] })
+}
+
+/// The least of the lanes.
+#[inline(always)]
+fn least(x: [Real; BLOCK]) -> Real {
+    x.into_iter().fold(Real::INFINITY, Real::min)
+}
+
+/// The greatest of the lanes.
+#[inline(always)]
+fn greatest(x: [Real; BLOCK]) -> Real {
+    x.into_iter().fold(Real::NEG_INFINITY, Real::max)
+}
 
 /// Four of the packet's rays for the box test of a leaf, stored lane by
 /// lane so that one SIMD slab test covers all four: the same arithmetic as
@@ -409,7 +421,8 @@ impl Bvh {
             if !self.unbounded.is_empty() {
                 query.test_unbounded(self, objects, methods);
             }
-            // The single-ray test's inverse direction (`Slabs::new`).
+            // The single-ray test's inverse direction (`Slabs::new` divides
+            // lane by lane; a correctly rounded quotient either way).
             let inv = divide(Vec3::ONE, rays[i].dir);
             blocks[i / BLOCK].set(i % BLOCK, rays[i].origin, inv, query.range.min, query.t_max());
         }
@@ -453,27 +466,10 @@ impl Bvh {
         queries: &mut [Query],
         methods: Methods,
     ) {
-        let lanes = |blocks: &[RayBlock],
-                     init: Real,
-                     pick: fn(&RayBlock) -> [Real; BLOCK],
-                     keep: fn(Real, Real) -> bool| {
-            let mut acc = [init; BLOCK];
-            for b in blocks {
-                let x = pick(b);
-                for l in 0..BLOCK {
-                    acc[l] = if keep(x[l], acc[l]) { x[l] } else { acc[l] };
-                }
-            }
-            acc
-        };
-        let t_min = lanes(blocks, Real::INFINITY, |b| b.t_min, |x, m| x < m)
-            .into_iter()
-            .fold(Real::INFINITY, Real::min);
+        let t_min = least(blocks.iter().fold([Real::INFINITY; BLOCK], |m, b| lane_min(m, b.t_min)));
         // The packet goes on while any ray could still find a closer hit.
         let farthest = |blocks: &[RayBlock]| {
-            lanes(blocks, Real::NEG_INFINITY, |b| b.t_max, |x, m| x > m)
-                .into_iter()
-                .fold(Real::NEG_INFINITY, Real::max)
+            greatest(blocks.iter().fold([Real::NEG_INFINITY; BLOCK], |m, b| lane_max(m, b.t_max)))
         };
         let mut t_max = farthest(blocks);
         let mut stack = [const { MaybeUninit::<Pending>::uninit() }; INLINE_STACK];
