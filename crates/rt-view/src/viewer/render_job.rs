@@ -48,8 +48,9 @@ pub fn sample_passes(spp: u32) -> Vec<Range<u32>> {
     passes
 }
 
-/// One row's running sums and how many samples they hold.
-struct RowSums {
+/// One band's running sums (its rows one after the other) and how many
+/// samples they hold: every row of a band is rendered with the others.
+struct BandSums {
     samples: u32,
     sums: Vec<Color>,
 }
@@ -127,8 +128,8 @@ pub struct Progress {
 
 /// What the workers report to the job's handle.
 struct Shared {
-    /// Each row's running sums of linear colour.
-    sums: Vec<Mutex<RowSums>>,
+    /// Each band's running sums of linear colour (bands of [`BAND_ROWS`]).
+    bands: Vec<Mutex<BandSums>>,
     /// Set to stop the workers after their current band of rows.
     cancel: AtomicBool,
     /// Rays cast so far, all kinds.
@@ -144,8 +145,12 @@ struct Shared {
 impl Shared {
     fn new(width: u32, height: u32) -> Self {
         Self {
-            sums: (0..height)
-                .map(|_| Mutex::new(RowSums { samples: 0, sums: vec![Color::ZERO; width as usize] }))
+            bands: (0..height)
+                .step_by(BAND_ROWS as usize)
+                .map(|y| {
+                    let pixels = (BAND_ROWS.min(height - y) * width) as usize;
+                    Mutex::new(BandSums { samples: 0, sums: vec![Color::ZERO; pixels] })
+                })
                 .collect(),
             cancel: AtomicBool::new(false),
             rays: AtomicU64::new(0),
@@ -216,9 +221,12 @@ impl RenderJob {
     /// and how many samples it has; `None` outside the image or before its
     /// row's first pass.
     pub fn linear(&self, x: u32, y: u32) -> Option<(Color, u32)> {
-        let row = self.shared.sums.get(y as usize)?.lock().unwrap_or_else(|e| e.into_inner());
-        let sum = *row.sums.get(x as usize)?;
-        (row.samples > 0).then(|| (sum / row.samples as f32, row.samples))
+        if x >= self.spec.width {
+            return None;
+        }
+        let band = self.shared.bands.get((y / BAND_ROWS) as usize)?.lock().unwrap_or_else(|e| e.into_inner());
+        let sum = *band.sums.get(((y % BAND_ROWS) * self.spec.width + x) as usize)?;
+        (band.samples > 0).then(|| (sum / band.samples as f32, band.samples))
     }
 
     /// Rays cast so far, all kinds together.
@@ -318,8 +326,7 @@ impl<F: Fn() + Send + Sync> Worker<F> {
                     break;
                 }
                 let (pass, band) = ((task / bands) as usize, (task % bands) as u32);
-                let rows = band * BAND_ROWS..((band + 1) * BAND_ROWS).min(s.height);
-                if !self.render(&renderer, rows, passes[pass].clone()) {
+                if !self.render(&renderer, band, passes[pass].clone()) {
                     break;
                 }
             }
@@ -330,29 +337,26 @@ impl<F: Fn() + Send + Sync> Worker<F> {
         }
     }
 
-    /// Adds `samples` to the sums of the band of rows `rows` and sends each
-    /// row's new mean; false when the job is to stop (cancelled, the
+    /// Adds `samples` to the sums of band `band` and sends each of its
+    /// rows' new mean; false when the job is to stop (cancelled, the
     /// receiver gone, or a panic).
-    fn render(&self, renderer: &Renderer, rows: Range<u32>, samples: Range<u32>) -> bool {
-        let lock = |y: u32| self.shared.sums[y as usize].lock().unwrap_or_else(|e| e.into_inner());
+    fn render(&self, renderer: &Renderer, band: u32, samples: Range<u32>) -> bool {
+        let rows = band * BAND_ROWS..((band + 1) * BAND_ROWS).min(self.spec.height);
+        let cell = &self.shared.bands[band as usize];
         // This band's previous pass may still be running on another thread.
-        // Every pass cuts the same bands, and a band's rows are locked in
-        // order and updated together, so its rows always hold the same count.
-        let mut band = loop {
-            let band: Vec<_> = rows.clone().map(lock).collect();
-            if band[0].samples == samples.start || self.shared.cancelled() {
-                break band;
+        let mut sums = loop {
+            let sums = cell.lock().unwrap_or_else(|e| e.into_inner());
+            if sums.samples == samples.start || self.shared.cancelled() {
+                break sums;
             }
-            drop(band);
+            drop(sums);
             std::thread::yield_now();
         };
-        if band[0].samples != samples.start {
+        if sums.samples != samples.start {
             return false; // Cancelled while waiting.
         }
-        let width = self.spec.width as usize;
-        let mut sums: Vec<Color> = band.iter().flat_map(|row| row.sums.iter().copied()).collect();
         let rendered = catch_unwind(AssertUnwindSafe(|| {
-            (self.render_band)(renderer, rows.clone(), samples.clone(), &mut sums)
+            (self.render_band)(renderer, rows.clone(), samples.clone(), &mut sums.sums)
         }));
         let counts = match rendered {
             Ok(counts) => counts,
@@ -365,23 +369,24 @@ impl<F: Fn() + Send + Sync> Worker<F> {
                 return false;
             }
         };
+        sums.samples = samples.end;
         // The means exactly as `Renderer::pixel` computes them.
         let count = samples.end as f32;
         let color_space = renderer.color_space();
-        let mut finished = Vec::with_capacity(band.len());
-        for ((y, row), new) in rows.zip(band.iter_mut()).zip(sums.chunks_exact(width)) {
-            row.sums.copy_from_slice(new);
-            row.samples = samples.end;
-            let pixels = new
-                .iter()
-                .map(|&sum| {
-                    let [r, g, b] = color_space.encode(sum / count);
-                    Color32::from_rgb(r, g, b)
-                })
-                .collect();
-            finished.push(Row { generation: self.generation, y, samples: samples.end, pixels });
-        }
-        drop(band);
+        let finished: Vec<Row> = rows
+            .zip(sums.sums.chunks_exact(self.spec.width as usize))
+            .map(|(y, row)| {
+                let pixels = row
+                    .iter()
+                    .map(|&sum| {
+                        let [r, g, b] = color_space.encode(sum / count);
+                        Color32::from_rgb(r, g, b)
+                    })
+                    .collect();
+                Row { generation: self.generation, y, samples: samples.end, pixels }
+            })
+            .collect();
+        drop(sums);
         self.shared.rays.fetch_add(counts.total(), Ordering::Relaxed);
         for row in finished {
             self.shared.rows_rendered.fetch_add(1, Ordering::Relaxed);
