@@ -18,7 +18,7 @@ use crate::aabb::Aabb;
 use crate::real::{Real, Vec3};
 
 /// Leaves hold at most this many primitives.
-pub(super) const MAX_LEAF: usize = super::leaf::LANES;
+pub(super) const MAX_LEAF: usize = super::leaf::LANES * super::leaf::BLOCKS;
 /// SAH bins per split.
 const BINS: usize = 16;
 /// Below this depth the SAH chooses splits; from here on, splits are at the
@@ -147,11 +147,12 @@ impl Bin {
     }
 
     /// What testing these items in leaves costs, relative to one node
-    /// visit: leaves test up to [`MAX_LEAF`] mesh triangles at once with
-    /// SIMD, so triangles cost by the block (Embree's SAH counts blocks the
-    /// same way); every other primitive is tested on its own.
+    /// visit: leaves test a block of up to [`LANES`](super::leaf::LANES)
+    /// mesh triangles at once with SIMD, so triangles cost by the block
+    /// (Embree's SAH counts blocks the same way); every other primitive is
+    /// tested on its own.
     fn leaf_cost(&self) -> Real {
-        (self.count - self.whole).div_ceil(MAX_LEAF) as Real + self.whole as Real
+        (self.count - self.whole).div_ceil(super::leaf::LANES) as Real + self.whole as Real
     }
 
     /// The items of `items`, on all threads if `parallel` (min and max are

@@ -29,9 +29,7 @@ pub(super) fn collapse(
     let BuildNode::Inner { children, .. } = node else {
         let BuildNode::Leaf { first, count, .. } = node else { unreachable!() };
         let child = leaf(*first, *count);
-        // One test for the triangles, one per other primitive.
-        let tests = u32::from(child.lanes.triangles() != 0) + child.lanes.objects().count_ones();
-        let cost = area(node) * f64::from(tests);
+        let cost = area(node) * f64::from(child.lanes.tests());
         return Collapsed { child, depth: 0, stack: 0, cost };
     };
     let mut open: Vec<&BuildNode> = children.iter().collect();

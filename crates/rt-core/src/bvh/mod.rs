@@ -7,9 +7,11 @@
 //! tree, then collapsed into a 4-wide one (each node holds the boxes of up to
 //! four children, as Embree's BVH4 does; Wald, Benthin and Boulos, "Getting
 //! Rid of Packets", 2008): one node visit tests four boxes with the same
-//! instructions, which the compiler turns into 4-lane SIMD. A leaf holds up
-//! to four triangles with their corners stored lane by lane, tested at once
-//! with SIMD (`bvh/leaf.rs`); leaves are stored in tree order. Coherent rays
+//! instructions, which the compiler turns into 4-lane SIMD. A leaf is one
+//! or two blocks of up to four triangles with their corners stored lane by
+//! lane, tested at once with SIMD (`bvh/leaf.rs`; both blocks in one
+//! eight-lane test where the CPU has AVX2, as Embree's leaves may hold
+//! several `Triangle4` blocks); leaves are stored in tree order. Coherent rays
 //! (a pixel's samples, a run of a row's pixels) go down the tree together
 //! as packets ([`Bvh::closest_hits`], `bvh/packet.rs`).
 //!
@@ -41,7 +43,7 @@ use crate::triangle::TriangleRay;
 use build::Item;
 use leaf::{Lanes, Leaf, lanes_of};
 pub use packet::PACKET_RAYS;
-use query::Query;
+use query::{Best, Query};
 
 /// Traversal stack entries kept on the machine stack at most: enough for
 /// any tree up to 21 levels deep (4²¹ leaves).
@@ -50,7 +52,8 @@ const INLINE_STACK: usize = 64;
 const WIDTH: usize = 4;
 
 /// A child slot of a [`Node`]: an inner node (`lanes` 0), or the leaf
-/// `leaves[index]` with its [`Lanes`].
+/// whose blocks start at `leaves[index]`, with its [`Lanes`] (which also
+/// tell how many blocks it has).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Child {
     index: u32,
@@ -89,8 +92,11 @@ pub struct BvhStats {
     pub nodes: usize,
     /// Nodes on the longest path from the root to a leaf.
     pub depth: usize,
-    /// Leaves in the tree (each holds up to four primitives).
+    /// Leaves in the tree.
     pub leaves: usize,
+    /// Blocks of up to four primitives in the leaves (a leaf has one or
+    /// two).
+    pub leaf_blocks: usize,
     /// Bytes of nodes and leaves.
     pub bytes: usize,
     /// The tree's surface-area-heuristic cost: the expected cost of a ray
@@ -108,6 +114,7 @@ pub struct BvhStats {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bvh {
     nodes: Vec<Node>,
+    /// The leaves' blocks, each leaf's one after the other.
     leaves: Vec<Leaf>,
     /// The most entries the traversal stack can hold: over all paths from
     /// the root, the largest sum of (children − 1) of the nodes on it.
@@ -148,18 +155,25 @@ impl Bvh {
             .collect();
         let mut nodes = Vec::new();
         let mut leaf_items = Vec::new();
+        let mut leaf_count = 0;
         let (mut depth, mut stack_bound, mut sah_cost) = (0, 0, 0.0);
         let mut bounds = None;
         if !items.is_empty() {
             let tree = build::build(&mut items);
             let root_box = tree.bounds();
             bounds = Some(root_box);
-            // Leaves get their slots in tree order; they are filled below, on all threads.
+            // Leaves get their blocks' slots in tree order; the blocks are
+            // filled below, on all threads.
             let mut leaf = |first: u32, count: u32| {
-                let range = first as usize..(first + count) as usize;
-                let lanes = Leaf::lanes(&items[range.clone()], objects);
-                leaf_items.push(range);
-                Child { index: leaf_items.len() as u32 - 1, lanes }
+                let index = leaf_items.len() as u32;
+                let mut lanes = Lanes(0);
+                for (b, start) in (first..first + count).step_by(leaf::LANES).enumerate() {
+                    let range = start as usize..(start as usize + leaf::LANES).min((first + count) as usize);
+                    lanes = lanes.with_block(b, Leaf::lanes(&items[range.clone()], objects));
+                    leaf_items.push(range);
+                }
+                leaf_count += 1;
+                Child { index, lanes }
             };
             let root = collapse::collapse(&tree, &mut nodes, &mut leaf);
             (depth, stack_bound) = (root.depth, root.stack);
@@ -177,7 +191,8 @@ impl Bvh {
         let stats = BvhStats {
             primitives: items.len(),
             nodes: nodes.len(),
-            leaves: leaves.len(),
+            leaves: leaf_count,
+            leaf_blocks: leaves.len(),
             depth,
             bytes: nodes.len() * size_of::<Node>() + leaves.len() * size_of::<Leaf>(),
             sah_cost,
@@ -209,11 +224,25 @@ impl Bvh {
         query.test_unbounded(self, objects, methods);
         // Boxes entering beyond the best hit so far cannot improve on it (one
         // entering exactly there can still win a tie, and is visited).
-        self.traverse(ray, Interval::new(range.min, query.t_max()), |leaf, lanes| {
-            query.test_leaf(objects, leaf, lanes, methods);
+        let range = Interval::new(range.min, query.t_max());
+        // The leaf and lane of the best hit while it is a mesh triangle.
+        let mut best_lane = None;
+        self.traverse(ray, range, |blocks, lanes| {
+            match query.test_leaf(objects, blocks, lanes, methods) {
+                Best::Kept => {}
+                Best::Triangle(block, lane) => best_lane = Some((&blocks[block], lane)),
+                Best::Object => best_lane = None,
+            }
             query.best_t()
         });
-        query.finish(objects)
+        match best_lane {
+            // The normal from the corners in the leaf, which is still in the
+            // cache: the mesh's normal list is a cache miss for incoherent
+            // rays. Same corners, same function, so the same bits as
+            // `Mesh::normal` (tested by the brute-force comparisons).
+            Some((leaf, lane)) => query.finish_with_normal(leaf.normal(lane)),
+            None => query.finish(objects),
+        }
     }
 
     /// Whether anything is hit with `t` in `range` (shadow rays): stops at
@@ -226,9 +255,10 @@ impl Bvh {
             return true;
         }
         let mut found = false;
-        self.traverse(ray, range, |leaf, lanes| {
-            found = leaf.intersect_triangles(lanes.triangles(), &prepared, range, methods.triangle).1 != 0
-                || lanes_of(lanes.objects()).any(|lane| hits(leaf.object(lane)));
+        self.traverse(ray, range, |blocks, lanes| {
+            found = Leaf::intersect_leaf(blocks, lanes, &prepared, range, methods.triangle).1 != 0
+                || (blocks.iter().enumerate())
+                    .any(|(b, leaf)| lanes_of(lanes.block(b).objects()).any(|lane| hits(leaf.object(lane))));
             // −∞ as the new limit: no box can be entered before it, so the traversal ends.
             found.then_some(Real::NEG_INFINITY)
         });
@@ -236,9 +266,15 @@ impl Bvh {
     }
 
     /// Visits the leaves whose boxes the ray enters within `range`, always
-    /// going on with the nearest child entered at each node. `leaf` tests a leaf's primitives and returns the `t` of the
+    /// going on with the nearest child entered at each node. `leaf` tests a
+    /// leaf's primitives (its blocks and lanes) and returns the `t` of the
     /// closest hit so far, which prunes boxes that start beyond it.
-    fn traverse(&self, ray: &Ray, range: Interval, leaf: impl FnMut(&Leaf, Lanes) -> Option<Real>) {
+    fn traverse<'a>(
+        &'a self,
+        ray: &Ray,
+        range: Interval,
+        leaf: impl FnMut(&'a [Leaf], Lanes) -> Option<Real>,
+    ) {
         if self.nodes.is_empty() {
             return;
         }
@@ -254,12 +290,12 @@ impl Bvh {
 
     /// [`Bvh::traverse`] with `stack` for the children still to visit, with
     /// the t where the ray enters them.
-    fn traverse_with(
-        &self,
+    fn traverse_with<'a>(
+        &'a self,
         stack: &mut [MaybeUninit<(Child, Real)>],
         ray: &Ray,
         range: Interval,
-        mut leaf: impl FnMut(&Leaf, Lanes) -> Option<Real>,
+        mut leaf: impl FnMut(&'a [Leaf], Lanes) -> Option<Real>,
     ) {
         let slabs = Slabs::new(ray);
         let mut t_max = range.max;
@@ -292,7 +328,7 @@ impl Bvh {
                     continue;
                 }
             } else {
-                if let Some(t) = leaf(&self.leaves[current.index as usize], current.lanes) {
+                if let Some(t) = leaf(self.blocks(current), current.lanes) {
                     t_max = t_max.min(t);
                 }
             }
@@ -314,20 +350,35 @@ impl Bvh {
 }
 
 impl Bvh {
+    /// The blocks of the leaf `child`.
+    #[inline(always)]
+    fn blocks(&self, child: Child) -> &[Leaf] {
+        let first = child.index as usize;
+        &self.leaves[first..first + child.lanes.blocks()]
+    }
+
     /// Asks the CPU to start loading `child`'s node or leaf into the cache.
     #[inline(always)]
     fn prefetch(&self, child: Child) {
         #[cfg(target_arch = "x86_64")]
         {
             use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-            let (ptr, bytes) = if child.is_leaf() {
-                (self.leaves.as_ptr().wrapping_add(child.index as usize) as *const i8, size_of::<Leaf>())
-            } else {
-                (self.nodes.as_ptr().wrapping_add(child.index as usize) as *const i8, size_of::<Node>())
+            // A line every 64 bytes of `bytes` from `ptr` (loops of constant
+            // length, unrolled). SAFETY: prefetching never faults, whatever the address.
+            let lines = |ptr: *const i8, bytes: std::ops::Range<usize>| {
+                bytes.step_by(64).for_each(|at| unsafe { _mm_prefetch::<_MM_HINT_T0>(ptr.wrapping_add(at)) })
             };
-            for line in (0..bytes).step_by(64) {
-                // SAFETY: prefetching never faults, whatever the address.
-                unsafe { _mm_prefetch::<_MM_HINT_T0>(ptr.wrapping_add(line)) };
+            if child.is_leaf() {
+                let first = self.leaves.as_ptr().wrapping_add(child.index as usize) as *const i8;
+                lines(first, 0..size_of::<Leaf>());
+                if child.lanes.blocks() > 1 {
+                    lines(first, size_of::<Leaf>()..2 * size_of::<Leaf>());
+                }
+            } else {
+                lines(
+                    self.nodes.as_ptr().wrapping_add(child.index as usize) as *const i8,
+                    0..size_of::<Node>(),
+                );
             }
         }
     }
@@ -361,14 +412,24 @@ impl Node {
 struct Slabs {
     origin: [Real; 3],
     inv: [Real; 3],
-    enter: [usize; 3],
+    /// `inv · (1 + 2γ₃)`, for the far planes (see [`Slabs::entries`]).
+    inv_far: [Real; 3],
+    /// Per axis, the rows of a node's bounds the ray enters and leaves by,
+    /// counted in the bounds flattened to six rows of four
+    /// (`bounds[side][axis]` is row `side · 3 + axis`): all below 6.
+    rows: [(usize, usize); 3],
 }
 
 impl Slabs {
     fn new(ray: &Ray) -> Self {
         let inv = Vec3::ONE / ray.dir;
-        let enter = [inv.x, inv.y, inv.z].map(|i| usize::from(i < 0.0));
-        Self { origin: ray.origin.into(), inv: inv.into(), enter }
+        let mut rows = [(0, 0); 3];
+        for (axis, row) in rows.iter_mut().enumerate() {
+            let side = usize::from(inv[axis] < 0.0);
+            *row = (side * 3 + axis, (side ^ 1) * 3 + axis);
+        }
+        let inv_far = inv * (1.0 + 2.0 * gamma(3));
+        Self { origin: ray.origin.into(), inv: inv.into(), inv_far: inv_far.into(), rows }
     }
 
     /// Where the ray enters each of the node's four boxes, and a mask with
@@ -379,21 +440,35 @@ impl Slabs {
     /// runs inside the closed slab. Bounds are updated with `>`/`<`
     /// comparisons, which are false for NaN, so such a bound is ignored
     /// instead of poisoning the result (pbrt-v4's `Bounds3::IntersectP`), for
-    /// +0.0 and −0.0 alike; the same comparisons are SIMD max/min. The far
-    /// bound is widened by 1 + 2γ₃ so rounding never rejects a box the ray
-    /// touches.
+    /// +0.0 and −0.0 alike; the same comparisons are SIMD max/min.
+    ///
+    /// The far bound is widened so rounding never rejects a box the ray
+    /// touches: it is `(leave − o) · fl(fl(1/d) · (1 + 2γ₃))`, four
+    /// roundings (the subtraction, the inverse, the widening, the product),
+    /// so at least `t·(1 + 2γ₃)(1 − ε)⁴ ≥ t` in magnitude, where `ε` is the
+    /// unit roundoff and `fl(1 + 2γ₃) = 1 + 6ε` in f32 and f64 (pbrt-v4's
+    /// `Bounds3::IntersectP` rounds the same four times, widening the
+    /// product instead; folding the factor into the inverse saves a
+    /// multiplication per box). An inverse that the factor carries past
+    /// the largest float becomes ∞: `t₁` is then ±∞, or NaN where the
+    /// origin is on the plane, both of which only widen the interval for
+    /// rays that start in front of the box.
     #[inline(always)]
     fn entries(&self, node: &Node, t_min: Real, t_max: Real) -> ([Real; WIDTH], u32) {
         let mut near = [t_min; WIDTH];
         let mut far = [t_max; WIDTH];
+        let rows = node.bounds.as_flattened();
         for axis in 0..3 {
-            // `& 1` shows the optimiser both indices are in bounds.
-            let side = self.enter[axis] & 1;
-            let (enter, leave) = (&node.bounds[side][axis], &node.bounds[side ^ 1][axis]);
-            let (o, inv) = (self.origin[axis], self.inv[axis]);
+            let (enter, leave) = self.rows[axis];
+            debug_assert!(enter < 6 && leave < 6);
+            // SAFETY: `rows` has 6 entries, and `Slabs::new` makes every row
+            // index below 6 (the offsets come from the ray, not the node, so
+            // this saves recomputing them at every node).
+            let (enter, leave) = unsafe { (rows.get_unchecked(enter), rows.get_unchecked(leave)) };
+            let (o, inv, inv_far) = (self.origin[axis], self.inv[axis], self.inv_far[axis]);
             for slot in 0..WIDTH {
                 let t0 = (enter[slot] - o) * inv;
-                let t1 = (leave[slot] - o) * inv * (1.0 + 2.0 * gamma(3));
+                let t1 = (leave[slot] - o) * inv_far;
                 near[slot] = if t0 > near[slot] { t0 } else { near[slot] };
                 far[slot] = if t1 < far[slot] { t1 } else { far[slot] };
             }
@@ -436,7 +511,9 @@ mod tests {
                 let range = s.cast_range(&ray);
                 let bvh = s.closest_hit(&ray, range);
                 let brute = s.closest_hit_brute_force(&ray, range);
-                prop_assert_eq!(bvh.map(|h| (h.object, h.primitive, h.t.to_bits())), brute.map(|h| (h.object, h.primitive, h.t.to_bits())), "ray {:?}", ray);
+                // The normal too: single rays take a triangle's from its leaf's corners.
+                let key = |h: Hit| (h.object, h.primitive, h.t.to_bits(), h.normal.to_array().map(Real::to_bits));
+                prop_assert_eq!(bvh.map(key), brute.map(key), "ray {:?}", ray);
                 prop_assert_eq!(s.any_hit(&ray, range), brute.is_some());
             }
         }
@@ -544,8 +621,9 @@ mod tests {
         // third as many nodes as leaves.
         let leaves_min = 20_000 / build::MAX_LEAF;
         assert!(stats.nodes > leaves_min / 4 && stats.nodes < 20_000 / 2, "{} nodes", stats.nodes);
-        assert!(stats.leaves >= 20_000 / leaf::LANES && stats.leaves < 20_000);
-        assert_eq!(stats.bytes, stats.nodes * size_of::<Node>() + stats.leaves * size_of::<Leaf>());
+        assert!(stats.leaves >= 20_000 / build::MAX_LEAF && stats.leaves < 20_000);
+        assert!(stats.leaf_blocks >= stats.leaves && stats.leaf_blocks <= leaf::BLOCKS * stats.leaves);
+        assert_eq!(stats.bytes, stats.nodes * size_of::<Node>() + stats.leaf_blocks * size_of::<Leaf>());
         let ray = Ray::new(Vec3::new(37.3, 61.2, -10.0), Vec3::Z);
         let hit = s.cast(&ray).unwrap();
         assert_eq!(Some(hit), s.closest_hit_brute_force(&ray, s.cast_range(&ray)));

@@ -510,7 +510,7 @@ impl Bvh {
                 }
             } else {
                 let parent = &self.nodes[current.parent as usize];
-                let leaf = &self.leaves[current.child.index as usize];
+                let leaf = self.blocks(current.child);
                 let slot = current.slot as usize;
                 // The leaf's box, planes in the order the rays cross them.
                 let planes = |side: usize| {

@@ -2,7 +2,7 @@
 //! rays ([`super::Bvh::closest_hit`]) and packets ([`super::packet`]) both
 //! do at a leaf.
 
-use super::leaf::{Lanes, Leaf, lanes_of};
+use super::leaf::{LANES, Lanes, Leaf, lanes_of};
 use super::{Bvh, object_primitive};
 use crate::hit::Hit;
 use crate::method::Methods;
@@ -11,6 +11,17 @@ use crate::primitive::Primitive;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3};
 use crate::triangle::TriangleRay;
+
+/// What a leaf test did to the best hit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Best {
+    /// It stayed what it was.
+    Kept,
+    /// It is the mesh triangle in this block and lane now.
+    Triangle(usize, usize),
+    /// It is one of the leaf's whole objects now.
+    Object,
+}
 
 /// A ray prepared for triangle tests, the range of `t` it accepts, and the
 /// closest hit found so far. Triangle hits carry a zero normal until
@@ -51,14 +62,16 @@ impl Query {
     /// Keeps `h` if it is closer than the best so far, or as close with a
     /// lower (object, primitive): the order the in-order loop over all
     /// objects gives, whatever order leaves are visited in.
+    /// Whether it was kept.
     #[inline(always)]
-    fn consider(&mut self, h: Hit) {
-        if self
+    fn consider(&mut self, h: Hit) -> bool {
+        let better = self
             .best
-            .is_none_or(|b| h.t < b.t || (h.t == b.t && (h.object, h.primitive) < (b.object, b.primitive)))
-        {
+            .is_none_or(|b| h.t < b.t || (h.t == b.t && (h.object, h.primitive) < (b.object, b.primitive)));
+        if better {
             self.best = Some(h);
         }
+        better
     }
 
     /// Tests the objects without bounds (planes).
@@ -68,26 +81,42 @@ impl Query {
         }
     }
 
-    fn test_object(&mut self, objects: &[Object], object: u32, methods: Methods) {
-        if let Some(h) =
-            object_primitive(objects, object).intersect_with(&self.prepared.ray, self.within(), methods)
-        {
-            self.consider(Hit::new(object as usize, h));
-        }
+    /// Whether it hit and was kept.
+    fn test_object(&mut self, objects: &[Object], object: u32, methods: Methods) -> bool {
+        object_primitive(objects, object)
+            .intersect_with(&self.prepared.ray, self.within(), methods)
+            .is_some_and(|h| self.consider(Hit::new(object as usize, h)))
     }
 
-    /// Tests the primitives of `leaf`.
+    /// Tests the primitives of a leaf (its `blocks`, with `lanes`); says
+    /// which of them, if any, is the best hit now.
     #[inline(always)]
-    pub fn test_leaf(&mut self, objects: &[Object], leaf: &Leaf, lanes: Lanes, methods: Methods) {
-        let within = self.within();
-        let (t, hit) = leaf.intersect_triangles(lanes.triangles(), &self.prepared, within, methods.triangle);
-        for lane in lanes_of(hit) {
+    pub fn test_leaf(&mut self, objects: &[Object], blocks: &[Leaf], lanes: Lanes, methods: Methods) -> Best {
+        let mut best = Best::Kept;
+        // All the triangles at once, then the whole objects: the best hit is
+        // the least (t, object, primitive) whatever the order.
+        let (t, hit) = Leaf::intersect_leaf(blocks, lanes, &self.prepared, self.within(), methods.triangle);
+        for i in lanes_of(hit) {
+            let (leaf, lane) = (&blocks[i / LANES], i % LANES);
             let (object, primitive) = (leaf.object(lane) as usize, leaf.index(lane) as usize);
-            self.consider(Hit { t: t[lane], object, primitive, normal: Vec3::ZERO });
+            if self.consider(Hit { t: t[i], object, primitive, normal: Vec3::ZERO }) {
+                best = Best::Triangle(i / LANES, lane);
+            }
         }
-        for lane in lanes_of(lanes.objects()) {
-            self.test_object(objects, leaf.object(lane), methods);
+        for (b, leaf) in blocks.iter().enumerate() {
+            for lane in lanes_of(lanes.block(b).objects()) {
+                if self.test_object(objects, leaf.object(lane), methods) {
+                    best = Best::Object;
+                }
+            }
         }
+        best
+    }
+
+    /// The closest hit, a mesh triangle, with its `normal` (which the
+    /// caller computed from the triangle's corners in its leaf).
+    pub fn finish_with_normal(self, normal: Vec3) -> Option<Hit> {
+        self.best.map(|best| Hit { normal, ..best })
     }
 
     /// The closest hit, with its normal.
