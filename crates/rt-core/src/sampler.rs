@@ -42,7 +42,7 @@ pub fn stratified(k: u32, n: u32, jitter: (Real, Real)) -> (Real, Real) {
 /// n = m² this is the m × m grid, cell (k mod m, k div m). Made once per
 /// sample count (a renderer keeps its pixels'), so the square root and
 /// divisions that lay out the rows are not paid per sample.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Strata {
     n: u32,
     /// Cells per row in the first `extra` rows is `base + 1`, then `base`.
@@ -50,6 +50,11 @@ pub struct Strata {
     extra: u32,
     /// Cells in the first `extra` rows: `extra · (base + 1)`.
     wide: u32,
+    /// Where every row has `base` cells and both `base` and `n` are powers
+    /// of two (n = 1, 2, 4, 8, 16, 64, 256, …): log₂ `base`, and `1/base`
+    /// and `1/n`, which are exact, so multiplying by them gives the
+    /// quotients' very bits without a division.
+    powers_of_two: Option<(u32, Real, Real)>,
 }
 
 impl Strata {
@@ -58,14 +63,27 @@ impl Strata {
         let n = n.max(1);
         let rows = (n as f64).sqrt().floor().max(1.0) as u32;
         let (base, extra) = (n / rows, n % rows);
-        Self { n, base, extra, wide: extra * (base + 1) }
+        let powers_of_two = (extra == 0 && base.is_power_of_two() && n.is_power_of_two())
+            .then(|| (base.trailing_zeros(), 1.0 / base as Real, 1.0 / n as Real));
+        Self { n, base, extra, wide: extra * (base + 1), powers_of_two }
     }
 
     /// Point `k` placed at `jitter` ∈ [0,1)² inside its cell.
     #[inline]
     pub fn point(&self, k: u32, jitter: (Real, Real)) -> (Real, Real) {
-        let Strata { n, base, extra, wide } = *self;
+        let Strata { n, base, extra, wide, powers_of_two } = *self;
         let k = k.min(n - 1);
+        // `(c + j) / n < 1` for j < 1 in exact arithmetic; `min` keeps it so after rounding.
+        let below_one = 1.0 - Real::EPSILON / 2.0;
+        if let Some((shift, inv_base, inv_n)) = powers_of_two {
+            // The general case's arithmetic below with shifts for the
+            // integer divisions and exact reciprocals for the float ones.
+            let (row, col) = (k >> shift, k & (base - 1));
+            return (
+                ((col as Real + jitter.0) * inv_base).min(below_one),
+                (((row * base) as Real + jitter.1 * base as Real) * inv_n).min(below_one),
+            );
+        }
         // Cells before row `row`, the row, the cell in it and the row's width.
         let (row, col, count) = if k < wide {
             (k / (base + 1), k % (base + 1), base + 1)
@@ -73,8 +91,6 @@ impl Strata {
             (extra + (k - wide) / base, (k - wide) % base, base)
         };
         let before = if row < extra { row * (base + 1) } else { wide + (row - extra) * base };
-        // `(c + j) / n < 1` for j < 1 in exact arithmetic; `min` keeps it so after rounding.
-        let below_one = 1.0 - Real::EPSILON / 2.0;
         (
             ((col as Real + jitter.0) / count as Real).min(below_one),
             ((before as Real + jitter.1 * count as Real) / n as Real).min(below_one),
@@ -171,6 +187,25 @@ fn mix(mut z: u64) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn power_of_two_counts_place_points_with_the_general_arithmetic_bits() {
+        let mut rng = SampleRng::seeded(3, 0, 0, 0);
+        for n in [1, 2, 4, 8, 16, 64, 256, 1024] {
+            let fast = Strata::new(n);
+            assert!(fast.powers_of_two.is_some(), "{n}");
+            let general = Strata { powers_of_two: None, ..fast };
+            for k in 0..n {
+                let jitters = [(0.0, 0.0), (1.0 - Real::EPSILON / 2.0, 1.0 - Real::EPSILON / 2.0)];
+                let random = (0..8).map(|_| rng.next_pair());
+                for jitter in jitters.into_iter().chain(random) {
+                    let (a, b) = (fast.point(k, jitter), general.point(k, jitter));
+                    assert_eq!((a.0.to_bits(), a.1.to_bits()), (b.0.to_bits(), b.1.to_bits()), "{n} {k}");
+                }
+            }
+        }
+        assert!(Strata::new(32).powers_of_two.is_none() && Strata::new(9).powers_of_two.is_none());
+    }
 
     #[test]
     fn one_sample_is_the_pixel_centre() {
