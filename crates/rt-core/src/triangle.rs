@@ -237,9 +237,9 @@ pub fn intersect_watertight_prepared(
 /// recomputed with [`difference_of_products`], whose sign is exact. Edge
 /// functions of a shared edge, computed from its two corners in either
 /// order, are exact negatives of each other either way, so the test stays
-/// watertight. The SIMD test of four triangles (`bvh::leaf`) does the same
-/// operations lane by lane, so both give the same bits. With `f64` geometry
-/// every edge function is a [`difference_of_products`].
+/// watertight. The SIMD tests of four and eight triangles (`bvh::leaf`)
+/// do the same operations lane by lane, so all give the same bits. With
+/// `f64` geometry every edge function is a [`difference_of_products`].
 #[inline(always)]
 pub fn edge_functions(p0: Vec3, p1: Vec3, p2: Vec3) -> [Real; 3] {
     #[cfg(not(feature = "f64"))]
