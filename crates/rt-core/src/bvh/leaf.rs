@@ -441,7 +441,7 @@ mod tests {
         (leaf, lanes)
     }
 
-    fn bits(t: [Real; LANES], hit: u32) -> Vec<(usize, u64)> {
+    fn bits(t: &[Real], hit: u32) -> Vec<(usize, u64)> {
         #[allow(clippy::useless_conversion)] // to_bits gives u32 for f32 geometry
         lanes_of(hit).map(|lane| (lane, u64::from(t[lane].to_bits()))).collect()
     }
@@ -480,7 +480,7 @@ mod tests {
             let method = TriangleMethod::Watertight;
             let (t, hit) = leaf.intersect_triangles(lanes.triangles(), &ray, range, method);
             let (ts, hits) = leaf.intersect_scalar(lanes.triangles(), &ray, range, method);
-            prop_assert_eq!(bits(t, hit), bits(ts, hits));
+            prop_assert_eq!(bits(&t, hit), bits(&ts, hits));
 
             let (low, high) = (used & 0xF, used >> 4);
             let pair_lanes = Lanes(lanes.0 & low).with_block(1, Lanes(second_lanes.0 & high));
@@ -488,10 +488,8 @@ mod tests {
             let (t0, hit0) = leaf.intersect_scalar(low, &ray, range, method);
             let (t1, hit1) = second.intersect_scalar(high, &ray, range, method);
             let scalar: Vec<(usize, u64)> =
-                bits(t0, hit0).into_iter().chain(bits(t1, hit1).into_iter().map(|(l, t)| (l + LANES, t))).collect();
-            #[allow(clippy::useless_conversion)] // to_bits gives u32 for f32 geometry
-            let simd: Vec<(usize, u64)> = lanes_of(hit).map(|l| (l, u64::from(t[l].to_bits()))).collect();
-            prop_assert_eq!(simd, scalar);
+                bits(&t0, hit0).into_iter().chain(bits(&t1, hit1).into_iter().map(|(l, t)| (l + LANES, t))).collect();
+            prop_assert_eq!(bits(&t, hit), scalar);
         }
     }
 
