@@ -1,13 +1,13 @@
-//! The second step of the build: the binary tree collapsed into a 4-wide
-//! one, as Embree's BVH4 (Wald, Benthin and Boulos, "Getting Rid of
+//! The second step of the build: the binary tree collapsed into an 8-wide
+//! one, as Embree's BVH8 (Wald, Benthin and Boulos, "Getting Rid of
 //! Packets", 2008). Each node opens its widest inner child (by surface
-//! area) until it has four children, which keeps the SAH tree's splits.
+//! area) until it has eight children, which keeps the SAH tree's splits.
 
 use super::build::BuildNode;
 use super::{Child, Node, WIDTH};
 use crate::real::to_f64;
 
-/// What collapsing a subtree produced: its child entry, the 4-wide nodes on
+/// What collapsing a subtree produced: its child entry, the 8-wide nodes on
 /// its longest path down, its traversal stack bound (see
 /// [`super::Bvh::stack_bound`]), and its share of the SAH cost
 /// ([`super::BvhStats::sah_cost`]) before dividing by the root's area.

@@ -11,8 +11,8 @@
 //! operations. The SAH counts a leaf's cost by the block, as Embree's
 //! does, so a two-block leaf is made only where splitting it would cost
 //! more: on the 1 M-triangle terrain a third of the leaves have two blocks,
-//! and a bounce ray visits 15.0 nodes and 2.24 leaves instead of 15.6 and
-//! 2.34 (docs/performance.md has the timings).
+//! and a bounce ray visits 2.24 leaves instead of 2.34 (measured with
+//! 4-wide nodes; docs/performance.md has the timings).
 //!
 //! Both tests perform exactly the scalar test's operations
 //! ([`crate::triangle::intersect_watertight_prepared`]), lane by lane and

@@ -3,7 +3,7 @@
 //!
 //! The packet descends the tree once, with one box test per node for all
 //! its rays: interval arithmetic over the rays' origins and inverse
-//! directions gives, for each of the node's four children, a lower bound
+//! directions gives, for each of the node's eight children, a lower bound
 //! on where any of the rays enters it and an upper bound on where any
 //! leaves it (the frustum test of Reshetov, Soupikov and Hurley, "Multi-Level
 //! Ray Tracing Algorithm", 2005, in the interval form of Boulos et al.,

@@ -94,9 +94,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         let build = bvh.build_time.as_secs_f64();
         eprintln!("scene load: {:.3} s (of which BVH build {build:.3} s)", load_time.as_secs_f64());
         eprintln!(
-            "BVH: {} primitives, {} nodes (4-wide), depth {}, {:.1} KiB ({:.1} bytes per primitive)",
+            "BVH: {} primitives, {} nodes ({}-wide), depth {}, {:.1} KiB ({:.1} bytes per primitive)",
             bvh.primitives,
             bvh.nodes,
+            bvh.width,
             bvh.depth,
             bvh.bytes as f64 / 1024.0,
             bvh.bytes as f64 / bvh.primitives.max(1) as f64
