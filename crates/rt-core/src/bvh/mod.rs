@@ -27,6 +27,7 @@
 
 mod build;
 mod collapse;
+mod huge_pages;
 mod leaf;
 mod packet;
 mod query;
@@ -193,8 +194,10 @@ impl Bvh {
             }
             sah_cost = root.cost / to_f64(root_box.surface_area()).max(f64::MIN_POSITIVE);
         }
-        let leaves: Vec<Leaf> =
-            leaf_items.into_par_iter().map(|range| Leaf::new(&items[range], objects).0).collect();
+        // Filled in place, on all threads, once marked for huge pages.
+        let mut leaves: Vec<Leaf> = huge_pages::with_capacity(leaf_items.len());
+        leaves.par_extend(leaf_items.into_par_iter().map(|range| Leaf::new(&items[range], objects).0));
+        let nodes = huge_pages::moved(nodes);
         let stats = BvhStats {
             primitives: items.len(),
             nodes: nodes.len(),
