@@ -38,8 +38,12 @@ pub(super) fn with_capacity<T>(len: usize) -> Vec<T> {
     v
 }
 
-/// `items` moved to a vector from [`with_capacity`].
+/// `items` moved to a vector from [`with_capacity`]; left where they are if
+/// they are too few to fill a huge page.
 pub(super) fn moved<T: Copy>(items: Vec<T>) -> Vec<T> {
+    if items.len() * size_of::<T>() < HUGE_PAGE {
+        return items;
+    }
     let mut v = with_capacity(items.len());
     v.extend_from_slice(&items);
     v
