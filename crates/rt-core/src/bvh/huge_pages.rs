@@ -1,6 +1,6 @@
 //! The tree's arrays on transparent huge pages, where the system has them.
 //!
-//! Incoherent rays read nodes and leaves all over a large tree (89 MB for
+//! Incoherent rays read nodes and leaves all over a large tree (56 MiB for
 //! the 1 M-triangle terrain): with 4 KiB pages most of those reads also
 //! miss the CPU's address-translation cache (a few thousand entries, a
 //! few to a dozen MB of 4 KiB pages) and wait for a page-table walk; a
