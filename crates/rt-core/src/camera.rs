@@ -99,7 +99,13 @@ impl CameraBasis {
         if right.length() < MIN_UP_SINE {
             return Err(CameraError::UpParallelToView);
         }
-        let x = right.normalize();
+        // up × cam_z has rounding errors of about ε per component, which
+        // near the threshold is ε/sin relative: enough to tilt cam_x out of
+        // the plane across cam_z by 10⁻³ rad in f32. What of it lies along
+        // cam_z is removed (one Gram–Schmidt step, no change in exact
+        // arithmetic), so the basis is orthonormal to a few ε at any angle
+        // accepted; only its roll keeps the ε/sin uncertainty of `up` itself.
+        let x = right.reject_from_normalized(z).normalize();
         let y = z.cross(x);
         Ok(Self { x, y, z })
     }
@@ -332,6 +338,49 @@ mod tests {
                 proptest::prop_assert!((b.z.cross(b.x) - b.y).length() < 1e-5);
                 // True up leans the same way as the given up.
                 proptest::prop_assert!(b.y.dot(v(up)) >= 0.0);
+            }
+        }
+
+        /// Up vectors at angles from 10⁻⁸ to 1 radian off the view direction
+        /// (either way along it), where `up × cam_z` cancels: refused below
+        /// half the threshold sine, accepted above twice it, and an accepted
+        /// basis is orthonormal with true up along the part of `up` across
+        /// the view, to within the cancellation's error ε/sin.
+        #[test]
+        fn a_nearly_parallel_up_is_refused_or_gives_the_roll_it_leans_towards(
+            c in proptest::array::uniform3(-1e3f32..1e3),
+            view in proptest::array::uniform3(-1f32..1.0),
+            across in proptest::array::uniform3(-1f32..1.0),
+            exponent in -8f32..0.0,
+            backwards in proptest::bool::ANY,
+        ) {
+            let v = |a: [f32; 3]| Vec3::new(a[0] as Real, a[1] as Real, a[2] as Real);
+            let Some(z) = normalize_robust(v(view)) else { return Ok(()) };
+            let Some(w) = normalize_robust(v(across).reject_from(z)) else { return Ok(()) };
+            let along = if backwards { -z } else { z };
+            let up = along + w * (10.0 as Real).powf(exponent as Real);
+            let (c, coi) = (v(c), v(c) + z * 10.0);
+            // The sine the camera sees, exactly (in f64, from the rounded inputs).
+            let (wide_up, wide_view) = (crate::real::widen(up), crate::real::widen(coi - c));
+            let sine = wide_up.normalize().cross(wide_view.normalize()).length();
+            let threshold = crate::real::to_f64(MIN_UP_SINE);
+            match CameraBasis::new(c, coi, up) {
+                Ok(b) => {
+                    proptest::prop_assert!(sine > threshold / 2.0, "accepted at sine {sine:e}");
+                    for axis in [b.x, b.y, b.z] {
+                        proptest::prop_assert!((axis.length() - 1.0).abs() < 1e-5);
+                    }
+                    proptest::prop_assert!((b.z.cross(b.x) - b.y).length() < 1e-5);
+                    proptest::prop_assert!(b.x.dot(b.z).abs() < 1e-5 && b.y.dot(b.z).abs() < 1e-5);
+                    // up × cam_z loses log₂(1/sin) bits to cancellation.
+                    let epsilon = crate::real::to_f64(Real::EPSILON);
+                    let off = crate::real::to_f64((b.y - w).length());
+                    proptest::prop_assert!(off <= 64.0 * epsilon / sine + 1e-5, "true up {} off {w} by {off:e} at sine {sine:e}", b.y);
+                }
+                Err(e) => {
+                    proptest::prop_assert_eq!(e, CameraError::UpParallelToView);
+                    proptest::prop_assert!(sine < 2.0 * threshold, "refused at sine {sine:e}");
+                }
             }
         }
     }

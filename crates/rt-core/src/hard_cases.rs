@@ -5,15 +5,25 @@
 //! A case is a list of queries (primitive, ray, expected outcome), all with
 //! `t` in (0, ∞). The outcome is fixed by construction where it can be (a ray
 //! from inside a closed surface must hit it; a ray aimed 10⁻⁵ heights outside
-//! a triangle's edge must miss), and otherwise computed in f64 from the same
-//! rounded inputs the method sees (whether a ray aimed at a box's edge passes
-//! just inside or just outside; the exact `t`). With f64 geometry that
-//! reference has the geometry's own precision, so the f64 build's `t` errors
-//! are bounded by it rather than measured.
+//! a triangle's edge must miss), and otherwise computed from the same rounded
+//! inputs the method sees (whether a ray aimed at a box's edge passes just
+//! inside or just outside; the exact `t`).
+//!
+//! The reference is independent of the methods it scores, in algorithm and
+//! in precision: it is computed in [`DoubleDouble`] arithmetic (about 106
+//! bits), by the plain formulas — the textbook quadratic for spheres, the
+//! slab test for boxes, the plane equation for triangles — whose cancellations
+//! cost at most about 40 of those bits on these cases (the worst, a radius-1
+//! sphere 10⁶ away, cancels `b²` against `a·c` at about 10¹² times the
+//! discriminant). Its `t` is thus good to about 2⁻⁶⁰ relative, below an f64
+//! rounding error (2⁻⁵³), so the f64 build's errors are measured too, not
+//! compared with themselves.
 
 use std::f64::consts::PI;
 
 use glam::DVec3;
+
+use crate::double_double::{DdVec3, DoubleDouble};
 
 use crate::aabb::Aabb;
 use crate::mesh::{Mesh, icosahedron};
@@ -42,8 +52,8 @@ pub enum CaseKind {
 /// What a query must give.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Expect {
-    /// A hit at this `t` (the f64 reference).
-    Hit(f64),
+    /// A hit at this `t` (the double-double reference).
+    Hit(DoubleDouble),
     /// No hit.
     Miss,
     /// The line passes within [`GRAZING`] of the surface's edge: rounding
@@ -105,8 +115,8 @@ impl HardCase {
             match (q.expect, hit) {
                 (Expect::Hit(t_ref), Some(h)) if h.t.is_finite() => {
                     let (o, d) = (widen(q.ray.origin), widen(q.ray.dir).length());
-                    let scale = o.abs().max_element().max(1.0).max(t_ref * d);
-                    let error = (to_f64(h.t) - t_ref).abs() * d / scale;
+                    let scale = o.abs().max_element().max(1.0).max(t_ref.to_f64() * d);
+                    let error = (DoubleDouble::new(to_f64(h.t)) - t_ref).abs().to_f64() * d / scale;
                     score.max_t_error = score.max_t_error.max(error);
                 }
                 (Expect::Miss, None) | (Expect::Either, _) => {}
@@ -167,23 +177,24 @@ fn ray_towards(origin: DVec3, target: DVec3) -> Ray {
     Ray::new(o, narrow(target - widen(o)))
 }
 
-/// The ray/sphere reference in f64: the careful form of [`Sphere::intersect`]
-/// on the (already rounded) inputs; the nearest root with `t > 0`.
+/// The ray/sphere reference in double-double arithmetic on the (already
+/// rounded) inputs: the textbook quadratic `a·t² − 2b·t + c = 0` with
+/// `f = o − c` (exact), `a = d·d`, `b = −f·d`, `c = f·f − r²`, roots
+/// `(b ± √(b² − a·c))/a` — not the cancellation-free form of
+/// [`Sphere::intersect`] it checks; the nearest root with `t > 0`.
 fn reference_sphere(ray: &Ray, sphere: &Sphere) -> Expect {
-    let (o, d, c) = (widen(ray.origin), widen(ray.dir), widen(sphere.center()));
-    let r = to_f64(sphere.radius());
-    let f = o - c;
-    let a = d.dot(d);
-    let b = -f.dot(d);
-    let l = f + (b / a) * d;
-    let discriminant = a * (r * r - l.dot(l));
-    if discriminant < 0.0 {
+    let f = DdVec3::difference(widen(ray.origin), widen(sphere.center()));
+    let d = DdVec3::new(widen(ray.dir));
+    let r = DoubleDouble::new(to_f64(sphere.radius()));
+    let (a, b) = (d.dot(d), -f.dot(d));
+    let c = f.dot(f) - r * r;
+    let discriminant = b * b - a * c;
+    if discriminant < DoubleDouble::ZERO {
         return Expect::Miss;
     }
-    let q = b + b.signum() * discriminant.sqrt();
-    let (t0, t1) = ((f.dot(f) - r * r) / q, q / a);
-    let (near, far) = (t0.min(t1), t0.max(t1));
-    [near, far].into_iter().find(|&t| t > 0.0).map_or(Expect::Miss, Expect::Hit)
+    let root = discriminant.sqrt();
+    let (near, far) = ((b - root) / a, (b + root) / a);
+    [near, far].into_iter().find(|&t| t > DoubleDouble::ZERO).map_or(Expect::Miss, Expect::Hit)
 }
 
 /// Spheres of radius 1 at `distance` from the origin in random directions,
@@ -262,15 +273,13 @@ fn closed_mesh_from_inside(name: &'static str, centre: DVec3, case: u32) -> Hard
     let corner = |k: u32| widen(positions[k as usize]);
     let origin = widen(narrow(centre));
     let exit = |ray: &Ray| {
-        let (o, d) = (widen(ray.origin), widen(ray.dir));
         faces
             .iter()
             .filter_map(|&[a, b, c]| {
-                let n = (corner(b) - corner(a)).cross(corner(c) - corner(a));
-                let t = n.dot(corner(a) - o) / n.dot(d);
-                (n.dot(d) > 0.0).then_some(t)
+                let (t, facing) = reference_plane_t(ray, [a, b, c].map(corner));
+                (facing > DoubleDouble::ZERO).then_some(t)
             })
-            .fold(f64::INFINITY, f64::min)
+            .fold(DoubleDouble::new(f64::INFINITY), DoubleDouble::min)
     };
     let queries = (0..RAYS_PER_CASE)
         .map(|i| {
@@ -314,8 +323,8 @@ fn triangle_near_edges(case: u32) -> HardCase {
             let (s, w) = uniform(case, i, 1);
             let origin = DVec3::new(s - 0.5, w - 0.5, -3.0);
             let ray = ray_towards(origin, target);
-            let (o, d) = (widen(ray.origin), widen(ray.dir));
-            let expect = if outside { Expect::Miss } else { Expect::Hit(normal.dot(a - o) / normal.dot(d)) };
+            let expect =
+                if outside { Expect::Miss } else { Expect::Hit(reference_plane_t(&ray, [a, b, c]).0) };
             Query { primitive: 0, ray, expect }
         })
         .collect();
@@ -333,12 +342,22 @@ fn reference_box() -> (DVec3, DVec3) {
     (centre - 1.0, centre + 1.0)
 }
 
-/// The slab test in f64: the first of the entry and exit `t` that is > 0,
-/// or [`Expect::Either`] for a line that grazes an edge. An axis with `d = ±0`
-/// keeps the ray in its slab exactly when `min ≤ o ≤ max`.
+/// Where the ray meets the plane of the triangle `[a, b, c]`, in
+/// double-double: `t = n·(a − o)/(n·d)` with `n = (b − a)×(c − a)`, and
+/// `n·d` (positive when the ray leaves through the side `n` points to).
+fn reference_plane_t(ray: &Ray, [a, b, c]: [DVec3; 3]) -> (DoubleDouble, DoubleDouble) {
+    let n = DdVec3::difference(b, a).cross(DdVec3::difference(c, a));
+    let d = DdVec3::new(widen(ray.dir));
+    let facing = n.dot(d);
+    (n.dot(DdVec3::difference(a, widen(ray.origin))) / facing, facing)
+}
+
+/// The slab test in double-double: the first of the entry and exit `t`
+/// that is > 0, or [`Expect::Either`] for a line that grazes an edge. An
+/// axis with `d = ±0` keeps the ray in its slab exactly when `min ≤ o ≤ max`.
 fn reference_box_hit(ray: &Ray, (min, max): (DVec3, DVec3)) -> Expect {
     let (o, d) = (widen(ray.origin), widen(ray.dir));
-    let (mut enter, mut exit) = (f64::NEG_INFINITY, f64::INFINITY);
+    let (mut enter, mut exit) = (DoubleDouble::new(f64::NEG_INFINITY), DoubleDouble::new(f64::INFINITY));
     for k in 0..3 {
         if d[k] == 0.0 {
             if o[k] < min[k] || o[k] > max[k] {
@@ -346,17 +365,21 @@ fn reference_box_hit(ray: &Ray, (min, max): (DVec3, DVec3)) -> Expect {
             }
             continue;
         }
-        let (t0, t1) = ((min[k] - o[k]) / d[k], (max[k] - o[k]) / d[k]);
+        let dk = DoubleDouble::new(d[k]);
+        let (t0, t1) = (DoubleDouble::sum(min[k], -o[k]) / dk, DoubleDouble::sum(max[k], -o[k]) / dk);
         enter = enter.max(t0.min(t1));
         exit = exit.min(t0.max(t1));
     }
-    if ((enter - exit) * d.length()).abs() < GRAZING && enter.max(exit) > 0.0 {
+    if ((enter - exit).to_f64() * d.length()).abs() < GRAZING && enter.max(exit) > DoubleDouble::ZERO {
         return Expect::Either;
     }
     if enter > exit {
         return Expect::Miss;
     }
-    [enter, exit].into_iter().find(|&t| t > 0.0 && t.is_finite()).map_or(Expect::Miss, Expect::Hit)
+    [enter, exit]
+        .into_iter()
+        .find(|&t| t > DoubleDouble::ZERO && t.is_finite())
+        .map_or(Expect::Miss, Expect::Hit)
 }
 
 /// Rays from 6 units around the box, aimed at random points of its 12 edges
@@ -434,13 +457,34 @@ mod tests {
         for case in all_cases() {
             let score = case.score(Methods::default());
             assert_eq!(score.wrong, 0, "{}: {score:?}", case.name);
-            // A few f32 ulps of t (2⁻²³ relative each), whatever the distance;
-            // from just above the huge sphere the near root, within 2 %: there
-            // `f·f − r²` cancels to the height, so f32 keeps about 7 bits of it.
-            let bound =
-                if case.name.starts_with("radius-10^5") { 0.02 } else { 8.0 * f64::from(f32::EPSILON) };
+            // Measured against the double-double reference, in f32 and in f64
+            // alike: a few ulps of the working precision ε (2⁻²³ or 2⁻⁵²) of t,
+            // whatever the distance (2.5ε at most on these cases). From just
+            // above the huge sphere, `f·f − r²` cancels from |f|² ≈ 10¹⁰ down
+            // to 2·r·h ≈ 10⁵, so the near root keeps its value only to about
+            // 10⁵ε (4·10⁴ε measured in f32, 9·10⁴ε in f64): bound 2·10⁵ε,
+            // 2.4 % in f32.
+            let epsilon = to_f64(Real::EPSILON);
+            let bound = if case.name.starts_with("radius-10^5") { 2e5 * epsilon } else { 8.0 * epsilon };
             assert!(score.max_t_error < bound, "{}: {score:?}", case.name);
         }
+    }
+
+    #[test]
+    fn the_reference_is_finer_than_the_working_precision_and_tells_methods_apart() {
+        // A reference computed like the method it scores, at the same
+        // precision, would give the careful sphere test no error at all (the
+        // f64 build once did). The double-double reference sees its rounding
+        // errors, a fraction of an ulp to a few, and the textbook quadratic's
+        // cancellation far above them, in f32 and in f64.
+        use crate::method::SphereMethod;
+        let epsilon = to_f64(Real::EPSILON);
+        let far = far_sphere("far", 1e6, 3);
+        let careful = far.score(Methods::default()).max_t_error;
+        let textbook =
+            far.score(Methods { sphere: SphereMethod::Textbook, ..Methods::default() }).max_t_error;
+        assert!(careful > 0.1 * epsilon && careful < 8.0 * epsilon, "careful: {careful:e}");
+        assert!(textbook > 100.0 * careful, "textbook {textbook:e}, careful {careful:e}");
     }
 
     #[test]

@@ -44,6 +44,7 @@ pub mod bsdf;
 pub mod bvh;
 pub mod camera;
 pub mod color;
+pub mod double_double;
 pub mod effects;
 pub mod emitter;
 pub mod geometry_error;
