@@ -31,6 +31,7 @@ for file in "$@"; do
       filter="not ($slow_elsewhere | test(/^(bsdf|medium|path_tracer)::/) | test(/a_fine_grid_far_away/))" ;;
   esac
   echo "== $file (tests: $filter)"
+  mkdir -p "target/mutants/$stem"
   # Exit status 2 (some missed) and 3 (some timed out) are results, not failures.
   status=0
   cargo mutants --in-place -p rt-core -f "$file" -o "target/mutants/$stem" -- --lib -E "$filter" || status=$?
