@@ -316,6 +316,16 @@ mod tests {
     }
 
     #[test]
+    fn a_camera_keeps_the_fields_it_was_given() {
+        let (c, coi, up) = (Vec3::new(1.0, 2.0, -3.0), Vec3::new(0.5, -1.0, 4.0), Vec3::new(0.1, 1.0, 0.2));
+        let cam = Camera::new(c, coi, up, 37.5, 0.25, Projection::Orthographic).unwrap();
+        assert_eq!((cam.position(), cam.center_of_interest(), cam.up()), (c, coi, up));
+        assert_eq!((cam.fov_y(), cam.near()), (37.5, 0.25));
+        assert_eq!(cam.projection(), Projection::Orthographic);
+        assert_eq!(cam.basis(), CameraBasis::new(c, coi, up).unwrap());
+    }
+
+    #[test]
     fn view_plane_height_follows_the_tangent_formula() {
         // fov 90°, near 2: h = 2·2·tan 45° = 4.
         let c = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 90.0, 2.0, Projection::Perspective).unwrap();
