@@ -7,6 +7,10 @@
 #   cargo install cargo-mutants --locked
 #   scripts/mutants.sh crates/rt-core/src/sphere.rs [more files...]
 #
+# MUTANTS_SHARD=K/N runs every N-th mutant from the K-th (0-based; cargo
+# mutants --shard K/N --sharding round-robin): a sample spread over the
+# whole file, for files too large to run whole in one sitting.
+#
 # Outcomes go to target/mutants/<file stem>/mutants.out (caught.txt,
 # missed.txt, unviable.txt, timeout.txt). Runs in place (the source is
 # restored after each mutant), so leave the tree alone while it runs.
@@ -34,6 +38,8 @@ for file in "$@"; do
   mkdir -p "target/mutants/$stem"
   # Exit status 2 (some missed) and 3 (some timed out) are results, not failures.
   status=0
-  cargo mutants --in-place -p rt-core -f "$file" -o "target/mutants/$stem" -- --lib -E "$filter" || status=$?
+  shard=()
+  if [[ -n "${MUTANTS_SHARD:-}" ]]; then shard=(--shard "$MUTANTS_SHARD" --sharding round-robin); fi
+  cargo mutants --in-place -p rt-core -f "$file" "${shard[@]}" -o "target/mutants/$stem" -- --lib -E "$filter" || status=$?
   case $status in 0|2|3) ;; *) exit "$status" ;; esac
 done
