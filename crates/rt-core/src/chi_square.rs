@@ -203,17 +203,24 @@ pub(crate) fn pearson(observed: &[f64], expected: &[f64]) -> Result<Pearson, Str
 pub(crate) fn assert_fits(name: &str, observed: &[f64], expected: &[f64]) {
     match pearson(observed, expected) {
         Err(e) => panic!("{name}: {e}"),
-        Ok(t) => assert!(
-            t.p_value >= alpha(),
-            "{name}: χ² = {:.1} for {} dof, p = {:.3e} < α = {:.3e}; worst bins (bin, observed, expected; \
+        Ok(t) => {
+            // Shown with `--nocapture`: how far from failing each check is.
+            eprintln!(
+                "{name}: χ² = {:.1} for {} dof, p = {:.3} {:?}",
+                t.statistic, t.dof, t.p_value, t.worst
+            );
+            assert!(
+                t.p_value >= alpha(),
+                "{name}: χ² = {:.1} for {} dof, p = {:.3e} < α = {:.3e}; worst bins (bin, observed, expected; \
              {} = pooled): {:?}",
-            t.statistic,
-            t.dof,
-            t.p_value,
-            alpha(),
-            usize::MAX,
-            t.worst
-        ),
+                t.statistic,
+                t.dof,
+                t.p_value,
+                alpha(),
+                usize::MAX,
+                t.worst
+            )
+        }
     }
 }
 
@@ -259,9 +266,25 @@ pub(crate) fn adaptive_simpson_2d(
     adaptive_simpson(&mut outer, t0, t1, eps, depth)
 }
 
-/// Quadrature tolerance per bin, in probability: far below the standard
-/// error `√(p/N)` of any bin of the tests (N ≤ 10⁷).
+/// The probability of a bin: [`adaptive_simpson_2d`] to an absolute error
+/// of [`EPS`] plus [`RELATIVE_EPS`] of the bin's midpoint-rule estimate on
+/// a 4 × 4 grid.
+fn bin_probability(f: &dyn Fn(f64, f64) -> f64, (s0, s1): (f64, f64), (t0, t1): (f64, f64)) -> f64 {
+    let (ws, wt) = ((s1 - s0) / 4.0, (t1 - t0) / 4.0);
+    let mut rough = 0.0;
+    for i in 0..4 {
+        for j in 0..4 {
+            rough += f(s0 + (i as f64 + 0.5) * ws, t0 + (j as f64 + 0.5) * wt) * ws * wt;
+        }
+    }
+    adaptive_simpson_2d(f, (s0, s1), (t0, t1), EPS + RELATIVE_EPS * rough.abs(), DEPTH)
+}
+
+/// Quadrature tolerance per bin, in probability, and relative to the bin's
+/// probability p: far below the standard error `√(p/N)` of any bin of the
+/// tests (N ≤ 10⁷: `√(p/N) ≥ 3·10⁻⁴·√p`, against `10⁻⁹ + 10⁻⁶·p`).
 const EPS: f64 = 1e-9;
+const RELATIVE_EPS: f64 = 1e-6;
 /// Quadrature depth: a jump of the density across a bin is resolved to
 /// 2⁻¹⁰ of its width (≈ 0.1 % of the bin's mass).
 const DEPTH: u32 = 10;
@@ -305,7 +328,10 @@ fn run<P>(
                     deltas.resize(k + 1, (0.0, f64::NAN));
                 }
                 let (count, claim) = &mut deltas[k];
-                assert!(claim.is_nan() || (*claim - p).abs() <= 1e-5 * p, "{name}: δ outcome {k} claims {p} and {claim}");
+                assert!(
+                    claim.is_nan() || (*claim - p).abs() <= 1e-5 * p,
+                    "{name}: δ outcome {k} claims {p} and {claim}"
+                );
                 *count += 1.0;
                 *claim = p;
             }
@@ -316,7 +342,11 @@ fn run<P>(
     let smooth: f64 = bin_probability.iter().sum();
     let discrete: f64 = deltas.iter().filter(|d| d.0 > 0.0).map(|d| d.1).sum();
     let rest = 1.0 - smooth - discrete;
-    assert!(rest > -1e-4, "{name}: the densities add up to {} > 1 (smooth {smooth}, δ {discrete})", 1.0 - rest);
+    assert!(
+        rest > -1e-4,
+        "{name}: the densities add up to {} > 1 (smooth {smooth}, δ {discrete})",
+        1.0 - rest
+    );
     let mut observed = counts;
     let mut expected: Vec<f64> = bin_probability.iter().map(|p| p * n).collect();
     for (count, claim) in deltas.into_iter().filter(|d| d.0 > 0.0) {
@@ -405,7 +435,7 @@ impl SphereGrid {
         for i in 0..self.n_u {
             for j in 0..self.n_phi {
                 let (u, phi) = (i as f64 * du, j as f64 * dphi);
-                out.push(adaptive_simpson_2d(&f, (u, u + du), (phi, phi + dphi), EPS, DEPTH));
+                out.push(bin_probability(&f, (u, u + du), (phi, phi + dphi)));
             }
         }
         out
@@ -499,7 +529,7 @@ pub(crate) fn plane(
     for j in 0..grid.t.n {
         for i in 0..grid.s.n {
             let (s, t) = (grid.s.lo + i as f64 * ws, grid.t.lo + j as f64 * wt);
-            probabilities.push(adaptive_simpson_2d(pdf, (s, s + ws), (t, t + wt), EPS, DEPTH));
+            probabilities.push(bin_probability(pdf, (s, s + ws), (t, t + wt)));
         }
     }
     let bin_of = |(s, t): (f64, f64)| Some(grid.t.bin(t)? * grid.s.n + grid.s.bin(s)?);
