@@ -227,6 +227,10 @@ pub(crate) fn assert_fits(name: &str, observed: &[f64], expected: &[f64]) {
 /// `∫_a^b f` by adaptive Simpson quadrature with Lyness's stopping rule and
 /// Richardson's correction, to an absolute error of about `eps`, halving
 /// intervals at most `depth` times (pbrt-v4 `bsdfs_test.cpp`, `AdaptiveSimpson`).
+/// The first [`MIN_SPLITS`] halvings are always made (16 intervals, 33
+/// points), so that a density that is nonzero on a sliver of the interval
+/// only (the corner of a triangle's cone of directions) is not missed by the
+/// three points of the first estimate all being zero.
 pub(crate) fn adaptive_simpson(f: &mut dyn FnMut(f64) -> f64, a: f64, b: f64, eps: f64, depth: u32) -> f64 {
     #[allow(clippy::too_many_arguments)]
     fn step(
@@ -235,24 +239,28 @@ pub(crate) fn adaptive_simpson(f: &mut dyn FnMut(f64) -> f64, a: f64, b: f64, ep
         (fa, fm, fb): (f64, f64, f64),
         whole: f64,
         eps: f64,
-        depth: u32,
+        (depth, forced): (u32, u32),
     ) -> f64 {
         let (l, r) = (0.5 * (a + m), 0.5 * (m + b));
         let (fl, fr) = (f(l), f(r));
         let left = (m - a) / 6.0 * (fa + 4.0 * fl + fm);
         let right = (b - m) / 6.0 * (fm + 4.0 * fr + fb);
         let both = left + right;
-        if depth == 0 || (both - whole).abs() <= 15.0 * eps {
+        if depth == 0 || (forced == 0 && (both - whole).abs() <= 15.0 * eps) {
             return both + (both - whole) / 15.0;
         }
-        step(f, (a, l, m), (fa, fl, fm), left, 0.5 * eps, depth - 1)
-            + step(f, (m, r, b), (fm, fr, fb), right, 0.5 * eps, depth - 1)
+        let next = (depth - 1, forced.saturating_sub(1));
+        step(f, (a, l, m), (fa, fl, fm), left, 0.5 * eps, next)
+            + step(f, (m, r, b), (fm, fr, fb), right, 0.5 * eps, next)
     }
     let m = 0.5 * (a + b);
     let (fa, fm, fb) = (f(a), f(m), f(b));
     let whole = (b - a) / 6.0 * (fa + 4.0 * fm + fb);
-    step(f, (a, m, b), (fa, fm, fb), whole, eps, depth)
+    step(f, (a, m, b), (fa, fm, fb), whole, eps, (depth, MIN_SPLITS.min(depth)))
 }
+
+/// Halvings [`adaptive_simpson`] always makes.
+const MIN_SPLITS: u32 = 3;
 
 /// `∫∫ f(s, t) ds dt` over a rectangle by nested [`adaptive_simpson`].
 pub(crate) fn adaptive_simpson_2d(
