@@ -227,7 +227,7 @@ pub(crate) fn assert_fits(name: &str, observed: &[f64], expected: &[f64]) {
 /// `∫_a^b f` by adaptive Simpson quadrature with Lyness's stopping rule and
 /// Richardson's correction, to an absolute error of about `eps`, halving
 /// intervals at most `depth` times (pbrt-v4 `bsdfs_test.cpp`, `AdaptiveSimpson`).
-/// The first [`MIN_SPLITS`] halvings are always made (16 intervals, 33
+/// The first [`MIN_SPLITS`] halvings are always made (8 intervals, 17
 /// points), so that a density that is nonzero on a sliver of the interval
 /// only (the corner of a triangle's cone of directions) is not missed by the
 /// three points of the first estimate all being zero.
@@ -260,7 +260,7 @@ pub(crate) fn adaptive_simpson(f: &mut dyn FnMut(f64) -> f64, a: f64, b: f64, ep
 }
 
 /// Halvings [`adaptive_simpson`] always makes.
-const MIN_SPLITS: u32 = 3;
+const MIN_SPLITS: u32 = 2;
 
 /// `∫∫ f(s, t) ds dt` over a rectangle by nested [`adaptive_simpson`].
 pub(crate) fn adaptive_simpson_2d(

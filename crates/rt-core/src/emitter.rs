@@ -335,9 +335,25 @@ mod tests {
             Some(s) => Draw::At(widen(s.wi)),
             None => Draw::Nothing,
         };
+        // A mesh's own intersection is slow for a million queries: its
+        // triangles one by one instead.
+        let surface: Vec<Primitive> = match primitive {
+            Primitive::Mesh(m) => (0..m.triangle_count())
+                .map(|i| {
+                    let [a, b, c] = m.triangle(i);
+                    Primitive::Triangle(Triangle::new(a, b, c).unwrap())
+                })
+                .collect(),
+            other => vec![other.clone()],
+        };
         let pdf = |wi: DVec3| {
             let wi = narrow(wi);
-            match primitive.intersect(&Ray::new(p, wi), Interval::new(0.0, Real::INFINITY)) {
+            let ray = Ray::new(p, wi);
+            let hit = surface
+                .iter()
+                .filter_map(|s| s.intersect(&ray, Interval::new(0.0, Real::INFINITY)))
+                .min_by(|a, b| a.t.total_cmp(&b.t));
+            match hit {
                 Some(hit) if wi.dot(hit.normal) < 0.0 => to_f64(e.pdf(p, wi, hit.t, hit.normal)),
                 _ => 0.0,
             }
