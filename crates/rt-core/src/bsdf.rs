@@ -669,10 +669,10 @@ mod tests {
     fn the_lambert_lobe_samples_directions_with_the_cosine_density_pdf_reports() {
         // 2·10⁵ draws per view, χ² at α ≈ 10⁻⁴ (see `chi_square`).
         let m = Material::flat(Color::ONE);
-        for degrees in [0.0, 70.0] {
-            let wo = at(degrees);
+        // From above, and from below (where the lower side reflects).
+        for (side, wo) in [("above", at(0.0)), ("below", -at(70.0))] {
             assert_samples_follow_the_pdf(
-                &format!("lambert at {degrees}°"),
+                &format!("lambert from {side}"),
                 &Bsdf::new(&m, Vec3::Y, wo),
                 wo,
                 200_000,
