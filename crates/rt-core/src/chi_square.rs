@@ -13,7 +13,7 @@
 //! N samples are drawn and counted per bin (`O_i`). The claimed density is
 //! integrated over each bin in f64 by adaptive Simpson quadrature (nested
 //! for two dimensions, as pbrt-v4's `AdaptiveSimpson2D`) to give the
-//! expected counts `E_i = N·∫_bin pdf`. Three more bins close the books, so
+//! expected counts `E_i = N·∫_bin pdf`. More bins close the books, so
 //! that the expected counts sum to N and a density of the wrong total is
 //! caught: the δ lobes a sample can pick (expected `N·p`, with `p` the
 //! probability the routine says it chose the lobe with), and one for
