@@ -43,6 +43,8 @@ pub mod aabb;
 pub mod bsdf;
 pub mod bvh;
 pub mod camera;
+#[cfg(test)]
+pub(crate) mod chi_square;
 pub mod color;
 pub mod double_double;
 pub mod effects;
