@@ -8,9 +8,10 @@
 //!
 //! The temporary file is `.NAME.rt-view-PID-XXXXXX.tmp` beside the target
 //! `NAME` (PID: the writer's process id, XXXXXX: random), so a leftover says
-//! what it was for and who wrote it. An error, a panic or Ctrl-C removes it;
-//! only a kill that cannot be caught (SIGKILL, a power cut) during the write
-//! leaves it behind. The next write to the same directory then removes every
+//! what it was for and who wrote it. An error or a panic removes it (and
+//! `render` handles Ctrl-C by stopping before the write, never during it);
+//! only a process killed during the write (SIGKILL, a power cut, a signal the
+//! command does not handle) leaves it behind. The next write to the same directory then removes every
 //! such stale file ([`remove_stale_temp_files`]): one whose writer is gone —
 //! on Linux, no `/proc/PID`; elsewhere (or without `/proc`), one untouched
 //! for [`STALE_AGE`]. A live writer's file is never removed. The pid is
@@ -18,6 +19,7 @@
 //! another machine or container could lose a temporary file of a writer
 //! running there, whose rename then fails with an error (never a corrupt
 //! target).
+
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -39,8 +41,10 @@ pub enum Format {
 }
 
 /// A file output whose directory has been checked but which is not written
-/// yet. Nothing exists on disk until it is written, so a command that is
-/// killed part-way leaves no trace.
+/// yet. Nothing exists on disk until it is written, so a command killed
+/// before the write leaves no trace, and one killed during it a temporary
+/// file that the next write to the directory removes (see the module's
+/// documentation).
 pub struct PendingFile {
     target: PathBuf,
     dir: PathBuf,
