@@ -7,7 +7,8 @@
 //! # Temporary files
 //!
 //! The temporary file is `.NAME.rt-view-PID-XXXXXX.tmp` beside the target
-//! `NAME` (PID: the writer's process id, XXXXXX: random), so a leftover says
+//! `NAME` (its first 100 characters; PID: the writer's process id, XXXXXX:
+//! random), so a leftover says
 //! what it was for and who wrote it. An error or a panic removes it (and
 //! `render` handles Ctrl-C by stopping before the write, never during it);
 //! only a process killed during the write (SIGKILL, a power cut, a signal the
@@ -69,6 +70,9 @@ impl PendingFile {
     /// the umask), as `cp` would give it.
     fn temp_file(&self) -> anyhow::Result<tempfile::NamedTempFile> {
         let name = self.target.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        // At most 100 characters of it, so that the temporary name stays
+        // within the 255 bytes a file name may have whatever the target's.
+        let name: String = name.chars().take(100).collect();
         let prefix = format!(".{name}{TEMP_MARK}{}-", std::process::id());
         let mut builder = tempfile::Builder::new();
         builder.prefix(&prefix).suffix(TEMP_SUFFIX);
@@ -257,6 +261,15 @@ mod tests {
         let name = temp.path().file_name().unwrap().to_str().unwrap().to_owned();
         assert!(name.starts_with(&format!(".out.png.rt-view-{}-", std::process::id())), "{name}");
         assert_eq!(temp_file_writer(&name), Some(std::process::id()), "{name}");
+    }
+
+    #[test]
+    fn a_target_with_the_longest_name_a_file_may_have_can_be_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join(format!("{}.png", "é".repeat(125)));
+        assert_eq!(target.file_name().unwrap().len(), 254);
+        PendingFile::create(&target).unwrap().write_bytes(b"done").unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"done");
     }
 
     #[test]
