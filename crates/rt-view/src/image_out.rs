@@ -148,7 +148,7 @@ fn writer_may_be_alive(pid: u32, age: Option<Duration>) -> bool {
 
 /// Removes the temporary files in `dir` that writers killed mid-write left
 /// behind: names [`temp_file_writer`] recognises, of writers that are gone
-/// ([`writer_may_be_alive`]). Best effort: an unreadable directory or a file
+/// (`writer_may_be_alive`). Best effort: an unreadable directory or a file
 /// that cannot be removed is left as it is (the write itself reports real
 /// trouble). Returns the files removed.
 pub fn remove_stale_temp_files(dir: &Path) -> Vec<PathBuf> {
