@@ -3,9 +3,27 @@
 //!
 //! PNG holds 8-bit pixels encoded in the scene's colour space; OpenEXR holds
 //! the linear colours themselves as 32-bit floats (HDR: nothing is clamped).
+//!
+//! # Temporary files
+//!
+//! The temporary file is `.NAME.rt-view-PID-XXXXXX.tmp` beside the target
+//! `NAME` (its first 100 characters; PID: the writer's process id, XXXXXX:
+//! random), so a leftover says
+//! what it was for and who wrote it. An error or a panic removes it (and
+//! `render` handles Ctrl-C by stopping before the write, never during it);
+//! only a process killed during the write (SIGKILL, a power cut, a signal the
+//! command does not handle) leaves it behind. The next write to the same directory then removes every
+//! such stale file ([`remove_stale_temp_files`]): one whose writer is gone —
+//! on Linux, no `/proc/PID`; elsewhere (or without `/proc`), one untouched
+//! for [`STALE_AGE`]. A live writer's file is never removed. The pid is
+//! checked on this machine (in this pid namespace): a directory shared with
+//! another machine or container could lose a temporary file of a writer
+//! running there, whose rename then fails with an error (never a corrupt
+//! target).
 
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 use anyhow::{Context, bail};
 use image::ImageEncoder;
@@ -24,8 +42,10 @@ pub enum Format {
 }
 
 /// A file output whose directory has been checked but which is not written
-/// yet. Nothing exists on disk until it is written, so a command that is
-/// killed part-way leaves no trace.
+/// yet. Nothing exists on disk until it is written, so a command killed
+/// before the write leaves no trace, and one killed during it a temporary
+/// file that the next write to the directory removes (see the module's
+/// documentation).
 pub struct PendingFile {
     target: PathBuf,
     dir: PathBuf,
@@ -44,12 +64,18 @@ impl PendingFile {
         Ok(pending)
     }
 
-    /// A new temporary file beside the target. Temporary files are private
-    /// (0600) by default; the output should get the mode of any new file
-    /// (0666 less the umask), as `cp` would give it.
+    /// A new temporary file beside the target, `.NAME.rt-view-PID-XXXXXX.tmp`
+    /// (see the module's documentation). Temporary files are private (0600)
+    /// by default; the output should get the mode of any new file (0666 less
+    /// the umask), as `cp` would give it.
     fn temp_file(&self) -> anyhow::Result<tempfile::NamedTempFile> {
+        let name = self.target.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        // At most 100 characters of it, so that the temporary name stays
+        // within the 255 bytes a file name may have whatever the target's.
+        let name: String = name.chars().take(100).collect();
+        let prefix = format!(".{name}{TEMP_MARK}{}-", std::process::id());
         let mut builder = tempfile::Builder::new();
-        builder.prefix(".rt-view-").suffix(".tmp");
+        builder.prefix(&prefix).suffix(TEMP_SUFFIX);
         #[cfg(unix)]
         builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
         builder.tempfile_in(&self.dir).with_context(|| {
@@ -70,6 +96,7 @@ impl PendingFile {
         write: impl FnOnce(&mut BufWriter<&std::fs::File>) -> anyhow::Result<()>,
     ) -> anyhow::Result<()> {
         let target = self.target.display().to_string();
+        remove_stale_temp_files(&self.dir);
         let temp = self.temp_file()?;
         let mut out = BufWriter::new(temp.as_file());
         write(&mut out).with_context(|| format!("{target}: cannot write"))?;
@@ -81,6 +108,61 @@ impl PendingFile {
             .with_context(|| format!("{target}: cannot replace"))?;
         Ok(())
     }
+}
+
+/// What marks a temporary file's name: `.NAME` + this + `PID-XXXXXX.tmp`.
+const TEMP_MARK: &str = ".rt-view-";
+/// The end of a temporary file's name.
+const TEMP_SUFFIX: &str = ".tmp";
+
+/// Where there is no `/proc` to ask whether a writer is alive, how long its
+/// temporary file must have been left untouched to count as stale: far
+/// longer than any write takes (a live write keeps touching its file).
+pub const STALE_AGE: Duration = Duration::from_secs(24 * 60 * 60);
+
+/// The pid of the writer of a temporary file named `name`
+/// (`.NAME.rt-view-PID-XXXXXX.tmp`); `None` for any other name.
+pub fn temp_file_writer(name: &str) -> Option<u32> {
+    let rest = name.strip_prefix('.')?.strip_suffix(TEMP_SUFFIX)?;
+    let (_, tail) = rest.rsplit_once(TEMP_MARK)?;
+    let (pid, random) = tail.split_once('-')?;
+    let valid = !pid.is_empty()
+        && pid.bytes().all(|b| b.is_ascii_digit())
+        && !random.is_empty()
+        && random.bytes().all(|b| b.is_ascii_alphanumeric());
+    if valid { pid.parse().ok() } else { None }
+}
+
+/// Whether the writer `pid` of a temporary file last modified `age` ago may
+/// still be writing it: its process exists (Linux, by `/proc/PID`), or,
+/// without `/proc`, the file was touched less than [`STALE_AGE`] ago.
+fn writer_may_be_alive(pid: u32, age: Option<Duration>) -> bool {
+    if pid == std::process::id() {
+        return true;
+    }
+    if cfg!(target_os = "linux") && Path::new("/proc/self").exists() {
+        return Path::new("/proc").join(pid.to_string()).exists();
+    }
+    age.is_none_or(|a| a < STALE_AGE)
+}
+
+/// Removes the temporary files in `dir` that writers killed mid-write left
+/// behind: names [`temp_file_writer`] recognises, of writers that are gone
+/// (`writer_may_be_alive`). Best effort: an unreadable directory or a file
+/// that cannot be removed is left as it is (the write itself reports real
+/// trouble). Returns the files removed.
+pub fn remove_stale_temp_files(dir: &Path) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(dir) else { return Vec::new() };
+    let mut removed = Vec::new();
+    for entry in entries.flatten() {
+        let Some(pid) = entry.file_name().to_str().and_then(temp_file_writer) else { continue };
+        let Ok(meta) = entry.metadata() else { continue };
+        let age = meta.modified().ok().and_then(|m| m.elapsed().ok());
+        if meta.is_file() && !writer_may_be_alive(pid, age) && std::fs::remove_file(entry.path()).is_ok() {
+            removed.push(entry.path());
+        }
+    }
+    removed
 }
 
 /// An image output whose directory has been checked but which is not
@@ -152,5 +234,118 @@ impl PendingImage {
         encode: impl FnOnce(&mut BufWriter<&std::fs::File>) -> image::ImageResult<()>,
     ) -> anyhow::Result<()> {
         self.file.write_with(|out| encode(out).context("cannot encode image"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A process that has run and been waited for, so is gone (its pid could
+    /// be reused only after some 32 768, or 4 million, others started).
+    fn gone_process() -> std::process::Child {
+        let mut child = std::process::Command::new(std::env::current_exe().unwrap())
+            .args(["--list", "--exact", "no such test"])
+            .stdout(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        child.wait().unwrap();
+        child
+    }
+
+    #[test]
+    fn temporary_files_are_named_after_their_target_and_their_writer() {
+        let dir = tempfile::tempdir().unwrap();
+        let pending = PendingFile::create(&dir.path().join("out.png")).unwrap();
+        let temp = pending.temp_file().unwrap();
+        let name = temp.path().file_name().unwrap().to_str().unwrap().to_owned();
+        assert!(name.starts_with(&format!(".out.png.rt-view-{}-", std::process::id())), "{name}");
+        assert_eq!(temp_file_writer(&name), Some(std::process::id()), "{name}");
+    }
+
+    #[test]
+    fn a_target_with_the_longest_name_a_file_may_have_can_be_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join(format!("{}.png", "é".repeat(125)));
+        assert_eq!(target.file_name().unwrap().len(), 254);
+        PendingFile::create(&target).unwrap().write_bytes(b"done").unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"done");
+    }
+
+    #[test]
+    fn only_names_of_the_temporary_file_pattern_have_a_writer() {
+        assert_eq!(temp_file_writer(".out.png.rt-view-1234-aB3xYz.tmp"), Some(1234));
+        // A target whose own name holds the mark: the last one counts.
+        assert_eq!(temp_file_writer(".a.rt-view-9-x.png.rt-view-77-q1.tmp"), Some(77));
+        for other in [
+            "out.png",
+            "out.png.rt-view-1234-aB3xYz.tmp",
+            ".out.png.rt-view-1234-aB3xYz",
+            ".out.png.rt-view--aB3xYz.tmp",
+            ".out.png.rt-view-12a4-aB3xYz.tmp",
+            ".out.png.rt-view-1234-.tmp",
+            ".out.png.rt-view-1234-a.b.tmp",
+            ".out.png.rt-view-1234.tmp",
+            ".out.png.rt-view-99999999999-abc.tmp",
+            ".rt-view-abcdef.tmp",
+        ] {
+            assert_eq!(temp_file_writer(other), None, "{other}");
+        }
+    }
+
+    #[test]
+    fn a_live_writer_is_never_stale_and_a_gone_one_is() {
+        assert!(writer_may_be_alive(std::process::id(), Some(STALE_AGE * 2)));
+        if cfg!(target_os = "linux") {
+            let pid = gone_process().id();
+            assert!(!writer_may_be_alive(pid, Some(Duration::ZERO)));
+            assert!(writer_may_be_alive(1, Some(STALE_AGE * 2)), "init is alive");
+        }
+    }
+
+    #[test]
+    fn stale_temporary_files_go_and_everything_else_stays() {
+        let dir = tempfile::tempdir().unwrap();
+        let gone = gone_process().id();
+        let me = std::process::id();
+        let stale = format!(".out.png.rt-view-{gone}-abc123.tmp");
+        let keep = [
+            format!(".out.png.rt-view-{me}-abc123.tmp"),
+            format!("out.png.rt-view-{gone}-abc123.tmp"),
+            format!(".notes.rt-view-{gone}.tmp"),
+            "out.png".to_owned(),
+        ];
+        for name in keep.iter().chain([&stale]) {
+            std::fs::write(dir.path().join(name), b"x").unwrap();
+        }
+        std::fs::create_dir(dir.path().join(format!(".d.rt-view-{gone}-abc.tmp"))).unwrap();
+        let removed = remove_stale_temp_files(dir.path());
+        if cfg!(target_os = "linux") {
+            assert_eq!(removed, [dir.path().join(&stale)]);
+        }
+        let mut left: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        left.sort();
+        let mut want: Vec<String> = keep.to_vec();
+        want.push(format!(".d.rt-view-{gone}-abc.tmp"));
+        if !cfg!(target_os = "linux") {
+            want.push(stale);
+        }
+        want.sort();
+        assert_eq!(left, want);
+    }
+
+    #[test]
+    fn a_write_removes_the_stale_temporary_files_of_its_directory() {
+        let dir = tempfile::tempdir().unwrap();
+        let gone = gone_process().id();
+        let stale = dir.path().join(format!(".other.exr.rt-view-{gone}-Zz9.tmp"));
+        std::fs::write(&stale, b"half an image").unwrap();
+        let target = dir.path().join("out.txt");
+        PendingFile::create(&target).unwrap().write_bytes(b"done").unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"done");
+        assert_eq!(stale.exists(), !cfg!(target_os = "linux"));
     }
 }

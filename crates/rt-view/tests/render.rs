@@ -2,6 +2,9 @@
 
 mod common;
 
+use std::path::Path;
+use std::time::{Duration, Instant};
+
 use common::{read_png, rt_view, scenes_dir, stderr};
 
 #[test]
@@ -183,16 +186,158 @@ fn spawn_long_render(out: &std::path::Path) -> std::process::Child {
         .unwrap()
 }
 
+/// Starts `rt-view render` of sphere.ron (flat colours: quick to trace) at
+/// `width`×`height` to `out`; a large EXR takes measurable time to encode and
+/// write.
+fn spawn_render(out: &Path, width: u32, height: u32) -> std::process::Child {
+    let scene = scenes_dir().join("sphere.ron");
+    std::process::Command::new(env!("CARGO_BIN_EXE_rt-view"))
+        .args(["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()])
+        .args(["--width", &width.to_string(), "--height", &height.to_string(), "--spp", "1"])
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap()
+}
+
+/// The names in `dir` of temporary files (`.NAME.rt-view-PID-XXXXXX.tmp`)
+/// with their writers' pids and sizes.
+fn temp_files(dir: &Path) -> Vec<(String, u32, u64)> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| {
+            let e = e.ok()?;
+            let name = e.file_name().into_string().ok()?;
+            let pid = rt_view::image_out::temp_file_writer(&name)?;
+            Some((name, pid, e.metadata().ok()?.len()))
+        })
+        .collect()
+}
+
+/// The names of the files in `dir`, sorted.
+fn names(dir: &Path) -> Vec<String> {
+    let mut n: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    n.sort();
+    n
+}
+
+/// Polls `dir` every millisecond until `child` has written bytes into its
+/// temporary file (its write phase began: `true`) or has exited (`false`).
+fn wait_for_write_phase(child: &mut std::process::Child, dir: &Path) -> bool {
+    loop {
+        if temp_files(dir).iter().any(|(_, pid, size)| *pid == child.id() && *size > 0) {
+            return true;
+        }
+        if child.try_wait().unwrap().is_some() {
+            return false;
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+}
+
+/// SIGKILL cannot be caught: a render killed while it writes leaves its
+/// temporary file. What must hold whenever it is killed: the old output is
+/// untouched (or, killed after the rename, the complete new one is there),
+/// nothing but temporary files of killed writers is left, and the next write
+/// to the directory removes them. Ten kills: six at delays spread over a
+/// whole run (tracing about 60 %, writing 40 % of it, measured first), four
+/// at delays spread over the write phase once the temporary file is seen to
+/// grow (polled every millisecond), so that some land mid-write whatever the
+/// machine's speed. About 3 s.
 #[test]
-fn a_render_killed_part_way_leaves_no_file_behind() {
+fn a_render_killed_at_any_moment_keeps_the_old_output_and_the_next_write_removes_its_temporary_file() {
     let dir = tempfile::tempdir().unwrap();
-    let mut child = spawn_long_render(&dir.path().join("big.png"));
-    std::thread::sleep(std::time::Duration::from_millis(300));
-    assert!(child.try_wait().unwrap().is_none(), "the render finished too fast to interrupt");
-    child.kill().unwrap();
-    child.wait().unwrap();
-    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
-    assert!(left.is_empty(), "left behind: {left:?}");
+    let (width, height) = (1600, 1200);
+    // A whole run, timed: tracing, then the write phase (the temporary file
+    // growing, synced, renamed).
+    let reference = dir.path().join("reference.exr");
+    let start = Instant::now();
+    let mut child = spawn_render(&reference, width, height);
+    assert!(wait_for_write_phase(&mut child, dir.path()), "no temporary file seen");
+    let trace = start.elapsed();
+    assert!(child.wait().unwrap().success());
+    let write = start.elapsed() - trace;
+    let full = std::fs::read(&reference).unwrap();
+    eprintln!("tracing {trace:?}, writing {write:?} ({} bytes)", full.len());
+
+    let out = dir.path().join("out.exr");
+    std::fs::write(&out, b"previous image").unwrap();
+    let old_output = |what: &str| {
+        // The old output, or (killed after the rename) the complete new one.
+        let now = std::fs::read(&out).unwrap_or_else(|e| panic!("{what}: the output is gone: {e}"));
+        assert!(now == b"previous image" || now == full, "{what}: the output is neither old nor complete");
+        std::fs::write(&out, b"previous image").unwrap();
+    };
+    let mut killed = Vec::new();
+    let mut left_mid_write = 0;
+    // Kills at delays spread over the whole run, then at delays spread over
+    // the write phase once it is seen to have begun.
+    let run = trace + write;
+    let at_times = (0..6).map(|i| (false, run * (2 * i + 1) / 12));
+    let in_write = (0..4).map(|j| (true, write * j / 4));
+    for (after_write_began, delay) in at_times.chain(in_write) {
+        let mut child = spawn_render(&out, width, height);
+        let writing = after_write_began && wait_for_write_phase(&mut child, dir.path());
+        std::thread::sleep(delay);
+        child.kill().unwrap(); // SIGKILL: nothing can clean up.
+        child.wait().unwrap();
+        killed.push(child.id());
+        let what =
+            format!("killed {delay:?} after {}", if writing { "the write began" } else { "the start" });
+        old_output(&what);
+        let temps = temp_files(dir.path());
+        // Only temporary files of killed writers are left, named for the output.
+        for (name, pid, _) in &temps {
+            assert!(killed.contains(pid) && name.starts_with(".out.exr.rt-view-"), "{what}: {name}");
+        }
+        assert_eq!(names(dir.path()).len(), 2 + temps.len(), "{what}: {:?}", names(dir.path()));
+        if writing {
+            // Its own write removed the temporary files of those killed before.
+            assert!(temps.iter().all(|(_, pid, _)| *pid == child.id()), "{what}: {temps:?}");
+            left_mid_write += temps.len();
+        }
+    }
+    assert!(left_mid_write > 0, "no kill landed in the write phase (write {write:?})");
+    eprintln!(
+        "{} kills, {left_mid_write} of those after the write began left a temporary file",
+        killed.len()
+    );
+    // The next render to the same output replaces it and removes what the
+    // killed ones left.
+    let mut child = spawn_render(&out, 64, 48);
+    assert!(child.wait().unwrap().success());
+    assert_eq!(names(dir.path()), ["out.exr", "reference.exr"]);
+    assert_eq!(image::open(&out).unwrap().to_rgb32f().dimensions(), (64, 48));
+}
+
+#[test]
+fn a_write_never_removes_a_live_writers_temporary_file() {
+    let dir = tempfile::tempdir().unwrap();
+    // This test's process is alive; a process that has been waited for is not.
+    let live = format!(".out.png.rt-view-{}-abc123.tmp", std::process::id());
+    let mut gone = std::process::Command::new(env!("CARGO_BIN_EXE_rt-view"))
+        .args(["cast", "/no/such/scene.ron"])
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    gone.wait().unwrap();
+    let stale = format!(".out.png.rt-view-{}-abc123.tmp", gone.id());
+    let unrelated = ".out.png.tmp";
+    for name in [&live, &stale, unrelated] {
+        std::fs::write(dir.path().join(name), b"half an image").unwrap();
+    }
+    let out = dir.path().join("out.png");
+    let scene = scenes_dir().join("sphere.ron");
+    let args =
+        ["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--width", "8", "--height", "6"];
+    let o = rt_view(&args, "");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut want = vec![live, unrelated.to_owned(), "out.png".to_owned()];
+    if !cfg!(target_os = "linux") {
+        want.push(stale); // Elsewhere only an age limit tells a stale file.
+    }
+    want.sort();
+    assert_eq!(names(dir.path()), want);
 }
 
 #[test]

@@ -549,19 +549,94 @@ mod tests {
         drop_textures(&ctx, v);
     }
 
+    /// The numbers in `text` after `prefix` on its line, up to `end`, split at
+    /// ", " (the inspection's "(x, y, z)" lists).
+    fn numbers_after<T: std::str::FromStr>(text: &str, prefix: &str, end: &str) -> Vec<T>
+    where
+        T::Err: std::fmt::Display,
+    {
+        let line =
+            text.lines().find_map(|l| l.strip_prefix(prefix)).unwrap_or_else(|| panic!("{prefix}: {text}"));
+        let list = line.split(end).next().unwrap();
+        list.split(", ").map(|n| n.parse().unwrap_or_else(|e| panic!("{n:?} in {line:?}: {e}"))).collect()
+    }
+
     #[test]
     fn inspecting_a_pixel_tells_what_cast_tells_and_its_linear_colour() {
         let ctx = egui::Context::default();
         let mut v = viewer(&ctx, Some(scenes().join("sphere.ron")));
         finish_render(&ctx, &mut v);
-        // sphere.ron is 320×240 with the sphere in the middle.
-        let size = v.image.full_size(v.source.scene());
-        let look = |p| inspect(v.source.scene(), v.camera.settings(), size, v.scheduler.shown_job(), p);
-        let text = look([160, 120]);
-        assert!(text.starts_with("pixel (160, 120)\nlinear ("), "{text}");
-        assert!(text.contains("object 0 (Sphere, material \"red\"), primitive 0"), "{text}");
-        assert!(text.contains("normal ("), "{text}");
-        assert!(look([0, 0]).contains("no hit: background"));
+        // sphere.ron is 320×240 with the sphere in the middle, flat colours (no lights).
+        let scene = v.source.scene();
+        let size = v.image.full_size(scene);
+        assert_eq!(size, (320, 240));
+        let job = v.scheduler.shown_job();
+        let spp = job.expect("a finished job").spec().spp;
+        let look = |p| inspect(scene, v.camera.settings(), size, job, p);
+        // What `rt-view cast --pixels` prints for pixel (x, y): its CSV row
+        // ox,oy,oz,dx,dy,dz,hit,t,object,primitive,nx,ny,nz, split.
+        let view = scene.view_plane(size.0, size.1).unwrap();
+        let cast = |x: u32, y: u32| -> Vec<String> {
+            let row = crate::commands::cast::rays_rows(scene, &[view.center_ray(x, y)]);
+            row.trim_end().split(',').map(str::to_owned).collect()
+        };
+        let hits = |x: u32, y: u32| cast(x, y)[6] == "1";
+        let (mut hit_count, mut miss_count) = (0, 0);
+        // Every 8th pixel, both ways, and the centre: 1200 pixels.
+        let pixels = (0..240).step_by(8).flat_map(|y| (0..320).step_by(8).map(move |x| (x, y)));
+        for (x, y) in pixels.chain([(160, 120)]) {
+            let text = look([x, y]);
+            let row = cast(x, y);
+            assert!(text.starts_with(&format!("pixel ({x}, {y})\n")), "{text}");
+            // Numbers printed with `{}` round-trip, so they compare exactly.
+            let num = |i: usize| -> rt_core::Real { row[i].parse().unwrap() };
+            let linear: Vec<f64> = numbers_after(&text, "linear (", ")");
+            assert_eq!(linear.len(), 3, "{text}");
+            assert!(text.contains(&format!("), {spp} spp\n")), "{text}");
+            // Interior pixels (the four neighbours agree) are one flat colour:
+            // the material's or the background's, printed to 4 decimals.
+            let interior = [(x.saturating_sub(1), y), (x + 1, y), (x, y.saturating_sub(1)), (x, y + 1)]
+                .iter()
+                .all(|&(a, b)| a >= 320 || b >= 240 || cast(a, b)[6..9] == row[6..9]);
+            if row[6] == "1" {
+                hit_count += 1;
+                let object: usize = row[8].parse().unwrap();
+                let expected = format!(
+                    "object {object} ({}, material \"{}\"), primitive {}",
+                    scene.objects()[object].primitive.kind(),
+                    scene.material_names()[scene.objects()[object].material],
+                    row[9]
+                );
+                let object_line = text.lines().find(|l| l.starts_with("object ")).expect("object line");
+                assert_eq!(object_line, expected, "{text}");
+                let t_line = text.lines().find_map(|l| l.strip_prefix("t ")).expect("t line");
+                let (t, distance) = t_line.split_once(", distance ").expect("t, distance");
+                let (t, distance): (rt_core::Real, rt_core::Real) =
+                    (t.parse().unwrap(), distance.parse().unwrap());
+                assert_eq!(t, num(7), "{text}");
+                let dir = rt_core::Vec3::new(num(3), num(4), num(5));
+                assert_eq!(distance, t * dir.length(), "{text}");
+                let normal: Vec<rt_core::Real> = numbers_after(&text, "normal (", ")");
+                assert_eq!(normal, [num(10), num(11), num(12)], "{text}");
+                let color = scene.materials()[scene.objects()[object].material].color;
+                if interior {
+                    for (got, want) in linear.iter().zip(color.to_array()) {
+                        assert!((got - want as f64).abs() <= 0.5e-4, "{text}: want {color}");
+                    }
+                }
+            } else {
+                miss_count += 1;
+                assert!(text.ends_with("\nno hit: background"), "{text}");
+                assert!(!text.contains("object ") && !text.contains("normal ("), "{text}");
+                if interior {
+                    for (got, want) in linear.iter().zip(scene.background.to_array()) {
+                        assert!((got - want as f64).abs() <= 0.5e-4, "{text}: want {}", scene.background);
+                    }
+                }
+            }
+        }
+        assert!(hits(160, 120) && !hits(0, 0));
+        assert!(hit_count > 100 && miss_count > 100, "{hit_count} hits, {miss_count} misses");
         drop_textures(&ctx, v);
     }
 

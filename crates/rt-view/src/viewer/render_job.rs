@@ -386,14 +386,20 @@ impl<F: Fn() + Send + Sync> Worker<F> {
                 Row { generation: self.generation, y, samples: samples.end, pixels }
             })
             .collect();
-        drop(sums);
         self.shared.rays.fetch_add(counts.total(), Ordering::Relaxed);
+        // Sent before the band is unlocked (the channel never blocks): its
+        // next pass waits for the lock, so cannot send its rows first. A
+        // band's rows arrive in pass order, and the last applied is the final.
+        let sent = finished.len();
         for row in finished {
             self.shared.rows_rendered.fetch_add(1, Ordering::Relaxed);
             if self.shared.cancelled() || self.tx.send(row).is_err() {
                 self.shared.cancel.store(true, Ordering::Relaxed);
                 return false;
             }
+        }
+        drop(sums);
+        for _ in 0..sent {
             (self.on_row)();
         }
         true
