@@ -275,6 +275,58 @@ mod tests {
     }
 
     #[test]
+    fn a_ray_that_touches_the_sphere_at_one_point_hits_it_there() {
+        // Tangent: f = (1, 0, −5), d = +z, so b = 5, l = (1, 0, 0) and
+        // Δ = a·(r² − |l|²) = 0 exactly; the double root is t = 5, at (1, 0, 0).
+        let s = unit_sphere_at(Vec3::ZERO);
+        let hit = s.intersect(&Ray::new(Vec3::new(1.0, 0.0, -5.0), Vec3::Z), ALL).unwrap();
+        assert_eq!((hit.t, hit.normal), (5.0, Vec3::X));
+        // A hair further out it misses.
+        let beside = Ray::new(Vec3::new(1.0 + 4.0 * Real::EPSILON, 0.0, -5.0), Vec3::Z);
+        assert_eq!(s.intersect(&beside, ALL), None);
+    }
+
+    #[test]
+    fn surface_points_lie_on_the_sphere_within_their_error_bound() {
+        // Points near the surface of spheres of several radii and centres,
+        // moved onto it: each coordinate is within the stated bound of the
+        // exact projection c + (p − c)·r/|p − c| (computed in f64), and the
+        // bound is a few ulps of the coordinates, not more.
+        use crate::real::{to_f64, widen};
+        for (center, radius) in [
+            (Vec3::ZERO, 1.0 as Real),
+            (Vec3::new(3.0, -2.0, 5.0), 2.5),
+            (Vec3::new(-1e3, 40.0, 7e2), 0.01),
+            (Vec3::new(1e4, 1e4, -1e4), 300.0),
+        ] {
+            let s = Sphere::new(center, radius).unwrap();
+            for k in 0..500u32 {
+                let rng = &mut crate::sampler::SampleRng::new(k, 7, 3);
+                let (u, v) = rng.next_pair();
+                let z = 1.0 - 2.0 * u;
+                let phi = 2.0 * std::f64::consts::PI as Real * v;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let dir = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+                let p = center + dir * radius * (1.0 + 1e-3 * (rng.next_pair().0 - 0.5));
+                let sp = s.surface_point(p, dir);
+                let f = widen(p) - widen(center);
+                let exact = widen(center) + f * (to_f64(radius) / f.length());
+                let off = (widen(sp.p) - exact).abs();
+                let bound = widen(sp.error);
+                assert!(
+                    off.cmple(bound).all(),
+                    "{center} r {radius}: {} off the sphere by {off}, bound {bound}",
+                    sp.p
+                );
+                let ulps = widen(center.abs() + Vec3::splat(radius)) * to_f64(Real::EPSILON);
+                assert!(bound.cmple(ulps * 8.0).all(), "bound {bound} against ulps {ulps}");
+            }
+            // The centre itself has no direction: it goes along the normal given.
+            assert_eq!(s.surface_point(center, Vec3::Y).p, center + Vec3::Y * radius, "{center} r {radius}");
+        }
+    }
+
+    #[test]
     fn bounds_contain_the_sphere() {
         let b = Sphere::new(Vec3::new(1.0, 2.0, 3.0), 0.5).unwrap().bounds();
         assert_eq!((b.min(), b.max()), (Vec3::new(0.5, 1.5, 2.5), Vec3::new(1.5, 2.5, 3.5)));
