@@ -327,6 +327,27 @@ mod tests {
     }
 
     #[test]
+    fn the_textbook_quadratic_agrees_with_the_careful_test_where_nothing_cancels() {
+        // Spheres a few radii from the ray's origin, from outside and from
+        // inside: the two methods solve the same quadratic, so they hit and
+        // miss alike and agree on t and the normal to rounding (f32: 10⁻⁵).
+        for (center, radius) in [(Vec3::new(0.5, -0.3, 4.0), 1.5 as Real), (Vec3::new(0.2, 0.1, 0.3), 2.0)] {
+            let s = Sphere::new(center, radius).unwrap();
+            for k in 0..400u32 {
+                let (u, v) = crate::sampler::SampleRng::new(k, 11, 5).next_pair();
+                let dir = Vec3::new(u - 0.5, v - 0.5, 1.0) * (1.0 + u);
+                let ray = Ray::new(Vec3::ZERO, dir);
+                let (careful, textbook) = (s.intersect(&ray, ALL), s.intersect_textbook(&ray, ALL));
+                assert_eq!(careful.is_some(), textbook.is_some(), "{center}, ray {k}");
+                if let (Some(c), Some(t)) = (careful, textbook) {
+                    assert!((c.t - t.t).abs() <= 1e-5 * c.t, "{center}, ray {k}: t {} against {}", t.t, c.t);
+                    assert!((c.normal - t.normal).length() <= 1e-4, "{center}, ray {k}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn bounds_contain_the_sphere() {
         let b = Sphere::new(Vec3::new(1.0, 2.0, 3.0), 0.5).unwrap().bounds();
         assert_eq!((b.min(), b.max()), (Vec3::new(0.5, 1.5, 2.5), Vec3::new(1.5, 2.5, 3.5)));
