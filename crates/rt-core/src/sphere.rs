@@ -279,7 +279,11 @@ mod tests {
         // Tangent: f = (1, 0, −5), d = +z, so b = 5, l = (1, 0, 0) and
         // Δ = a·(r² − |l|²) = 0 exactly; the double root is t = 5, at (1, 0, 0).
         let s = unit_sphere_at(Vec3::ZERO);
-        let hit = s.intersect(&Ray::new(Vec3::new(1.0, 0.0, -5.0), Vec3::Z), ALL).unwrap();
+        let tangent = Ray::new(Vec3::new(1.0, 0.0, -5.0), Vec3::Z);
+        let hit = s.intersect(&tangent, ALL).unwrap();
+        assert_eq!((hit.t, hit.normal), (5.0, Vec3::X));
+        // The textbook form's b² − 4ac = 100 − 4·1·25 = 0 exactly too.
+        let hit = s.intersect_textbook(&tangent, ALL).unwrap();
         assert_eq!((hit.t, hit.normal), (5.0, Vec3::X));
         // A hair further out it misses.
         let beside = Ray::new(Vec3::new(1.0 + 4.0 * Real::EPSILON, 0.0, -5.0), Vec3::Z);
