@@ -1030,25 +1030,48 @@ mod tests {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
         /// Random scenes of every primitive with random materials (every lobe,
         /// emissive or not), lit by a point light and the background: no
-        /// sample of any pixel is NaN, infinite or negative.
+        /// sample of any pixel is NaN, infinite or negative. Spheres and
+        /// boxes whose material is drawn translucent get a random medium
+        /// (albedo, mean free paths from 0.02 to 2 per channel, anisotropy),
+        /// as does, in some scenes, a closed icosahedron; meshes carry
+        /// tilted shading normals and texture coordinates, and some
+        /// materials a random texture.
         #[test]
         fn no_sample_is_nan_infinite_or_negative_on_random_scenes(
             parts in crate::test_support::random_parts(5.0, 6),
             materials in proptest::collection::vec(proptest::array::uniform8(0f32..1.0), 6),
+            media in proptest::collection::vec(
+                (proptest::bool::ANY, proptest::array::uniform3(0f32..1.0), proptest::array::uniform3(0.02f32..2.0), -0.9f32..0.9),
+                6,
+            ),
+            textured in proptest::collection::vec(proptest::bool::ANY, 6),
+            texels in proptest::array::uniform4(proptest::array::uniform3(0f32..1.0)),
+            tilt in proptest::array::uniform3(-1.2f32..1.2),
+            uv_scale in -3f32..3.0,
+            icosahedron in proptest::option::of((proptest::array::uniform3(-4f32..4.0), 0.3f32..3.0, 0usize..6)),
             background in 0f32..2.0,
         ) {
             use crate::camera::{Camera, Projection};
             use crate::effects::Lighting;
             use crate::light::{Light, LightKind};
             use crate::material::Material;
+            use crate::medium::Subsurface;
+            use crate::primitive::Primitive;
             use crate::scene::SceneBuilder;
+            use crate::test_support::{icosahedron_mesh, random_primitive_with_attributes, v};
+            use crate::texture::Texture;
             let camera = Camera::new(Vec3::new(0.0, 0.0, -12.0), Vec3::ZERO, Vec3::Y, 60.0, 1.0, Projection::Perspective).unwrap();
             let lighting = Lighting {
                 lights: vec![Light { kind: LightKind::Point { position: Vec3::new(1.0, 6.0, -3.0) }, power: Color::splat(20.0), shadows: true }],
                 global_illumination: Some(GlobalIllumination { max_bounces: 6, russian_roulette: true, max_walk_steps: 256 }),
                 ..Lighting::default()
             };
-            let mut b = SceneBuilder::new(camera).image_size(6, 4).background(Color::splat(background)).lighting(lighting);
+            let texture = Texture::new(2, 2, texels.iter().map(|&t| Color::from_array(t)).collect()).unwrap();
+            let mut b = SceneBuilder::new(camera)
+                .image_size(6, 4)
+                .background(Color::splat(background))
+                .lighting(lighting)
+                .texture(std::sync::Arc::new(texture));
             for (i, [c, kd, ks, s, kr, kt, ior, e]) in materials.iter().copied().enumerate() {
                 let (kr, kt) = if kr + kt > 1.0 { (kr / 2.0, kt / 2.0) } else { (kr, kt) };
                 let m = Material {
@@ -1062,12 +1085,20 @@ mod tests {
                     ior: 0.5 + 3.0 * ior,
                     emission: if e > 0.7 { Color::splat(e * 5.0) } else { Color::ZERO },
                     subsurface: None,
-                    texture: None,
+                    texture: textured[i].then_some(0),
                 };
-                b = b.material(format!("m{i}"), m);
+                let (_, albedo, mfp, g) = media[i];
+                let medium = Subsurface { albedo: Color::from_array(albedo), mean_free_path: Color::from_array(mfp), anisotropy: g };
+                b = b.material(format!("m{i}"), m).material(format!("t{i}"), Material { subsurface: Some(medium), ..m });
             }
-            for (i, p) in crate::test_support::primitives_of(parts).into_iter().enumerate() {
-                b = b.object(p, format!("m{}", i % 6));
+            for (i, (k, p, q, r)) in parts.into_iter().enumerate() {
+                let Some(primitive) = random_primitive_with_attributes(k, p, q, r, tilt, uv_scale) else { continue };
+                let closed = matches!(primitive, Primitive::Sphere(_) | Primitive::Aabb(_));
+                let kind = if closed && media[i % 6].0 { "t" } else { "m" };
+                b = b.object(primitive, format!("{kind}{}", i % 6));
+            }
+            if let Some((center, radius, material)) = icosahedron {
+                b = b.object(Primitive::Mesh(icosahedron_mesh(v(center), radius as Real)), format!("t{material}"));
             }
             // Some polygons cannot glow (self-crossing ones); skip those scenes.
             let Ok(s) = b.build() else { return Ok(()) };
