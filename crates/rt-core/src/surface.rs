@@ -93,7 +93,7 @@ mod tests {
 
     /// The f32 point `a` moved by `centre` (rounded to f32, as a scene file's would be).
     fn moved(a: [f32; 3], centre: Vec3) -> [f32; 3] {
-        [0, 1, 2].map(|i| (a[i] as Real + centre[i]) as f32)
+        [0, 1, 2].map(|i| crate::real::to_f32(a[i] as Real + centre[i]))
     }
 
     const ALL: Interval = Interval::new(0.0, Real::INFINITY);

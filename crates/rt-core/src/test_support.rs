@@ -8,7 +8,7 @@ use crate::mesh::Mesh;
 use crate::plane::Plane;
 use crate::polygon::Polygon;
 use crate::primitive::Primitive;
-use crate::real::{Real, Vec3};
+use crate::real::{Real, Vec3, to_f32};
 use crate::scene::{Scene, SceneBuilder};
 use crate::sphere::Sphere;
 use crate::triangle::Triangle;
@@ -67,7 +67,7 @@ pub fn random_primitive_with_attributes(
     let (positions, triangles) = spread_mesh(p, q, r);
     let n = (v(q) - v(p)).cross(v(r) - v(p)).normalize_or_zero();
     let normals = (0..12).map(|k| n + v(tilt) * (k as Real / 11.0)).collect();
-    let uvs = positions.iter().map(|x| [x.x as f32 * uv_scale, x.z as f32 * uv_scale]).collect();
+    let uvs = positions.iter().map(|x| [to_f32(x.x) * uv_scale, to_f32(x.z) * uv_scale]).collect();
     Mesh::new(positions, triangles)?.with_vertex_attributes(normals, uvs).map(Primitive::Mesh)
 }
 
