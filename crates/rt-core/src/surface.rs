@@ -205,7 +205,7 @@ mod tests {
         // on each, a ray spawned at any slope to either side never hits the
         // triangle again. The computed normal of a sliver is off by up to
         // γ·|e₁|·|e₂|/|e₁ × e₂|, not γ: with the latter, half of these rays
-        // came back near the origin in f64 (a tenth of them in f32).
+        // came back near the origin in f64 (up to a fifth in f32).
         use crate::triangle::Triangle;
         for far in [0.0 as Real, 1e3, 5e4] {
             for height in [1e-1 as Real, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-8] {
