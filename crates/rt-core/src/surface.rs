@@ -111,7 +111,9 @@ mod tests {
         /// direction; the ray leaves at any slope down to |d·n| = 10⁻⁷ and
         /// exactly along the surface (d·n = 0 as computed; for a solid, the
         /// side the offset rule then picks is the outside), towards any
-        /// point of the primitive.
+        /// point of the primitive. The random mesh's triangles include
+        /// slivers, some of them degenerate but for rounding (three of its
+        /// vertices may lie on a line).
         #[test]
         fn spawned_rays_never_hit_their_own_surface_again(
             kind in 0u8..6,
@@ -167,13 +169,6 @@ mod tests {
             let origin = at(from);
             let ray = Ray::new(origin, target - origin);
             let Some(hit) = primitive.intersect(&ray, ALL) else { return Ok(()) };
-            if let Primitive::Mesh(m) = &primitive
-                && !well_shaped(m.triangle(hit.primitive))
-            {
-                // Some of the mesh's triangles are slivers (three of its
-                // vertices may lie on a line).
-                return Ok(());
-            }
             let sp = primitive.surface_point(hit.primitive, hit.normal, ray.at(hit.t));
             // Leave along the surface, tilted off it by `slope` (or not at all).
             let n = hit.normal;
