@@ -611,7 +611,7 @@ mod tests {
                         // The bound tells N from N ± 1 (the nearer, N + 1, is
                         // ρ^(N+1) away); roulette's paths are noisier (σ per
                         // sample 0.6 against 0.15 at ρ = 0.5, 3.9 against 0.33 at
-                        // ρ = 0.8), its bound 4 to 12 times wider.
+                        // ρ = 0.8), its bound 3 to 8 times wider with twice the samples.
                         let gap = exact(max_bounces + 1) - exact(max_bounces);
                         assert!(2.0 * bound < gap, "{what}: bound {bound} cannot tell N ± 1 apart");
                     }
