@@ -8,7 +8,7 @@ use crate::mesh::Mesh;
 use crate::plane::Plane;
 use crate::polygon::Polygon;
 use crate::primitive::Primitive;
-use crate::real::{Real, Vec3};
+use crate::real::{Real, Vec3, to_f32};
 use crate::scene::{Scene, SceneBuilder};
 use crate::sphere::Sphere;
 use crate::triangle::Triangle;
@@ -30,14 +30,57 @@ pub fn random_primitive(kind: u8, p: [f32; 3], q: [f32; 3], r: [f32; 3]) -> Opti
         3 => Triangle::new(v(p), v(q), v(r)).ok().map(Primitive::Triangle),
         4 => Polygon::new(vec![v(p), v(q), v(q) + v(r) - v(p), v(r)]).ok().map(Primitive::Polygon),
         _ => {
-            let (a, b, c) = (v(p), v(q), v(r));
-            let spread = |k: usize, m: usize| (k * m % 12) as Real / 11.0;
-            let positions: Vec<Vec3> =
-                (0..12).map(|k| a + (b - a) * spread(k, 7) + (c - a) * spread(k, 5)).collect();
-            let triangles = (0..10u32).map(|k| [k, k + 1, (k + 2) % 12]).collect();
+            let (positions, triangles) = spread_mesh(p, q, r);
             Mesh::new(positions, triangles).map(Primitive::Mesh)
         }
     }
+}
+
+/// The vertices and triangles of [`random_primitive`]'s mesh: ten
+/// triangles over twelve vertices spread across the triangle (p, q, r).
+fn spread_mesh(p: [f32; 3], q: [f32; 3], r: [f32; 3]) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let (a, b, c) = (v(p), v(q), v(r));
+    let spread = |k: usize, m: usize| (k * m % 12) as Real / 11.0;
+    let positions = (0..12).map(|k| a + (b - a) * spread(k, 7) + (c - a) * spread(k, 5)).collect();
+    let triangles = (0..10u32).map(|k| [k, k + 1, (k + 2) % 12]).collect();
+    (positions, triangles)
+}
+
+/// [`random_primitive`], with shading normals and texture coordinates at
+/// every vertex where it is a mesh (other primitives have neither): vertex
+/// k's normal is the normal of (p, q, r) plus `tilt` scaled by k/11 (so
+/// normals vary across the mesh, tilted up to about 60° for a tilt of
+/// length 2, and may point either way), and its (u, v) its x and z times
+/// `uv_scale`, so that a texture repeats across it and coordinates run
+/// outside [0, 1].
+pub fn random_primitive_with_attributes(
+    kind: u8,
+    p: [f32; 3],
+    q: [f32; 3],
+    r: [f32; 3],
+    tilt: [f32; 3],
+    uv_scale: f32,
+) -> Option<Primitive> {
+    if kind % 6 != 5 {
+        return random_primitive(kind, p, q, r);
+    }
+    let (positions, triangles) = spread_mesh(p, q, r);
+    let n = (v(q) - v(p)).cross(v(r) - v(p)).normalize_or_zero();
+    let normals = (0..12).map(|k| n + v(tilt) * (k as Real / 11.0)).collect();
+    let uvs = positions.iter().map(|x| [to_f32(x.x) * uv_scale, to_f32(x.z) * uv_scale]).collect();
+    Mesh::new(positions, triangles)?.with_vertex_attributes(normals, uvs).map(Primitive::Mesh)
+}
+
+/// An icosahedron of circumradius `radius` about `center`, wound outward:
+/// a closed mesh, which a translucent material may fill.
+pub fn icosahedron_mesh(center: Vec3, radius: Real) -> Mesh {
+    let (corners, faces) = crate::mesh::icosahedron();
+    let scale = radius / corners[0].iter().map(|x| x * x).sum::<f64>().sqrt() as Real;
+    let positions = corners
+        .iter()
+        .map(|c| center + Vec3::new(c[0] as Real, c[1] as Real, c[2] as Real) * scale)
+        .collect();
+    Mesh::new(positions, faces.to_vec()).unwrap()
 }
 
 /// A scene of `primitives`, one white material, camera at the origin looking along +z.

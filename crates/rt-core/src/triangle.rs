@@ -93,13 +93,25 @@ impl Triangle {
 
 /// `p` projected onto the plane of the triangle `corners` with unit normal
 /// `normal` ([`project_onto_plane`]). The plane itself is uncertain: the
-/// computed normal is off the exact one by an angle of about γ₈ (cross
-/// product and normalisation), which at `p` is `γ₈·|p − a|`, and `d = n·a`
-/// by `γ₃(|a|·|n|)`; both are added to the bound along the normal.
+/// computed normal is off the exact one by an angle of about
+/// `γ₈·|e₁|·|e₂|/|e₁ × e₂|` (e₁ = b − a, e₂ = c − a: the cross product's
+/// rounding, relative to |e₁|·|e₂|, over its length, which is
+/// `|e₁|·|e₂|·sin α` for the corner angle α; γ₈ for a well-shaped
+/// triangle, far more for a sliver), which at `p` is that angle times
+/// `|p − a|`, and `d = n·a` by `γ₃(|a|·|n|)`; both are added to the bound
+/// along the normal.
 pub fn triangle_surface_point(corners: [Vec3; 3], normal: Vec3, p: Vec3) -> SurfacePoint {
     let [a, b, c] = corners;
-    let reach = (p - a).abs().max_element().max((b - a).abs().max_element()).max((c - a).abs().max_element());
-    let plane_error = gamma(8) * 3.0 * reach + gamma(3) * a.abs().dot(normal.abs());
+    let (e1, e2) = (b - a, c - a);
+    let reach = (p - a).abs().max_element().max(e1.abs().max_element()).max(e2.abs().max_element());
+    // The angle: 1/sin α from the edges scaled to their largest component
+    // (as `geometric_normal` does, so nothing overflows or underflows), at
+    // most 1 radian (a triangle degenerate but for rounding has no
+    // direction to speak of; `min` also takes 1 for a NaN or an infinity).
+    let m = e1.abs().max_element().max(e2.abs().max_element());
+    let (f1, f2) = (e1 / m, e2 / m);
+    let angle = (gamma(8) * f1.length() * f2.length() / f1.cross(f2).length()).min(1.0);
+    let plane_error = angle * 3.0 * reach + gamma(3) * a.abs().dot(normal.abs());
     let (p, error) = project_onto_plane(p, normal, normal.dot(a), plane_error);
     SurfacePoint { p, error, normal }
 }
