@@ -11,6 +11,9 @@
 # mutants --shard K/N --sharding round-robin): a sample spread over the
 # whole file, for files too large to run whole in one sitting.
 #
+# MUTANTS_ITERATE=1 tests again only the mutants a previous run of the same
+# file missed or timed out on (cargo mutants --iterate), after new tests.
+#
 # Outcomes go to target/mutants/<file stem>/mutants.out (caught.txt,
 # missed.txt, unviable.txt, timeout.txt). Runs in place (the source is
 # restored after each mutant), so leave the tree alone while it runs.
@@ -40,6 +43,7 @@ for file in "$@"; do
   status=0
   shard=()
   if [[ -n "${MUTANTS_SHARD:-}" ]]; then shard=(--shard "$MUTANTS_SHARD" --sharding round-robin); fi
+  if [[ -n "${MUTANTS_ITERATE:-}" ]]; then shard+=(--iterate); fi
   cargo mutants --in-place -p rt-core -f "$file" "${shard[@]}" -o "target/mutants/$stem" -- --lib -E "$filter" || status=$?
   case $status in 0|2|3) ;; *) exit "$status" ;; esac
 done
