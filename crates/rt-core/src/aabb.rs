@@ -265,6 +265,59 @@ mod tests {
         assert_eq!((h.t, h.normal), (2.0, -Vec3::Z));
     }
 
+    #[test]
+    fn the_six_plane_test_finds_the_slab_tests_face_t_and_normal() {
+        // Rays from outside aimed at random points of a box's faces (well
+        // inside them, so rounding cannot decide), and from inside: both
+        // methods hit the same face at the same t with the same normal.
+        let b = Aabb::new(Vec3::new(-1.0, 0.5, 2.0), Vec3::new(2.0, 1.5, 4.0)).unwrap();
+        for k in 0..600u32 {
+            let rng = &mut crate::sampler::SampleRng::new(k, 3, 9);
+            let (u, v) = rng.next_pair();
+            let (w, side) = rng.next_pair();
+            let target = b.min() + b.size() * Vec3::new(0.1 + 0.8 * u, 0.1 + 0.8 * v, 0.1 + 0.8 * w);
+            let origin = if k % 3 == 0 {
+                b.center() + Vec3::new(u - 0.5, v - 0.5, w - 0.5) * 0.5
+            } else {
+                b.center() + Vec3::new(u - 0.5, side - 0.5, v - 0.5).normalize() * 10.0
+            };
+            let ray = Ray::new(origin, target - origin);
+            let (slab, six) = (b.intersect(&ray, ALL).unwrap(), b.intersect_six_plane(&ray, ALL).unwrap());
+            assert_eq!(slab.normal, six.normal, "ray {k}");
+            assert!(
+                (slab.t - six.t).abs() <= 4.0 * Real::EPSILON * slab.t,
+                "ray {k}: {} vs {}",
+                slab.t,
+                six.t
+            );
+        }
+    }
+
+    #[test]
+    fn surface_points_are_on_their_face_exactly_and_offsets_leave_it() {
+        // Hits far from the origin: the coordinate across the hit face is the
+        // face's own, with zero error, so a ray spawned to either side starts
+        // strictly on that side (one float off the face).
+        let b = Aabb::new(Vec3::new(95.0, -60.0, 20.0), Vec3::new(130.0, -40.0, 33.0)).unwrap();
+        for k in 0..600u32 {
+            let rng = &mut crate::sampler::SampleRng::new(k, 4, 1);
+            let (u, v) = rng.next_pair();
+            let (w, s) = rng.next_pair();
+            let origin = b.center() + Vec3::new(u - 0.5, v - 0.5, w - 0.5).normalize() * (50.0 + 100.0 * s);
+            let ray = Ray::new(origin, b.center() + (Vec3::new(v, w, u) - 0.5) * 10.0 - origin);
+            let Some(hit) = b.intersect(&ray, ALL) else { continue };
+            let sp = b.surface_point(ray.at(hit.t), hit.normal);
+            let axis = hit.normal.abs().max_position();
+            let face = if hit.normal[axis] > 0.0 { b.max()[axis] } else { b.min()[axis] };
+            assert_eq!((sp.p[axis], sp.error[axis]), (face, 0.0), "ray {k}");
+            let (out, back) = (sp.spawn_origin(hit.normal), sp.spawn_origin(-hit.normal));
+            assert!(
+                (out[axis] - face) * hit.normal[axis] > 0.0 && (back[axis] - face) * hit.normal[axis] < 0.0,
+                "ray {k}"
+            );
+        }
+    }
+
     proptest::proptest! {
         /// Random rays against a random box: every hit lies on the box's
         /// surface with a unit axis normal pointing out of the face it is on,
