@@ -266,6 +266,19 @@ mod tests {
     }
 
     #[test]
+    fn a_segment_overlaps_the_box_only_where_it_passes_through_it() {
+        // The unit box from (0, 0, −5) along +z: inside for t in [4, 6].
+        let b = unit_box();
+        let ray = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z);
+        assert!(b.overlaps(&ray, ALL));
+        assert!(b.overlaps(&ray, Interval::new(0.0, 4.0)) && b.overlaps(&ray, Interval::new(6.0, 9.0)));
+        assert!(!b.overlaps(&ray, Interval::new(0.0, 3.9)), "segment ends before the box");
+        assert!(!b.overlaps(&ray, Interval::new(6.1, 9.0)), "segment starts past the box");
+        assert!(!b.overlaps(&Ray::new(Vec3::new(1.5, 0.0, -5.0), Vec3::Z), ALL), "passes beside");
+        assert!(!b.overlaps(&Ray::new(Vec3::new(0.0, 0.0, -5.0), -Vec3::Z), ALL), "points away");
+    }
+
+    #[test]
     fn the_six_plane_test_finds_the_slab_tests_face_t_and_normal() {
         // Rays from outside aimed at random points of a box's faces (well
         // inside them, so rounding cannot decide), and from inside: both
