@@ -150,7 +150,24 @@ mod tests {
         assert!(s.is_empty());
         assert_eq!(s.choose(0.5), None);
         let lit = LightSampler::new(&[], &[], Color::splat(0.5), 4, 1.0);
+        assert!(!lit.is_empty());
         assert_eq!(lit.choose(0.5).unwrap(), (Source::Environment, 1.0));
+    }
+
+    #[test]
+    fn a_number_rounded_up_to_one_still_chooses_the_last_source() {
+        // u is drawn from [0, 1), but a caller's arithmetic may round it up
+        // to 1: u·total then equals the last cumulative power, which every
+        // entry is ≤, and the choice must stay the last source, not run off.
+        let light = |x: Real| Light {
+            kind: LightKind::Point { position: Vec3::new(x, 0.0, 0.0) },
+            power: Color::splat(1.0),
+            shadows: true,
+        };
+        let s = LightSampler::new(&[light(0.0), light(1.0), light(2.0)], &[], Color::ZERO, 4, 1.0);
+        assert_eq!(s.choose(1.0).unwrap().0, Source::Light(2));
+        // The largest number below 1.
+        assert_eq!(s.choose(1.0 - Real::EPSILON / 2.0).unwrap().0, Source::Light(2));
     }
 
     #[test]
