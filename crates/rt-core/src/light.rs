@@ -191,6 +191,58 @@ mod tests {
     use crate::real::{to_f64, widen};
     use crate::sampler::SampleRng;
 
+    fn close(a: Vec3, b: Vec3) -> bool {
+        (a - b).length() <= 1e-5 * b.length().max(1.0)
+    }
+
+    #[test]
+    fn a_point_light_is_seen_along_the_line_to_it_with_inverse_square_falloff() {
+        // Intensity (1, 2, 3) at (1, 5, −2), seen from (4, 1, −2): 5 away
+        // along (−3, 4, 0)/5, irradiance I/25.
+        let light = Light {
+            kind: LightKind::Point { position: Vec3::new(1.0, 5.0, -2.0) },
+            power: Color::new(1.0, 2.0, 3.0),
+            shadows: true,
+        };
+        let s = light.sample_one(Vec3::new(4.0, 1.0, -2.0), (0.3, 0.7)).unwrap();
+        assert!(close(s.to_light, Vec3::new(-0.6, 0.8, 0.0)) && (s.distance - 5.0).abs() < 1e-5, "{s:?}");
+        assert!((s.irradiance - Color::new(1.0, 2.0, 3.0) / 25.0).abs().max_element() < 1e-6, "{s:?}");
+        // At the light itself there is no direction: no sample, never NaN.
+        assert_eq!(light.sample_one(Vec3::new(1.0, 5.0, -2.0), (0.3, 0.7)), None);
+    }
+
+    #[test]
+    fn a_sphere_light_is_a_point_light_from_inside_and_on_it_and_has_radiance_power_over_pi_r_squared() {
+        // Radius 2 at (0, 1, 0), power Φ = (4π, 8π, 12π): radiance
+        // Φ/(π·r²) = (1, 2, 3). Three samples, so each carries a third.
+        let power = Color::new(4.0, 8.0, 12.0) * std::f32::consts::PI;
+        let center = Vec3::new(0.0, 1.0, 0.0);
+        let light =
+            Light { kind: LightKind::Sphere { center, radius: 2.0, samples: 3 }, power, shadows: true };
+        // From inside (1 from the centre) and from its surface (2 away):
+        // towards the centre, what a point light of the same power gives.
+        for p in [Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 1.0, -2.0)] {
+            let s = light.sample(p, 1, (0.5, 0.5)).unwrap();
+            let d = (center - p).length();
+            assert!(close(s.to_light, (center - p) / d) && (s.distance - d).abs() < 1e-5, "from {p}: {s:?}");
+            assert!(
+                (s.irradiance - power / (3.0 * to_f32(d * d))).abs().max_element() < 1e-5,
+                "from {p}: {s:?}"
+            );
+        }
+        // From outside, every sample's irradiance is L/(pdf·n) with L = Φ/(π·r²).
+        let p = Vec3::new(0.0, 1.0, -7.0);
+        let cone = SphereCone::new(7.0, 2.0);
+        for k in 0..3 {
+            let s = light.sample(p, k, (0.25, 0.75)).unwrap();
+            let radiance = s.irradiance * to_f32(cone.pdf()) * 3.0;
+            assert!(
+                (radiance - Color::new(1.0, 2.0, 3.0)).abs().max_element() < 1e-4,
+                "sample {k}: {radiance}"
+            );
+        }
+    }
+
     #[test]
     fn sphere_light_samples_are_uniform_in_the_cone_the_sphere_subtends() {
         // From a point at distance d of a sphere light of radius r: a wide
