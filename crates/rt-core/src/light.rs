@@ -240,6 +240,9 @@ mod tests {
                 (radiance - Color::new(1.0, 2.0, 3.0)).abs().max_element() < 1e-4,
                 "sample {k}: {radiance}"
             );
+            // It ends on the sphere's side that faces p.
+            let on = p + s.to_light * s.distance - center;
+            assert!((on.length() - 2.0).abs() < 1e-4 && on.dot(p - center) > 0.0, "sample {k} ends at {on}");
         }
     }
 
