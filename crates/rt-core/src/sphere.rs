@@ -285,6 +285,12 @@ mod tests {
         // The textbook form's b² − 4ac = 100 − 4·1·25 = 0 exactly too.
         let hit = s.intersect_textbook(&tangent, ALL).unwrap();
         assert_eq!((hit.t, hit.normal), (5.0, Vec3::X));
+        // Straight down onto the pole: the hit is (0, 1, 0) exactly, and both
+        // methods give the pole's normal.
+        let down = Ray::new(Vec3::new(0.0, 5.0, 0.0), -Vec3::Y);
+        for hit in [s.intersect(&down, ALL), s.intersect_textbook(&down, ALL)] {
+            assert_eq!(hit.map(|h| (h.t, h.normal)), Some((4.0, Vec3::Y)));
+        }
         // A hair further out it misses.
         let beside = Ray::new(Vec3::new(1.0 + 4.0 * Real::EPSILON, 0.0, -5.0), Vec3::Z);
         assert_eq!(s.intersect(&beside, ALL), None);
