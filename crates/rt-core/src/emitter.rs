@@ -222,6 +222,51 @@ mod tests {
     use crate::triangle::Triangle;
 
     #[test]
+    fn a_sphere_emitter_is_sampled_off_the_origin_and_never_from_inside_or_on_it() {
+        // Radius 1.5 at (2, 3, −1), seen from (−4, 1, 2): every sample ends on
+        // the sphere's near side, with the cone's density, which `pdf` gives
+        // back. From inside and from its surface (exactly 1.5 from the
+        // centre) its glowing side faces away: no sample, density 0.
+        let center = Vec3::new(2.0, 3.0, -1.0);
+        let e = Emitter::new(0, &Primitive::Sphere(Sphere::new(center, 1.5).unwrap()), Color::ONE).unwrap();
+        let p = Vec3::new(-4.0, 1.0, 2.0);
+        let cone = crate::light::SphereCone::new((center - p).length(), 1.5);
+        for k in 0..64 {
+            let s = e.sample(p, SampleRng::new(k, 1, 1).next_pair()).unwrap();
+            let on = p + s.wi * s.distance - center;
+            assert!((on.length() - 1.5).abs() < 1e-4 && on.dot(p - center) > 0.0, "sample {k} ends at {on}");
+            assert_eq!((s.pdf, e.pdf(p, s.wi, s.distance, on / 1.5)), (cone.pdf(), cone.pdf()));
+        }
+        for q in [center + Vec3::X * 0.5, center + Vec3::Y * 1.5] {
+            assert_eq!(e.sample(q, (0.3, 0.6)), None, "from {q}");
+            assert_eq!(e.pdf(q, Vec3::X, 1.0, Vec3::X), 0.0, "from {q}");
+        }
+    }
+
+    #[test]
+    fn an_emitters_power_is_pi_times_its_radiance_times_its_area() {
+        // Radiance (1, 2, 3): mean L = 2. A right triangle of legs 2 (area 2)
+        // gives π·2·2; a sphere of radius 1.5 (area 9π) gives π·2·9π.
+        let pi = std::f64::consts::PI as Real;
+        let radiance = Color::new(1.0, 2.0, 3.0);
+        let triangle = Triangle::new(Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0)).unwrap();
+        let t = Emitter::new(0, &Primitive::Triangle(triangle), radiance).unwrap();
+        assert!((t.power() - 4.0 * pi).abs() < 1e-5, "{}", t.power());
+        let s = Emitter::new(0, &Primitive::Sphere(Sphere::new(Vec3::ZERO, 1.5).unwrap()), radiance).unwrap();
+        assert!((s.power() - 18.0 * pi * pi).abs() < 1e-4, "{}", s.power());
+    }
+
+    #[test]
+    fn a_number_rounded_up_to_one_still_samples_the_last_triangle() {
+        // u is drawn from [0, 1); rounded up to 1, u·area equals the last
+        // cumulative area and the choice must stay on the last triangle.
+        let b = Aabb::new(Vec3::ZERO, Vec3::ONE).unwrap();
+        let e = Emitter::new(0, &Primitive::Aabb(b), Color::ONE).unwrap();
+        let s = e.sample(Vec3::new(0.5, 0.5, -3.0), (1.0, 0.5));
+        assert!(s.is_none_or(|s| s.pdf.is_finite() && s.wi.is_finite()), "{s:?}");
+    }
+
+    #[test]
     fn box_faces_point_outward_and_cover_its_surface() {
         let b = Aabb::new(Vec3::new(-1.0, 0.0, 2.0), Vec3::new(2.0, 1.0, 4.0)).unwrap();
         let triangles = box_triangles(b.min(), b.max());
