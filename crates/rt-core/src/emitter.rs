@@ -252,6 +252,8 @@ mod tests {
         let triangle = Triangle::new(Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0)).unwrap();
         let t = Emitter::new(0, &Primitive::Triangle(triangle), radiance).unwrap();
         assert!((t.power() - 4.0 * pi).abs() < 1e-5, "{}", t.power());
+        // Its density where a ray meets it edge-on is 0, not infinite.
+        assert_eq!(t.pdf(Vec3::new(-1.0, 0.5, 0.0), Vec3::X, 1.0, Vec3::Z), 0.0);
         let s = Emitter::new(0, &Primitive::Sphere(Sphere::new(Vec3::ZERO, 1.5).unwrap()), radiance).unwrap();
         assert!((s.power() - 18.0 * pi * pi).abs() < 1e-4, "{}", s.power());
     }
