@@ -478,6 +478,81 @@ mod tests {
     }
 
     #[test]
+    fn a_diffuse_and_glossy_mixture_evaluates_to_the_weighted_sum_of_its_lobes() {
+        // f = (1 − ks)·kd·color/π + ks·s·D·G₁(ω_o)·G₁(ω_i)/(4·cos θ_o·cos θ_i),
+        // worked out here in f64 from the formulas of the module's header
+        // (α = √(2/(n + 2)) for the exponent n), at four pairs of directions.
+        let m = material(|m| {
+            (m.diffuse, m.specular, m.shininess) = (0.7, 0.3, 50.0);
+            m.specular_color = Color::new(1.0, 0.9, 0.5);
+        });
+        let n = Vec3::new(0.2, 1.0, -0.1).normalize();
+        let b = Bsdf::new(&m, n, n);
+        let alpha = (2.0f64 / 52.0).sqrt();
+        let (nn, pi) = (widen(n), std::f64::consts::PI);
+        let g1 = |w: DVec3| {
+            let c = w.dot(nn);
+            let tan2 = (1.0 - c * c) / (c * c);
+            2.0 / (1.0 + (1.0 + alpha * alpha * tan2).sqrt())
+        };
+        for (wo, wi) in [
+            (Vec3::new(0.3, 1.0, 0.2), Vec3::new(-0.3, 1.0, -0.2)),
+            (Vec3::new(0.5, 0.6, 0.0), Vec3::new(-0.4, 0.7, 0.1)),
+            (Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.6, 0.3, -0.5)),
+            (Vec3::new(-0.9, 0.4, 0.2), Vec3::new(0.8, 0.5, -0.1)),
+        ] {
+            let (wo, wi) = (wo.normalize(), wi.normalize());
+            let (o, i) = (widen(wo), widen(wi));
+            let h = (o + i).normalize();
+            let c2 = h.dot(nn).powi(2);
+            let d = alpha * alpha / (pi * (c2 * (alpha * alpha - 1.0) + 1.0).powi(2));
+            let ggx = d * g1(o) * g1(i) / (4.0 * o.dot(nn) * i.dot(nn));
+            let got = b.eval(wo, wi);
+            for c in 0..3 {
+                let diffuse = 0.7 * 0.7 * to_f64(m.color[c] as Real) / pi;
+                let expected = diffuse + 0.3 * to_f64(m.specular_color[c] as Real) * ggx;
+                let got = got[c] as f64;
+                assert!(
+                    (got - expected).abs() <= 1e-5 * expected,
+                    "{wo} → {wi}, channel {c}: {got} vs {expected}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_viewer_in_the_tangent_plane_sees_nothing_reflected() {
+        // cos θ_o = 0 exactly: no smooth lobe reflects towards it, and no
+        // direction has a density, whatever the light's side.
+        for (name, m) in materials() {
+            let b = Bsdf::new(&m, Vec3::Y, Vec3::X);
+            for wi in [Vec3::Y, Vec3::new(0.3, 0.8, 0.1).normalize()] {
+                assert_eq!((b.eval(Vec3::X, wi), b.pdf(Vec3::X, wi)), (Color::ZERO, 0.0), "{name}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_shading_normal_given_back_to_front_acts_as_the_same_normal() {
+        // The shading normal is turned to the geometric normal's side first:
+        // −n_s and n_s give the same BSDF.
+        let m = material(|m| m.specular = 0.4);
+        let (ng, ns) = (Vec3::Y, Vec3::new(0.3, 1.0, 0.0).normalize());
+        let wo = Vec3::new(-0.2, 1.0, 0.4).normalize();
+        let (a, b) = (Bsdf::shaded(&m, ng, ns, wo), Bsdf::shaded(&m, ng, -ns, wo));
+        for wi in [Vec3::new(0.5, 0.7, 0.1), Vec3::new(-0.1, 0.9, -0.6), Vec3::new(0.9, 0.2, 0.0)] {
+            let wi = wi.normalize();
+            assert_eq!((a.eval(wo, wi), a.pdf(wo, wi)), (b.eval(wo, wi), b.pdf(wo, wi)), "{wi}");
+            assert!(a.eval(wo, wi).max_element() > 0.0);
+            // Seen from behind the facet, the surface reflects as if both
+            // normals had been given facing the viewer.
+            let (back, front) = (Bsdf::shaded(&m, ng, ns, -wo), Bsdf::shaded(&m, -ng, -ns, -wo));
+            assert_eq!(back.eval(-wo, -wi), front.eval(-wo, -wi), "{wi}");
+            assert!(back.eval(-wo, -wi).max_element() > 0.0, "{wi}");
+        }
+    }
+
+    #[test]
     fn every_lobe_reflects_at_most_what_arrives() {
         for (name, m) in materials() {
             for degrees in [0.0 as Real, 30.0, 60.0, 85.0] {
