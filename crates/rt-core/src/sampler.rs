@@ -238,7 +238,20 @@ mod tests {
                 cells.push((lo, hi));
             }
             assert!((area - 1.0).abs() < 1e-4, "n = {n}: {area}");
-            // No two cells overlap: a point in one is in no other.
+            // No two cells overlap, even in part (a shifted row would overlap
+            // its neighbour and leave a gap elsewhere, with every cell's area
+            // still 1/n).
+            let slack = 1e-5;
+            for (i, (lo, hi)) in cells.iter().enumerate() {
+                for (j, (l, h)) in cells.iter().enumerate().skip(i + 1) {
+                    let apart = hi.0 <= l.0 + slack
+                        || h.0 <= lo.0 + slack
+                        || hi.1 <= l.1 + slack
+                        || h.1 <= lo.1 + slack;
+                    assert!(apart, "n = {n}: cells {i} {:?} and {j} {:?} overlap", (lo, hi), (l, h));
+                }
+            }
+            // A point in one is in no other.
             for (i, (lo, hi)) in cells.iter().enumerate() {
                 let mid = ((lo.0 + hi.0) / 2.0, (lo.1 + hi.1) / 2.0);
                 let inside = |(l, h): &((Real, Real), (Real, Real))| {
@@ -246,6 +259,18 @@ mod tests {
                 };
                 assert_eq!(cells.iter().filter(|c| inside(c)).count(), 1, "n = {n}, cell {i}");
             }
+        }
+    }
+
+    #[test]
+    fn the_largest_jitter_stays_below_one_and_an_index_past_the_count_stays_in_the_last_cell() {
+        // Jitter just below 1 in the last cell gives the largest number below
+        // 1 (not 1, not less); k ≥ n is sample n − 1.
+        let top = 1.0 - Real::EPSILON / 2.0;
+        for n in [1, 5, 16, 17] {
+            let strata = Strata::new(n);
+            assert_eq!(strata.point(n - 1, (top, top)), (top, top), "n = {n}");
+            assert_eq!(strata.point(n + 3, (0.25, 0.75)), strata.point(n - 1, (0.25, 0.75)), "n = {n}");
         }
     }
 
