@@ -263,6 +263,18 @@ mod tests {
     }
 
     #[test]
+    fn the_streams_of_pixels_and_samples_use_every_bit_of_their_state() {
+        // Over 4096 streams, each of the 64 state bits is set in some and
+        // clear in others (a hash losing bits would leave some fixed).
+        let (mut any, mut all) = (0u64, u64::MAX);
+        for k in 0..4096u32 {
+            let state = SampleRng::seeded(k % 64, k / 64, k % 7, 0).0;
+            (any, all) = (any | state, all & state);
+        }
+        assert_eq!((any, all), (u64::MAX, 0));
+    }
+
+    #[test]
     fn the_largest_jitter_stays_below_one_and_an_index_past_the_count_stays_in_the_last_cell() {
         // Jitter just below 1 in the last cell gives the largest number below
         // 1 (not 1, not less); k ≥ n is sample n − 1.
