@@ -178,6 +178,18 @@ mod tests {
     }
 
     #[test]
+    fn coefficients_and_transmittance_follow_from_the_mean_free_paths() {
+        // ℓ = (0.5, 1, 2), albedo (0.2, 0.5, 0.8): σt = 1/ℓ = (2, 1, 0.5),
+        // σs = α·σt, and over distance 2, exp(−σt·2) = (e⁻⁴, e⁻², e⁻¹).
+        let m = medium([0.2, 0.5, 0.8], [0.5, 1.0, 2.0], 0.0);
+        assert_eq!(m.sigma_t(), Color::new(2.0, 1.0, 0.5));
+        assert!((m.sigma_s() - Color::new(0.4, 0.5, 0.4)).abs().max_element() < 1e-6);
+        let t = m.transmittance(2.0);
+        let exact = Color::new((-4.0f32).exp(), (-2.0f32).exp(), (-1.0f32).exp());
+        assert!((t - exact).abs().max_element() < 1e-6, "{t} vs {exact}");
+    }
+
+    #[test]
     fn henyey_greenstein_integrates_to_one_and_its_mean_cosine_is_g() {
         for g in [-0.9f64, -0.3, 0.0, 0.5, 0.95] {
             // Integrate over cos θ in [−1, 1] (times 2π for φ), midpoint rule.
