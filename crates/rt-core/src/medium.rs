@@ -178,6 +178,24 @@ mod tests {
     }
 
     #[test]
+    fn a_walk_whose_densities_would_overflow_keeps_a_finite_weight() {
+        // Hero channel 0 with σt = 100, channel 1 with σt = 1: each scattering
+        // at t = 1 multiplies channel 1's density relative to the hero's by
+        // 0.01·e⁹⁹ ≈ e⁹⁴, past f64's range after four steps. Rescaled, the
+        // weight stays finite, and channel 1's is its contribution over a
+        // third of its density (the others' are negligible beside it):
+        // 3·α₁ⁿ = 3·0.9¹⁰.
+        let m = medium([0.5, 0.9, 0.5], [0.01, 1.0, 0.01], 0.0);
+        let mut w = WalkWeight::new(0.0);
+        for _ in 0..10 {
+            w.scatter(&m, 1.0);
+        }
+        let weight = w.weight();
+        assert!(weight.is_finite() && weight.min_element() >= 0.0, "{weight}");
+        assert!((weight.y - 3.0 * 0.9f32.powi(10)).abs() < 1e-5, "{weight}");
+    }
+
+    #[test]
     fn coefficients_and_transmittance_follow_from_the_mean_free_paths() {
         // ℓ = (0.5, 1, 2), albedo (0.2, 0.5, 0.8): σt = 1/ℓ = (2, 1, 0.5),
         // σs = α·σt, and over distance 2, exp(−σt·2) = (e⁻⁴, e⁻², e⁻¹).
