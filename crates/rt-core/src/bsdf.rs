@@ -521,6 +521,15 @@ mod tests {
     }
 
     #[test]
+    fn only_materials_with_a_diffuse_or_glossy_part_have_smooth_lobes() {
+        // Light sampling is spent only where a smooth lobe can use it.
+        for (name, m) in materials() {
+            let smooth = m.diffuse > 0.0 && m.reflectivity + m.transparency < 1.0 || m.specular > 0.0;
+            assert_eq!(Bsdf::new(&m, Vec3::Y, Vec3::Y).has_smooth_lobes(), smooth, "{name}");
+        }
+    }
+
+    #[test]
     fn a_viewer_in_the_tangent_plane_sees_nothing_reflected() {
         // cos θ_o = 0 exactly: no smooth lobe reflects towards it, and no
         // direction has a density, whatever the light's side.
@@ -627,6 +636,12 @@ mod tests {
         let b = Bsdf::shaded(&m, Vec3::Y, ns, wo);
         assert_eq!(b.normal(), Vec3::Y);
         assert_eq!(b.eval(wo, Vec3::Y), Color::splat(std::f32::consts::FRAC_1_PI));
+        // A viewer exactly in the shading normal's tangent plane is not above
+        // it either: the facet shades.
+        let ns = Vec3::new(1.0, 1.0, 0.0).normalize();
+        let wo = Vec3::new(-1.0, 1.0, 0.0).normalize();
+        assert_eq!(ns.dot(wo), 0.0);
+        assert_eq!(Bsdf::shaded(&m, Vec3::Y, ns, wo).normal(), Vec3::Y);
         // With the normals equal, shaded is the plain BSDF, bit for bit.
         let plain = Bsdf::new(&m, Vec3::Y, wo);
         let same = Bsdf::shaded(&m, Vec3::Y, Vec3::Y, wo);
