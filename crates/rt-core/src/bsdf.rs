@@ -521,6 +521,23 @@ mod tests {
     }
 
     #[test]
+    fn a_glossy_lobe_seen_straight_down_its_normal_samples_finite_directions() {
+        // ω_o = n exactly: the visible-normal frame has no azimuth to start
+        // from and takes a fixed one; every sample is a finite unit vector.
+        let m = material(|m| (m.specular, m.shininess) = (1.0, 30.0));
+        let b = Bsdf::new(&m, Vec3::Y, Vec3::Y);
+        let mut drawn = 0;
+        for k in 0..256u32 {
+            let rng = &mut SampleRng::new(k, 2, 8);
+            // A microfacet reflection below the surface gives no sample.
+            let Some(s) = b.sample(Vec3::Y, rng.next_pair().0, rng.next_pair()) else { continue };
+            assert!(s.wi.is_finite() && (s.wi.length() - 1.0).abs() < 1e-5 && s.weight.is_finite(), "{s:?}");
+            drawn += 1;
+        }
+        assert!(drawn > 200, "{drawn} of 256");
+    }
+
+    #[test]
     fn only_materials_with_a_diffuse_or_glossy_part_have_smooth_lobes() {
         // Light sampling is spent only where a smooth lobe can use it.
         for (name, m) in materials() {
