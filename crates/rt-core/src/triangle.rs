@@ -452,6 +452,157 @@ mod tests {
         assert_eq!(intersect_watertight(a, a, a, &ray, ALL), None);
     }
 
+    /// Triangles to test the methods and bounds on: well shaped at the
+    /// origin, 1 cm at 10³ units, a sliver (corner angle 2·10⁻³ rad) at 50,
+    /// and one 10³ units across.
+    fn test_triangles() -> [[Vec3; 3]; 4] {
+        [
+            [Vec3::new(0.1, -0.2, 0.3), Vec3::new(1.0, 0.2, -0.1), Vec3::new(-0.3, 0.9, 0.4)],
+            [
+                Vec3::new(1e3, -700.0, 400.0),
+                Vec3::new(1e3 + 0.01, -700.0, 400.005),
+                Vec3::new(1e3, -699.99, 400.002),
+            ],
+            [Vec3::new(50.0, 0.0, 3.0), Vec3::new(51.0, 0.3, 3.5), Vec3::new(50.5, 0.151, 3.25)],
+            [Vec3::new(-400.0, 20.0, 0.0), Vec3::new(600.0, -10.0, 30.0), Vec3::new(100.0, 900.0, -60.0)],
+        ]
+    }
+
+    #[test]
+    fn every_method_hits_inside_misses_outside_and_its_weights_rebuild_the_point() {
+        // Rays from random directions through the point with barycentric
+        // weights w (random, some negative: beyond each edge and corner),
+        // skipping points near an edge. Every method hits exactly when all
+        // weights are positive, at the point's t, with weights that agree
+        // with w (the area-ratio test's are unsigned, and equal to w inside)
+        // to 10⁻³ plus what rounding the point and the ray's origin to
+        // `Real` moves them: 8 ulps of the coordinates over the triangle's
+        // least height (5 % for the 1 cm triangle at 10³ and the sliver in
+        // f32, below 10⁻¹⁰ in f64).
+        // Points closer to an edge than 2 % plus that are skipped.
+        for (i, [a, b, c]) in test_triangles().into_iter().enumerate() {
+            let n = geometric_normal(a, b, c).unwrap();
+            let size = (b - a).length().max((c - a).length());
+            let scale = a.abs().max_element().max(1.0);
+            let rounding = 8.0 * Real::EPSILON * scale;
+            let longest = [b - a, c - b, a - c].map(|e| e.length()).into_iter().fold(0.0, Real::max);
+            let height = (b - a).cross(c - a).length() / longest;
+            let tolerance = 1e-3 + rounding / height;
+            for k in 0..400u32 {
+                let rng = &mut crate::sampler::SampleRng::new(k, 13, i as u32);
+                let (u, v) = rng.next_pair();
+                let w = [1.0 - 2.0 * u + v * 0.5, 2.0 * u - 0.5 - 0.2 * v, 0.0];
+                let w = [w[0], w[1], 1.0 - w[0] - w[1]];
+                let nearest_edge = w.iter().map(|w| w.abs()).fold(Real::INFINITY, Real::min);
+                if nearest_edge < 0.02 + tolerance {
+                    continue;
+                }
+                let inside = w.iter().all(|w| *w > 0.0);
+                let target = a * w[0] + b * w[1] + c * w[2];
+                let (s, t) = rng.next_pair();
+                let dir = (n * (0.3 + s) + (b - a).normalize() * (t - 0.5) + (c - a).normalize() * (s - 0.5))
+                    * if k % 2 == 0 { 1.0 } else { -1.0 };
+                let distance = 2.0 * size;
+                let ray = Ray::new(target - dir * (distance / dir.length()), dir);
+                let expected_t = distance / dir.length();
+                // The course's barycentric test gives the weights of the point itself.
+                let course = Triangle::new(a, b, c).unwrap().barycentric(target);
+                for (got, want) in course.into_iter().zip(w) {
+                    assert!((got - want).abs() <= tolerance, "triangle {i}, point {k}: {course:?} for {w:?}");
+                }
+                for method in
+                    [TriangleMethod::Watertight, TriangleMethod::MollerTrumbore, TriangleMethod::AreaRatio]
+                {
+                    let hit = intersect_by(method, a, b, c, &TriangleRay::new(&ray), ALL);
+                    let at = format!("triangle {i}, ray {k}, {method:?}, weights {w:?}");
+                    assert_eq!(hit.is_some(), inside, "{at}");
+                    let Some(hit) = hit else { continue };
+                    let t_tolerance = 1e-3 * expected_t + rounding / dir.length();
+                    assert!((hit.t - expected_t).abs() <= t_tolerance, "{at}: t {} for {expected_t}", hit.t);
+                    for (got, want) in hit.barycentric.into_iter().zip(w) {
+                        assert!((got - want).abs() <= tolerance, "{at}: weights {:?}", hit.barycentric);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_triangle_behind_the_ray_is_missed_even_when_the_range_allows_negative_t() {
+        // The watertight test's sign checks give t > 0 whatever the range,
+        // for both windings (det < 0 and det > 0).
+        let everywhere = Interval::new(Real::NEG_INFINITY, Real::INFINITY);
+        for (origin, dir) in [(Vec3::new(0.2, 0.2, 5.0), Vec3::Z), (Vec3::new(0.2, 0.2, -1.0), -Vec3::Z)] {
+            let ray = Ray::new(origin, dir);
+            let [a, b, c] = tri().corners();
+            for [a, b, c] in [[a, b, c], [a, c, b]] {
+                assert_eq!(
+                    intersect_watertight(a, b, c, &ray, everywhere),
+                    None,
+                    "from {origin} along {dir}"
+                );
+                assert!(intersect_watertight(a, b, c, &Ray::new(origin, -dir), everywhere).is_some());
+            }
+        }
+    }
+
+    #[test]
+    fn edge_functions_keep_their_exact_sign_where_the_products_round_equal() {
+        // x₁y₂ = (1 + ε)² = 1 + 2ε + ε² and y₁x₂ = 1 + 2ε: the rounded
+        // products are equal, the exact edge function is ε² > 0.
+        let eps = Real::EPSILON;
+        let (p0, p1, p2) = (
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(1.0 + eps, 1.0 + 2.0 * eps, 1.0),
+            Vec3::new(1.0, 1.0 + eps, 1.0),
+        );
+        let [e0, ..] = edge_functions(p0, p1, p2);
+        assert!(e0 > 0.0, "e₀ = {e0}");
+        let [e0, ..] = edge_functions(p0, p2, p1);
+        assert!(e0 < 0.0, "e₀ = {e0} with the corners swapped");
+    }
+
+    #[test]
+    fn surface_points_lie_on_the_exact_plane_within_a_tight_bound() {
+        // Points a little off each test triangle's plane (as a rounded o + t·d
+        // would be), moved onto it: the exact distance of the result from the
+        // exact plane through the corners (double-double) is within the bound
+        // along the normal; and that bound is a few ulps of the coordinates
+        // involved — the point's and, through the normal's angle error, the
+        // triangle's size over the sine of its corner angle (the sliver's
+        // 2·10⁻³ rad makes that term 500 times the size), no more.
+        use crate::double_double::{DdVec3, DoubleDouble};
+        use crate::real::{UNIT_ROUNDOFF, to_f64, widen};
+        for (i, [a, b, c]) in test_triangles().into_iter().enumerate() {
+            let n = geometric_normal(a, b, c).unwrap();
+            let (e1, e2) = (b - a, c - a);
+            let exact_n =
+                DdVec3::difference(widen(b), widen(a)).cross(DdVec3::difference(widen(c), widen(a)));
+            let n_length = exact_n.dot(exact_n).sqrt();
+            let sine = e1.cross(e2).length() / (e1.length() * e2.length());
+            let size = e1.length().max(e2.length());
+            for k in 0..300u32 {
+                let rng = &mut crate::sampler::SampleRng::new(k, 17, i as u32);
+                let (u, v) = rng.next_pair();
+                let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+                let (h, _) = rng.next_pair();
+                let p = a + e1 * u + e2 * v + n * ((h - 0.5) * 1e-4 * size);
+                let sp = triangle_surface_point([a, b, c], n, p);
+                let distance = (DdVec3::difference(widen(sp.p), widen(a)).dot(exact_n) / n_length).abs();
+                let bound = widen(sp.error).dot(widen(n).abs());
+                let at = format!("triangle {i}, point {k}: {}", sp.p);
+                assert!(
+                    distance <= DoubleDouble::new(bound),
+                    "{at}: {} off the plane, bound {bound:e}",
+                    distance.to_f64()
+                );
+                let ulps = to_f64(UNIT_ROUNDOFF)
+                    * (widen(p).abs().max_element() * 16.0 + to_f64(size / sine) * 32.0);
+                assert!(bound <= ulps, "{at}: bound {bound:e} against {ulps:e}");
+            }
+        }
+    }
+
     #[test]
     fn a_ray_through_a_shared_edge_hits_one_of_the_two_triangles() {
         // Square split along its diagonal from (0,0) to (1,1); rays along that diagonal.
