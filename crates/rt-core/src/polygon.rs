@@ -303,6 +303,237 @@ pub(crate) mod tests {
         assert!(matches!(Polygon::new(bent), Err(GeometryError::PolygonNotPlanar { .. })));
     }
 
+    /// A random star-shaped polygon (simple: corners at increasing angles
+    /// around a centre, at random radii 0.3–1.3), of 3 to 9 corners, in a
+    /// random plane through `origin`; its corners in the plane's own 2D
+    /// frame (f64) and the frame `(x, y, normal)`. Wound counter-clockwise
+    /// in that frame when `ccw`, so its normal is `normal`, else `−normal`.
+    fn star(seed: u32, origin: Vec3, ccw: bool) -> (Polygon, Vec<(f64, f64)>, [Vec3; 3]) {
+        let rng = &mut crate::sampler::SampleRng::new(seed, 23, 0);
+        let (u, v) = rng.next_pair();
+        let z = 1.0 - 2.0 * u;
+        let phi = 2.0 * std::f64::consts::PI as Real * v;
+        let normal = Vec3::new(
+            (1.0 - z * z).max(0.0).sqrt() * phi.cos(),
+            (1.0 - z * z).max(0.0).sqrt() * phi.sin(),
+            z,
+        );
+        let (x, y) = normal.any_orthonormal_pair();
+        let n = 3 + (seed % 7) as usize;
+        let mut flat: Vec<(f64, f64)> = (0..n)
+            .map(|k| {
+                let (r, jitter) = rng.next_pair();
+                let angle = (k as f64 + 0.8 * crate::real::to_f64(jitter)) / n as f64 * std::f64::consts::TAU;
+                let r = 0.3 + crate::real::to_f64(r);
+                (r * angle.cos(), r * angle.sin())
+            })
+            .collect();
+        if !ccw {
+            flat.reverse();
+        }
+        let points = flat.iter().map(|&(a, b)| origin + x * a as Real + y * b as Real).collect();
+        (Polygon::new(points).unwrap(), flat, [x, y, normal])
+    }
+
+    /// The winding number of the closed 2D polygon `flat` around `p`, by
+    /// summing the signed angles its edges subtend (f64): a different
+    /// algorithm from the crossing count under test.
+    fn winding_number(flat: &[(f64, f64)], p: (f64, f64)) -> i32 {
+        let n = flat.len();
+        let total: f64 = (0..n)
+            .map(|i| {
+                let (a, b) = (flat[i], flat[(i + 1) % n]);
+                let (ax, ay, bx, by) = (a.0 - p.0, a.1 - p.1, b.0 - p.0, b.1 - p.1);
+                (ax * by - ay * bx).atan2(ax * bx + ay * by)
+            })
+            .sum();
+        (total / std::f64::consts::TAU).round() as i32
+    }
+
+    /// The distance from `p` to the closest edge of `flat`.
+    fn edge_distance(flat: &[(f64, f64)], p: (f64, f64)) -> f64 {
+        let n = flat.len();
+        (0..n)
+            .map(|i| {
+                let (a, b) = (flat[i], flat[(i + 1) % n]);
+                let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+                let s = (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+                ((a.0 + s * dx - p.0).powi(2) + (a.1 + s * dy - p.1).powi(2)).sqrt()
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    #[test]
+    fn random_star_polygons_are_hit_exactly_where_their_winding_number_is_nonzero() {
+        // 200 polygons of 3–9 corners in random planes, at the origin and
+        // 10³ from it, wound either way; 60 rays each, from either side,
+        // through points of the plane within the polygon's reach. Points
+        // within 10⁻³ of an edge are skipped (rounding of the point at 10³
+        // in f32 is 6·10⁻⁵). The normal follows the winding, and t is the
+        // distance to the point.
+        for seed in 0..200u32 {
+            let origin = if seed % 2 == 0 { Vec3::ZERO } else { Vec3::new(1e3, -600.0, 300.0) };
+            let ccw = seed % 3 != 0;
+            let (polygon, flat, [x, y, normal]) = star(seed, origin, ccw);
+            let expected_normal = if ccw { normal } else { -normal };
+            // The corners are rounded at 10³ (6·10⁻⁵ in f32), which tilts the plane.
+            let tilt = 1e-5 + 8.0 * Real::EPSILON * origin.abs().max_element() / 0.3;
+            assert!(
+                (polygon.normal() - expected_normal).length() < tilt,
+                "polygon {seed}: normal {}",
+                polygon.normal()
+            );
+            for k in 0..60u32 {
+                let rng = &mut crate::sampler::SampleRng::new(k, 29, seed);
+                let (a, b) = rng.next_pair();
+                let p2 = (crate::real::to_f64(a) * 2.8 - 1.4, crate::real::to_f64(b) * 2.8 - 1.4);
+                if edge_distance(&flat, p2) < 1e-3 {
+                    continue;
+                }
+                let inside = winding_number(&flat, p2) != 0;
+                let target = origin + x * p2.0 as Real + y * p2.1 as Real;
+                let (s, t) = rng.next_pair();
+                let dir = (normal + x * (s - 0.5) + y * (t - 0.5)) * if k % 2 == 0 { 1.0 } else { -1.0 };
+                let ray = Ray::new(target - dir * 3.0, dir);
+                let at = format!("polygon {seed}, point {p2:?}");
+                assert_eq!(polygon.contains_projected(target), inside, "{at}");
+                let hit = polygon.intersect(&ray, ALL);
+                assert_eq!(hit.is_some(), inside, "{at}: hit {hit:?}");
+                if let Some(hit) = hit {
+                    assert!((hit.t - 3.0).abs() < 1e-3, "{at}: t = {}", hit.t);
+                    assert_eq!(hit.normal, polygon.normal());
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn random_star_polygons_are_cut_into_n_minus_2_triangles_that_tile_them() {
+        // Each triangle is wound like the polygon; the triangles' areas sum
+        // to the shoelace area; and random points of the polygon's box lie
+        // in exactly one triangle when inside the polygon, in none outside
+        // (so no two triangles overlap and none pokes out).
+        for seed in 0..200u32 {
+            let (polygon, flat, [x, y, _]) = star(seed, Vec3::new(3.0, -2.0, 1.0), seed % 2 == 0);
+            let triangles = polygon.triangulate().unwrap_or_else(|| panic!("polygon {seed} not cut"));
+            assert_eq!(triangles.len(), flat.len() - 2, "polygon {seed}");
+            let n = flat.len();
+            let shoelace = (0..n)
+                .map(|i| flat[i].0 * flat[(i + 1) % n].1 - flat[(i + 1) % n].0 * flat[i].1)
+                .sum::<f64>();
+            let areas: Real = triangles.iter().map(|[a, b, c]| 0.5 * (*b - *a).cross(*c - *a).length()).sum();
+            assert!(
+                (crate::real::to_f64(areas) - shoelace.abs() / 2.0).abs() < 1e-4,
+                "polygon {seed}: {areas} against {shoelace}"
+            );
+            let local = |p: Vec3| {
+                let q = p - Vec3::new(3.0, -2.0, 1.0);
+                (crate::real::to_f64(q.dot(x)), crate::real::to_f64(q.dot(y)))
+            };
+            for t in &triangles {
+                let normal = (t[1] - t[0]).cross(t[2] - t[0]);
+                assert!(normal.dot(polygon.normal()) > 0.0, "polygon {seed}: a triangle wound the other way");
+            }
+            for k in 0..100u32 {
+                let (a, b) = crate::sampler::SampleRng::new(k, 31, seed).next_pair();
+                let p = (crate::real::to_f64(a) * 2.8 - 1.4, crate::real::to_f64(b) * 2.8 - 1.4);
+                if edge_distance(&flat, p) < 1e-3 {
+                    continue;
+                }
+                let covering = triangles
+                    .iter()
+                    .filter(|t| {
+                        let [a, b, c] = t.map(local);
+                        let on_edge =
+                            [(a, b), (b, c), (c, a)].iter().any(|&(e, f)| edge_distance(&[e, f], p) < 1e-6);
+                        !on_edge && winding_number(&[a, b, c], p) != 0
+                    })
+                    .count();
+                let inside = winding_number(&flat, p) != 0;
+                assert_eq!(covering, usize::from(inside), "polygon {seed}, point {p:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn crossing_or_touching_edges_make_a_polygon_that_cannot_be_cut() {
+        let z = |x: Real, y: Real| Vec3::new(x, y, 0.0);
+        // A lopsided bow tie (so its net area is not 0): edges 0 and 2 cross.
+        let bow_tie = Polygon::new(vec![z(0.0, 0.0), z(2.0, 1.0), z(2.0, 0.0), z(0.0, 2.0)]).unwrap();
+        assert_eq!(bow_tie.triangulate(), None);
+        // The fifth corner, (1, 0), touches edge 0 (from (0, 0) to (2, 0)) without crossing it.
+        let touching = Polygon::new(vec![
+            z(0.0, 0.0),
+            z(2.0, 0.0),
+            z(2.0, 2.0),
+            z(1.5, 2.0),
+            z(1.0, 0.0),
+            z(0.5, 2.0),
+            z(0.0, 2.0),
+        ])
+        .unwrap();
+        assert_eq!(touching.triangulate(), None);
+        // Moved off the edge by 10⁻³ it is simple, and cut into 5 triangles.
+        let apart = Polygon::new(vec![
+            z(0.0, 0.0),
+            z(2.0, 0.0),
+            z(2.0, 2.0),
+            z(1.5, 2.0),
+            z(1.0, 1e-3),
+            z(0.5, 2.0),
+            z(0.0, 2.0),
+        ])
+        .unwrap();
+        assert_eq!(apart.triangulate().map(|t| t.len()), Some(5));
+    }
+
+    #[test]
+    fn a_corner_off_the_plane_is_refused_by_the_tolerance_and_named() {
+        // A unit square's third corner lifted by h: refused, naming corner 2
+        // or its neighbours (the best-fit plane tilts towards it), exactly
+        // when h is a few times the tolerance 10⁻⁴ × diagonal; accepted at
+        // a tenth of it.
+        let square = |h: Real| Polygon::new(vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, h), Vec3::Y]);
+        let tolerance = PLANARITY_TOLERANCE * (2.0 as Real).sqrt();
+        assert!(square(0.1 * tolerance).is_ok());
+        match square(10.0 * tolerance) {
+            Err(GeometryError::PolygonNotPlanar { point, distance, tolerance: t }) => {
+                assert!((t - tolerance).abs() < 1e-6 * tolerance + 16.0 * Real::EPSILON, "tolerance {t}");
+                // Newell's plane through the centroid leaves every corner h/4 off it.
+                assert!((distance - 2.5 * tolerance).abs() < 0.1 * tolerance, "distance {distance}");
+                assert!(point < 4);
+            }
+            other => panic!("{other:?}"),
+        }
+        // A pentagon with one corner lifted: that corner is the furthest.
+        let mut pentagon: Vec<Vec3> = (0..5)
+            .map(|k| {
+                let a = (72.0 * k as Real).to_radians();
+                Vec3::new(a.cos(), a.sin(), 0.0)
+            })
+            .collect();
+        pentagon[3].z = 0.05;
+        assert!(matches!(Polygon::new(pentagon), Err(GeometryError::PolygonNotPlanar { point: 3, .. })));
+    }
+
+    #[test]
+    fn the_box_holds_every_corner_and_no_more_and_surface_points_lie_on_the_plane() {
+        let (polygon, _, _) = star(5, Vec3::new(-4.0, 7.0, 2.0), true);
+        let b = polygon.bounds();
+        for axis in 0..3 {
+            let values = polygon.points().iter().map(|p| p[axis]);
+            assert_eq!(b.min()[axis], values.clone().fold(Real::INFINITY, Real::min));
+            assert_eq!(b.max()[axis], values.fold(Real::NEG_INFINITY, Real::max));
+        }
+        let n = polygon.normal();
+        let p = polygon.points()[0] + n * 0.25 + (polygon.points()[1] - polygon.points()[0]) * 0.3;
+        let sp = polygon.surface_point(p);
+        let d = polygon.points().iter().map(|q| q.dot(n)).sum::<Real>() / polygon.points().len() as Real;
+        assert!((sp.p.dot(n) - d).abs() <= sp.error.dot(n.abs()) + 1e-6, "{} off the plane", sp.p.dot(n) - d);
+        assert!((sp.p - (p - n * 0.25)).length() < 1e-5);
+        assert_eq!(sp.normal, n);
+    }
+
     #[test]
     fn a_slightly_rounded_polygon_far_from_the_origin_is_still_planar() {
         let o = Vec3::new(12345.678, -9876.5, 4321.0);
