@@ -1,6 +1,6 @@
-//! What a scene asks for ([`Lighting`]) and what the renderer will simulate
-//! ([`EffectPlan`]), decided once per render: a kind of ray that no effect
-//! needs is never cast, and [`RayCounts`] proves it.
+//! What a render asks for ([`Effects`], with the scene's lights) and what the
+//! renderer will simulate ([`EffectPlan`]), decided once per render: a kind
+//! of ray that no effect needs is never cast, and [`RayCounts`] proves it.
 
 use std::ops::{Add, AddAssign};
 
@@ -15,14 +15,12 @@ pub const MAX_DEPTH: u32 = 64;
 /// Largest sample count of an area light or of ambient occlusion per shaded point.
 pub const MAX_EFFECT_SAMPLES: u32 = 4096;
 
-/// The scene file's lighting: lights, ambient light and effect settings.
-/// The default (no lights) is pure ray casting.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Lighting {
-    /// The lights; none means flat colours (pure ray casting).
-    pub lights: Vec<Light>,
-    /// Light reaching every point from everywhere, times the diffuse albedo.
-    pub ambient: Color,
+/// The light transport a render asks for (a scene file's `effects` block):
+/// recursion depth, ambient occlusion, and global illumination, which
+/// chooses the path tracer over the direct-lighting tracer. The default
+/// (no recursion, neither of the others) with no lights is pure ray casting.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Effects {
     /// How many reflection/refraction bounces follow a primary ray, 0 to
     /// [`MAX_DEPTH`]; 0 turns both off.
     pub max_depth: u32,
@@ -132,27 +130,31 @@ impl Default for EffectToggles {
 }
 
 impl EffectPlan {
-    /// The effects a scene with `lighting` asks for, given the materials its
-    /// objects use (a material no object uses asks for nothing).
-    pub fn new<'m>(lighting: &Lighting, used_materials: impl IntoIterator<Item = &'m Material>) -> Self {
-        let global_illumination = lighting.global_illumination;
-        let shading = !lighting.lights.is_empty() || global_illumination.is_some();
+    /// The effects a render asks for: `effects`, in a scene with `lights`
+    /// and `ambient` light whose objects use `used_materials` (a material no
+    /// object uses asks for nothing).
+    pub fn new<'m>(
+        lights: &[Light],
+        ambient: Color,
+        effects: &Effects,
+        used_materials: impl IntoIterator<Item = &'m Material>,
+    ) -> Self {
+        let global_illumination = effects.global_illumination;
+        let shading = !lights.is_empty() || global_illumination.is_some();
         let (mut reflects, mut refracts, mut translucent) = (false, false, false);
         for m in used_materials {
             reflects |= m.reflectivity > 0.0 || m.transparency > 0.0;
             refracts |= m.transparency > 0.0;
             translucent |= m.subsurface.is_some();
         }
-        let recursion = shading && lighting.max_depth > 0;
+        let recursion = shading && effects.max_depth > 0;
         Self {
             shading,
-            shadows: shading && lighting.lights.iter().any(|l| l.shadows),
+            shadows: shading && lights.iter().any(|l| l.shadows),
             reflection: recursion && reflects,
             refraction: recursion && refracts,
-            ambient_occlusion: lighting
-                .ambient_occlusion
-                .filter(|_| shading && lighting.ambient != Color::ZERO),
-            max_depth: if recursion { lighting.max_depth } else { 0 },
+            ambient_occlusion: effects.ambient_occlusion.filter(|_| shading && ambient != Color::ZERO),
+            max_depth: if recursion { effects.max_depth } else { 0 },
             global_illumination,
             subsurface: translucent && global_illumination.is_some(),
         }
@@ -259,7 +261,8 @@ mod tests {
             {extra}
         )"#
         );
-        crate::parse_scene(&text, "t.ron", Path::new(".")).unwrap().effect_plan()
+        let l = crate::parse_scene(&text, "t.ron", Path::new(".")).unwrap();
+        l.scene.effect_plan(&l.settings.effects)
     }
 
     #[test]

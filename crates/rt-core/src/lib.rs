@@ -6,8 +6,9 @@
 //!
 //! One pixel's path through the crate, in the order of the course design:
 //!
-//! 1. [`scene_file`] reads a RON scene file into a validated [`scene::Scene`]
-//!    (or a [`scene::SceneBuilder`] makes one in code).
+//! 1. [`scene_file`] reads a RON scene file into a validated world
+//!    ([`scene::Scene`]; or a [`scene::SceneBuilder`] makes one in code), its
+//!    camera, and the [`settings`] to render it with.
 //! 2. [`camera`] derives the camera's axes from position, centre of interest and up.
 //! 3. [`view_plane`] sizes the virtual view plane and maps pixel (ix, iy) to a
 //!    3D point and its primary [`ray::Ray`].
@@ -34,8 +35,8 @@
 //! as text (the `cast` command's input).
 //!
 //! The names most programs need are re-exported here: build or load a
-//! [`Scene`], render it with a [`Renderer`] into a [`Frame`], or query it
-//! with a [`Ray`] for a [`Hit`].
+//! [`Scene`], render it through a [`Camera`] with [`RenderSettings`] by a
+//! [`Renderer`] into a [`Frame`], or query it with a [`Ray`] for a [`Hit`].
 
 #![deny(missing_docs)]
 
@@ -74,6 +75,7 @@ pub mod render;
 pub mod sampler;
 pub mod scene;
 pub mod scene_file;
+pub mod settings;
 pub mod shading;
 pub mod sphere;
 pub mod surface;
@@ -87,7 +89,7 @@ mod test_support;
 
 pub use camera::{Camera, CameraError, Projection};
 pub use color::Color;
-pub use effects::{EffectPlan, Lighting, RayCounts};
+pub use effects::{EffectPlan, Effects, RayCounts};
 pub use hit::Hit;
 pub use light::Light;
 pub use material::Material;
@@ -97,5 +99,6 @@ pub use ray::{Interval, Ray};
 pub use real::{Real, Vec3};
 pub use render::{Frame, RenderError, Renderer};
 pub use scene::{Scene, SceneBuildError, SceneBuilder};
-pub use scene_file::{SceneError, load_scene, parse_scene};
+pub use scene_file::{LoadedScene, SceneError, load_scene, parse_scene};
+pub use settings::{ImageSize, RenderSettings, SamplesPerPixel, SettingsError};
 pub use view_plane::ViewPlane;

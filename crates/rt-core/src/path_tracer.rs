@@ -137,7 +137,7 @@ impl<'s> PathTracer<'s> {
                         bsdf::power_heuristic(pdf, lights.environment_probability() * uniform_sphere_pdf())
                     }
                 };
-                radiance += beta * scene.background * to_f32(w);
+                radiance += beta * scene.background() * to_f32(w);
                 break;
             };
             let object = &scene.objects()[h.object];
@@ -403,7 +403,7 @@ impl<'s> PathTracer<'s> {
         // the density for MIS (None: the light cannot be hit), shadow test on)
         let (wi, distance, arriving, light_pdf, shadows) = match source {
             Source::Light(i) => {
-                let light = &scene.lighting.lights[i];
+                let light = &scene.lights()[i];
                 let Some(s) = light.sample_one(sp.p, uv) else { return Color::ZERO };
                 (s.to_light, s.distance, s.irradiance, None, light.shadows)
             }
@@ -416,7 +416,7 @@ impl<'s> PathTracer<'s> {
             Source::Environment => {
                 let wi = uniform_sphere(uv);
                 let pdf = uniform_sphere_pdf();
-                (wi, Real::INFINITY, scene.background / to_f32(pdf), Some(pdf), true)
+                (wi, Real::INFINITY, scene.background() / to_f32(pdf), Some(pdf), true)
             }
         };
         let f = bsdf.eval(wo, wi);
@@ -454,20 +454,24 @@ fn uniform_sphere_pdf() -> Real {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::{Frame, Renderer};
+    use crate::effects::Effects;
+    use crate::render::Frame;
+    use crate::scene_file::LoadedScene;
+    use crate::settings::{ImageSize, RenderSettings};
+    use crate::test_support::{renderer, renderer_of};
     use std::path::Path;
 
-    fn scene(text: &str) -> Scene {
+    fn scene(text: &str) -> LoadedScene {
         crate::parse_scene(text, "test.ron", Path::new(".")).unwrap()
     }
 
-    fn render(s: &Scene, width: u32, height: u32, spp: u32) -> Frame {
-        Renderer::new(s, width, height, spp).unwrap().render(|_| {})
+    fn render(s: &LoadedScene, width: u32, height: u32, spp: u32) -> Frame {
+        renderer(s, width, height, spp).render(|_| {})
     }
 
     /// A diffuse sphere of albedo `albedo` filling most of the view, inside a
     /// background of radiance 1.
-    fn furnace(albedo: f32, effects: &str) -> Scene {
+    fn furnace(albedo: f32, effects: &str) -> LoadedScene {
         scene(&format!(
             r#"(
             camera: (position: (0, 0, -3), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1),
@@ -489,9 +493,8 @@ mod tests {
     /// emitters, chosen by area). The background (0.3) lies outside: it
     /// must never show, and next-event estimation still samples it, its
     /// shadow rays always blocked.
-    fn glowing_room(room: usize, albedo: f32, emission: f32, gi: GlobalIllumination) -> Scene {
+    fn glowing_room(room: usize, albedo: f32, emission: f32, gi: GlobalIllumination) -> LoadedScene {
         use crate::camera::{Camera, Projection};
-        use crate::effects::Lighting;
         use crate::mesh::Mesh;
         use crate::polygon::Polygon;
         use crate::primitive::Primitive;
@@ -505,13 +508,13 @@ mod tests {
             Projection::Perspective,
         )
         .unwrap();
-        let lighting = Lighting { global_illumination: Some(gi), ..Lighting::default() };
+        let settings = RenderSettings {
+            image: ImageSize::new(8, 8).unwrap(),
+            effects: Effects { global_illumination: Some(gi), ..Effects::default() },
+            ..RenderSettings::default()
+        };
         let wall = Material { emission: Color::splat(emission), ..Material::flat(Color::splat(albedo)) };
-        let b = SceneBuilder::new(camera)
-            .image_size(8, 8)
-            .background(Color::splat(0.3))
-            .lighting(lighting)
-            .material("wall", wall);
+        let b = SceneBuilder::new().background(Color::splat(0.3)).material("wall", wall);
         let primitives = if room == 0 {
             let (corners, faces) = crate::mesh::icosahedron();
             // Corner 0 is (−1, φ, 0), at the circumradius.
@@ -550,12 +553,13 @@ mod tests {
                 assert!(q.normal().dot(q.points()[0]) < 0.0, "{:?}", q.points());
             }
         }
-        primitives.into_iter().fold(b, |b, p| b.object(p, "wall")).build().unwrap()
+        let scene = primitives.into_iter().fold(b, |b, p| b.object(p, "wall")).build().unwrap();
+        LoadedScene { scene, camera, settings }
     }
 
     /// Every sample of every pixel of an 8×8 image of `s`, `spp` each.
-    fn every_sample(s: &Scene, spp: u32) -> (Vec<Color>, RayCounts) {
-        let r = Renderer::new(s, 8, 8, spp).unwrap();
+    fn every_sample(s: &LoadedScene, spp: u32) -> (Vec<Color>, RayCounts) {
+        let r = renderer(s, 8, 8, spp);
         let mut counts = RayCounts::default();
         let samples = (0..8)
             .flat_map(|y| (0..8).flat_map(move |x| (0..spp).map(move |k| (x, y, k))))
@@ -647,7 +651,7 @@ mod tests {
             (0.8, "max_bounces: 50, russian_roulette: false"),
         ] {
             let s = furnace(albedo, effects);
-            let tracer = PathTracer::new(&s, s.lighting.global_illumination.unwrap(), true);
+            let tracer = PathTracer::new(&s.scene, s.settings.effects.global_illumination.unwrap(), true);
             let view = ViewPlane::new(s.camera, 12, 12).unwrap();
             let mut counts = RayCounts::default();
             let mut pixels = Vec::new();
@@ -656,7 +660,7 @@ mod tests {
                 for k in 0..spp {
                     let (sx, sy) = SampleRng::seeded(x, y, k, 7).next_pair();
                     let ray = view.primary_ray(x, y, sx, sy);
-                    let hit = s.cast(&ray);
+                    let hit = s.scene.cast(&ray);
                     let c = tracer.trace_primary_hit(&ray, hit, &mut SampleRng::new(x, y, k), &mut counts);
                     match hit {
                         None => assert_eq!(c, Color::ONE, "{effects}: background at ({x}, {y})"),
@@ -685,7 +689,7 @@ mod tests {
     }
 
     /// A grey floor lit by one point light, with `effects`.
-    fn lit_floor(effects: &str) -> Scene {
+    fn lit_floor(effects: &str) -> LoadedScene {
         scene(&format!(
             r#"(
             camera: (position: (0, 3, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 50, near: 1),
@@ -727,7 +731,7 @@ mod tests {
     #[test]
     fn the_image_is_identical_for_one_and_for_two_threads() {
         let s = lit_floor("background: (0.2, 0.3, 0.4), effects: (global_illumination: (max_bounces: 5)),");
-        let r = Renderer::new(&s, 16, 12, 4).unwrap();
+        let r = renderer(&s, 16, 12, 4);
         let run = |threads| crate::test_support::render_on_threads(&r, threads);
         assert_eq!(run(1), run(2));
     }
@@ -760,10 +764,10 @@ mod tests {
         };
         let centre = 4;
         let direct = scene(&text(""));
-        let d = Renderer::new(&direct, 3, 3, 1).unwrap().render(|_| {});
+        let d = renderer(&direct, 3, 3, 1).render(|_| {});
         assert_eq!(d.pixels[centre], Color::ZERO);
         let gi = scene(&text("effects: (global_illumination: (max_bounces: 4)),"));
-        let f = Renderer::new(&gi, 3, 3, 512).unwrap().render(|_| {});
+        let f = renderer(&gi, 3, 3, 512).render(|_| {});
         assert!(f.pixels.iter().all(|c| c.is_finite()));
         // About (0.8/π)·10·(π·1²/5²)·T ≈ 0.3 with T ≈ 0.92 the slab's transmittance.
         assert!(f.pixels[centre].x > 0.1, "{}", f.pixels[centre]);
@@ -772,7 +776,7 @@ mod tests {
     /// A scene with one translucent `object` of albedo `albedo`, mean free
     /// paths `mfp` and index `ior`, in a background of radiance 1 and
     /// nothing else, seen from −z.
-    fn translucent(object: &str, albedo: [f32; 3], mfp: [f32; 3], ior: f32, fov: f32) -> Scene {
+    fn translucent(object: &str, albedo: [f32; 3], mfp: [f32; 3], ior: f32, fov: f32) -> LoadedScene {
         let v = |c: [f32; 3]| format!("({:?}, {:?}, {:?})", c[0], c[1], c[2]);
         scene(&format!(
             r#"(
@@ -811,7 +815,7 @@ mod tests {
                 [([0.2; 3], 1.0), ([0.2; 3], 1.5), ([0.05, 0.2, 0.6], 1.0), ([0.05, 0.2, 0.6], 1.33)]
             {
                 let s = translucent(object, [1.0; 3], mfp, ior, 20.0);
-                let r = Renderer::new(&s, 8, 8, 1).unwrap();
+                let r = renderer(&s, 8, 8, 1);
                 // Every sample of every pixel, one by one, for the error bar.
                 let mut counts = RayCounts::default();
                 let samples: Vec<Color> = (0..8)
@@ -847,7 +851,7 @@ mod tests {
         let slab = "Aabb(min: (-3, -3, -0.25), max: (3, 3, 0.25), material: \"m\")";
         let mfp = [0.25f32, 0.5, 1.0];
         let s = translucent(slab, [0.0; 3], mfp, 1.0, 0.5);
-        let r = Renderer::new(&s, 8, 8, 1).unwrap();
+        let r = renderer(&s, 8, 8, 1);
         let exact = Color::new((-0.5 / mfp[0]).exp(), (-0.5 / mfp[1]).exp(), (-0.5 / mfp[2]).exp());
         let through = exact.element_sum() / 3.0;
         let carried = exact / through;
@@ -918,7 +922,7 @@ mod tests {
         let slab = "Aabb(min: (-200, -200, 0), max: (200, 200, 400), material: \"m\")";
         for (omega, n) in [(0.5f32, 1 << 19), (0.9, 1 << 17), (0.99, 1 << 15)] {
             let s = translucent(slab, [omega; 3], [1.0; 3], 1.0, 0.5);
-            let r = Renderer::new(&s, 8, 8, 1).unwrap();
+            let r = renderer(&s, 8, 8, 1);
             let mut counts = RayCounts::default();
             let samples: Vec<Color> = (0..n).map(|k| r.sample(4, 4, k, &mut counts)).collect();
             let (mean, error) = mean_and_error(&samples);
@@ -969,9 +973,9 @@ mod tests {
                 )"#
                 );
                 let s = crate::parse_scene(&text, "walk.ron", dir.path()).unwrap();
-                let tracer = PathTracer::new(&s, s.lighting.global_illumination.unwrap(), true);
-                let o = &s.objects()[0];
-                let m = s.material(o.material);
+                let tracer = PathTracer::new(&s.scene, s.settings.effects.global_illumination.unwrap(), true);
+                let o = &s.scene.objects()[0];
+                let m = s.scene.material(o.material);
                 let centre = Vec3::new(offset, 0.0, offset);
                 let mut counts = RayCounts::default();
                 let mut outcomes = [0u32; 3];
@@ -980,7 +984,7 @@ mod tests {
                     // Enter at a random point of the surface, straight inwards.
                     let d = uniform_sphere(rng.next_pair());
                     let ray = Ray::new(centre + d * 10.0, -d);
-                    let h = s.closest_hit(&ray, Interval::new(0.0, Real::INFINITY)).unwrap();
+                    let h = s.scene.closest_hit(&ray, Interval::new(0.0, Real::INFINITY)).unwrap();
                     let sp = o.primitive.surface_point(h.primitive, h.normal, ray.at(h.t));
                     let end = tracer.walk(
                         0,
@@ -1019,10 +1023,14 @@ mod tests {
         );
         let on = render(&s, 8, 8, 4).rays;
         assert!(on.subsurface > 0 && on.walk_steps > 0, "{on:?}");
-        let plan = s
-            .effect_plan()
-            .restricted(crate::effects::EffectToggles { subsurface: false, ..Default::default() });
-        let off = Renderer::with_plan(&s, s.camera, 8, 8, 4, plan).unwrap().render(|_| {}).rays;
+        let toggles = crate::effects::EffectToggles { subsurface: false, ..Default::default() };
+        let settings = RenderSettings {
+            toggles,
+            image: ImageSize::new(8, 8).unwrap(),
+            samples: crate::settings::SamplesPerPixel::new(4).unwrap(),
+            ..s.settings
+        };
+        let off = crate::render::Renderer::new(&s.scene, s.camera, &settings).unwrap().render(|_| {}).rays;
         assert_eq!((off.subsurface, off.walk_steps), (0, 0));
         assert!(off.bounce > 0);
     }
@@ -1053,7 +1061,6 @@ mod tests {
             background in 0f32..2.0,
         ) {
             use crate::camera::{Camera, Projection};
-            use crate::effects::Lighting;
             use crate::light::{Light, LightKind};
             use crate::material::Material;
             use crate::medium::Subsurface;
@@ -1062,16 +1069,15 @@ mod tests {
             use crate::test_support::{icosahedron_mesh, random_primitive_with_attributes, v};
             use crate::texture::Texture;
             let camera = Camera::new(Vec3::new(0.0, 0.0, -12.0), Vec3::ZERO, Vec3::Y, 60.0, 1.0, Projection::Perspective).unwrap();
-            let lighting = Lighting {
-                lights: vec![Light { kind: LightKind::Point { position: Vec3::new(1.0, 6.0, -3.0) }, power: Color::splat(20.0), shadows: true }],
+            let light = Light { kind: LightKind::Point { position: Vec3::new(1.0, 6.0, -3.0) }, power: Color::splat(20.0), shadows: true };
+            let effects = Effects {
                 global_illumination: Some(GlobalIllumination { max_bounces: 6, russian_roulette: true, max_walk_steps: 256 }),
-                ..Lighting::default()
+                ..Effects::default()
             };
             let texture = Texture::new(2, 2, texels.iter().map(|&t| Color::from_array(t)).collect()).unwrap();
-            let mut b = SceneBuilder::new(camera)
-                .image_size(6, 4)
+            let mut b = SceneBuilder::new()
                 .background(Color::splat(background))
-                .lighting(lighting)
+                .light(light)
                 .texture(std::sync::Arc::new(texture));
             for (i, [c, kd, ks, s, kr, kt, ior, e]) in materials.iter().copied().enumerate() {
                 let (kr, kt) = if kr + kt > 1.0 { (kr / 2.0, kt / 2.0) } else { (kr, kt) };
@@ -1103,7 +1109,7 @@ mod tests {
             }
             // Some polygons cannot glow (self-crossing ones); skip those scenes.
             let Ok(s) = b.build() else { return Ok(()) };
-            let r = Renderer::new(&s, 6, 4, 4).unwrap();
+            let r = renderer_of(&s, camera, effects, (6, 4, 4));
             for y in 0..4 {
                 for x in 0..6 {
                     for k in 0..4 {

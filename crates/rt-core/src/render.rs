@@ -22,8 +22,9 @@ use crate::hit::Hit;
 use crate::path_tracer::PathTracer;
 use crate::ray::Ray;
 use crate::real::Vec3;
-use crate::sampler::{MAX_SAMPLES_PER_PIXEL, SampleRng, Strata};
+use crate::sampler::{SampleRng, Strata};
 use crate::scene::Scene;
+use crate::settings::RenderSettings;
 use crate::tracer::Tracer;
 use crate::view_plane::{ViewPlane, ViewPlaneError};
 
@@ -35,15 +36,12 @@ pub const BAND_ROWS: u32 = 8;
 /// An 8-bit RGB pixel.
 pub type Rgb8 = [u8; 3];
 
-/// Why a render cannot start.
+/// Why a render cannot start (its settings are valid by construction).
 #[derive(Clone, Debug, Error, PartialEq)]
 pub enum RenderError {
-    /// The image size or the view plane is unusable.
+    /// The camera's view plane at the image size is unusable.
     #[error(transparent)]
     ViewPlane(#[from] ViewPlaneError),
-    /// Samples per pixel out of range.
-    #[error("samples per pixel must be 1 to {MAX_SAMPLES_PER_PIXEL}, got {0}")]
-    SamplesPerPixel(u32),
 }
 
 /// A finished image in linear colour: `pixels[y * width + x]`, row 0 at the top.
@@ -68,7 +66,7 @@ impl Frame {
     }
 }
 
-/// Renders one scene at one image size and sample count.
+/// Renders one scene through one camera with one set of [`RenderSettings`].
 #[derive(Clone, Copy, Debug)]
 pub struct Renderer<'s> {
     scene: &'s Scene,
@@ -84,52 +82,22 @@ pub struct Renderer<'s> {
 }
 
 impl<'s> Renderer<'s> {
-    /// A renderer for `scene` seen by its own camera at `width`×`height` with
-    /// `spp` samples per pixel, simulating the effects the scene asks for.
-    pub fn new(scene: &'s Scene, width: u32, height: u32, spp: u32) -> Result<Self, RenderError> {
-        Self::with_camera(scene, scene.camera, width, height, spp)
-    }
-
-    /// A renderer for `scene` seen by another `camera` (the viewer's).
-    pub fn with_camera(
-        scene: &'s Scene,
-        camera: Camera,
-        width: u32,
-        height: u32,
-        spp: u32,
-    ) -> Result<Self, RenderError> {
-        Self::with_plan(scene, camera, width, height, spp, scene.effect_plan())
-    }
-
-    /// A renderer that simulates what `plan` allows (the viewer's toggles).
-    pub fn with_plan(
-        scene: &'s Scene,
-        camera: Camera,
-        width: u32,
-        height: u32,
-        spp: u32,
-        plan: EffectPlan,
-    ) -> Result<Self, RenderError> {
-        if !(1..=MAX_SAMPLES_PER_PIXEL).contains(&spp) {
-            return Err(RenderError::SamplesPerPixel(spp));
-        }
+    /// A renderer for `scene` seen by `camera` with `settings`, simulating
+    /// the effects the settings ask for that the scene has something for
+    /// ([`Scene::effect_plan`]), less those the settings' toggles switch off.
+    pub fn new(scene: &'s Scene, camera: Camera, settings: &RenderSettings) -> Result<Self, RenderError> {
+        let plan = scene.effect_plan(&settings.effects).restricted(settings.toggles);
+        let spp = settings.samples.get();
         Ok(Self {
             scene,
             tracer: Tracer::new(scene, plan),
             path_tracer: plan.global_illumination.map(|gi| PathTracer::new(scene, gi, plan.subsurface)),
-            view: ViewPlane::new(camera, width, height)?,
+            view: ViewPlane::new(camera, settings.image.width(), settings.image.height())?,
             spp,
             strata: Strata::new(spp),
-            seed: 0,
-            color_space: scene.color_space,
+            seed: settings.seed,
+            color_space: settings.color_space,
         })
-    }
-
-    /// The same renderer drawing its random numbers for seed `seed`
-    /// ([`SampleRng::seeded`]): an independent estimate of the same image.
-    /// Seed 0 is the default.
-    pub fn with_seed(self, seed: u64) -> Self {
-        Self { seed, ..self }
     }
 
     /// The view plane rays are generated from.
@@ -328,6 +296,7 @@ pub fn to_rgb8(c: Color) -> Rgb8 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_support::renderer;
     use std::path::Path;
 
     const SCENE: &str = r#"(
@@ -338,14 +307,14 @@ mod tests {
         objects: [ Sphere(center: (0, 0, 0), radius: 1, material: "red") ],
     )"#;
 
-    fn scene() -> Scene {
+    fn scene() -> crate::LoadedScene {
         crate::parse_scene(SCENE, "test.ron", Path::new(".")).unwrap()
     }
 
     #[test]
     fn centre_pixel_shows_the_sphere_and_the_corner_the_background() {
         let s = scene();
-        let f = Renderer::new(&s, 32, 24, 1).unwrap().render(|_| {});
+        let f = renderer(&s, 32, 24, 1).render(|_| {});
         assert_eq!(f.to_rgb8()[12 * 32 + 16], [255, 0, 0]);
         assert_eq!(f.to_rgb8()[0], [0, 0, 255]);
     }
@@ -354,14 +323,14 @@ mod tests {
     fn every_row_is_reported_once() {
         let s = scene();
         let seen = std::sync::Mutex::new(vec![0; 24]);
-        Renderer::new(&s, 32, 24, 1).unwrap().render(|y| seen.lock().unwrap()[y as usize] += 1);
+        renderer(&s, 32, 24, 1).render(|y| seen.lock().unwrap()[y as usize] += 1);
         assert_eq!(seen.into_inner().unwrap(), vec![1; 24]);
     }
 
     #[test]
     fn edge_pixels_blend_with_several_samples() {
         let s = scene();
-        let r = Renderer::new(&s, 32, 24, 16).unwrap();
+        let r = renderer(&s, 32, 24, 16);
         let f = r.render(|_| {}).to_rgb8();
         let blended = f.iter().filter(|p| p[0] > 0 && p[2] > 0).count();
         assert!(blended > 0, "no anti-aliased edge pixels");
@@ -371,7 +340,7 @@ mod tests {
     #[test]
     fn the_image_is_the_same_for_one_and_for_two_threads() {
         let s = scene();
-        let r = Renderer::new(&s, 32, 24, 4).unwrap();
+        let r = renderer(&s, 32, 24, 4);
         let run = |threads| crate::test_support::render_on_threads(&r, threads);
         assert_eq!(run(1), run(2));
     }
@@ -379,7 +348,7 @@ mod tests {
     #[test]
     fn a_stopped_render_returns_nothing() {
         let s = scene();
-        let r = Renderer::new(&s, 32, 24, 1).unwrap();
+        let r = renderer(&s, 32, 24, 1);
         let stop = AtomicBool::new(false);
         let frame = r.render_until(
             |y| {
@@ -394,16 +363,10 @@ mod tests {
     }
 
     #[test]
-    fn bad_sample_counts_are_refused() {
-        let s = scene();
-        assert_eq!(Renderer::new(&s, 32, 24, 0).err(), Some(RenderError::SamplesPerPixel(0)));
-    }
-
-    #[test]
     fn a_scene_without_lights_casts_exactly_one_primary_ray_per_sample_and_nothing_else() {
         let s = scene();
         for spp in [1, 3, 16] {
-            let f = Renderer::new(&s, 32, 24, spp).unwrap().render(|_| {});
+            let f = renderer(&s, 32, 24, spp).render(|_| {});
             assert_eq!(f.rays, RayCounts { primary: 32 * 24 * spp as u64, ..RayCounts::default() });
         }
     }
@@ -433,7 +396,7 @@ mod tests {
             );
             let s = crate::parse_scene(&text, "packets.ron", &scenes).unwrap();
             for spp in [1, 5, 70] {
-                let r = Renderer::new(&s, 40, 30, spp).unwrap();
+                let r = renderer(&s, 40, 30, spp);
                 let mut row = vec![Color::ZERO; 40];
                 for y in [3, 14, 15, 22] {
                     r.render_row(y, &mut row);
@@ -455,7 +418,7 @@ mod tests {
     #[test]
     fn accumulating_samples_in_steps_gives_the_pixel_exactly() {
         let s = scene();
-        let r = Renderer::new(&s, 32, 24, 7).unwrap();
+        let r = renderer(&s, 32, 24, 7);
         let mut sums = vec![Color::ZERO; 32];
         for range in [0..1, 1..4, 4..7] {
             r.accumulate_row(11, range, &mut sums);

@@ -1,9 +1,11 @@
-//! A loaded, validated scene: camera, image size, background, materials,
-//! objects and lighting, and the ray queries over all of them.
+//! The world: objects and their materials and textures, lights, the
+//! background, the BVH over the objects, and the ray queries over all of
+//! them. How it is seen (the camera) and rendered ([`crate::settings`]) are
+//! values of their own.
 //!
 //! A scene is made once, by [`crate::scene_file`] from a RON file or by a
-//! [`SceneBuilder`] in code, and is read-only afterwards: its BVH is built
-//! when it is made, so its objects can be read but not changed.
+//! [`SceneBuilder`] in code, and is read-only afterwards: its BVH and the
+//! light sampler are built when it is made, from parts that cannot change.
 
 use std::borrow::Cow;
 use std::path::PathBuf;
@@ -12,11 +14,11 @@ use std::sync::Arc;
 use thiserror::Error;
 
 use crate::bvh::{Bvh, BvhStats, PACKET_RAYS};
-use crate::camera::Camera;
-use crate::color::{Color, ColorSpace};
-use crate::effects::{EffectPlan, Lighting};
+use crate::color::Color;
+use crate::effects::{EffectPlan, Effects};
 use crate::emitter::{Emitter, EmitterError};
 use crate::hit::Hit;
+use crate::light::Light;
 use crate::light_sampler::LightSampler;
 use crate::material::Material;
 use crate::method::Methods;
@@ -24,30 +26,16 @@ use crate::object::Object;
 use crate::primitive::Primitive;
 use crate::ray::{Interval, Ray, rescale_t};
 use crate::real::{Real, Vec3, cast_min_t, scale_pow2};
-use crate::sampler::MAX_SAMPLES_PER_PIXEL;
 use crate::texture::Texture;
-use crate::view_plane::{ViewPlane, ViewPlaneError, check_image_size};
 
-/// A scene ready to render. Every field is validated; the plain settings are
-/// public, the objects and materials are read through methods.
+/// A world ready to render, validated and read-only: every part is read
+/// through a method.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
-    /// The camera.
-    pub camera: Camera,
-    /// Image width in pixels (from the file; renderers may override it).
-    pub width: u32,
-    /// Image height in pixels.
-    pub height: u32,
-    /// Colour of rays that hit nothing.
-    pub background: Color,
-    /// Samples per pixel; 1 means one ray through each pixel centre.
-    pub samples_per_pixel: u32,
-    /// Lights and effect settings; none by default (pure ray casting).
-    pub lighting: Lighting,
-    /// How rendered colours are encoded into 8-bit pixels.
-    pub color_space: ColorSpace,
-    /// The intersection routines (the careful ones by default).
-    pub methods: Methods,
+    background: Color,
+    lights: Vec<Light>,
+    ambient: Color,
+    methods: Methods,
     materials: Vec<Material>,
     material_names: Vec<String>,
     textures: Vec<Arc<Texture>>,
@@ -65,12 +53,6 @@ pub struct Scene {
 /// Why a [`SceneBuilder`] cannot make a scene.
 #[derive(Clone, Debug, Error, PartialEq)]
 pub enum SceneBuildError {
-    /// The image size is out of range.
-    #[error(transparent)]
-    ImageSize(#[from] ViewPlaneError),
-    /// Samples per pixel out of range.
-    #[error("samples_per_pixel must be 1 to {MAX_SAMPLES_PER_PIXEL}, got {0}")]
-    SamplesPerPixel(u32),
     /// Two materials share a name.
     #[error("material \"{0}\" is defined twice")]
     DuplicateMaterial(String),
@@ -137,32 +119,26 @@ impl SceneBuildError {
     }
 }
 
-/// Builds a [`Scene`] step by step: a camera, then any of the settings,
-/// materials by name and objects that name them, then [`SceneBuilder::build`].
+/// Builds a [`Scene`] step by step: any of the background, lights and
+/// intersection methods, materials by name and objects that name them, then
+/// [`SceneBuilder::build`].
 ///
 /// ```
-/// use rt_core::{Camera, Material, Primitive, Projection, SceneBuilder, Vec3};
+/// use rt_core::{Material, Primitive, SceneBuilder, Vec3};
 /// use rt_core::sphere::Sphere;
 ///
-/// let camera = Camera::new(Vec3::new(0.0, 0.0, -5.0), Vec3::ZERO, Vec3::Y, 40.0, 1.0,
-///     Projection::Perspective).unwrap();
-/// let scene = SceneBuilder::new(camera)
-///     .image_size(64, 48)
+/// let scene = SceneBuilder::new()
 ///     .material("red", Material::flat(glam::Vec3::new(1.0, 0.0, 0.0)))
 ///     .object(Primitive::Sphere(Sphere::new(Vec3::ZERO, 1.0).unwrap()), "red")
 ///     .build()
 ///     .unwrap();
 /// assert_eq!(scene.objects().len(), 1);
 /// ```
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct SceneBuilder {
-    camera: Camera,
-    width: u32,
-    height: u32,
     background: Color,
-    samples_per_pixel: u32,
-    lighting: Lighting,
-    color_space: ColorSpace,
+    lights: Vec<Light>,
+    ambient: Color,
     methods: Methods,
     materials: Vec<(String, Material)>,
     textures: Vec<Arc<Texture>>,
@@ -172,50 +148,27 @@ pub struct SceneBuilder {
 }
 
 impl SceneBuilder {
-    /// A scene seen by `camera`: 640×480 pixels, 1 sample per pixel, a black
-    /// background, no materials, objects or lights, linear colours and the
-    /// default intersection methods until set otherwise.
-    pub fn new(camera: Camera) -> Self {
-        Self {
-            camera,
-            width: 640,
-            height: 480,
-            background: Color::ZERO,
-            samples_per_pixel: 1,
-            lighting: Lighting::default(),
-            color_space: ColorSpace::default(),
-            methods: Methods::default(),
-            materials: Vec::new(),
-            textures: Vec::new(),
-            objects: Vec::new(),
-            source_files: Vec::new(),
-            warnings: Vec::new(),
-        }
+    /// An empty world: a black background, no materials, objects or lights,
+    /// and the default intersection methods until set otherwise.
+    pub fn new() -> Self {
+        Self::default()
     }
 
-    /// The image size in pixels.
-    pub fn image_size(self, width: u32, height: u32) -> Self {
-        Self { width, height, ..self }
-    }
-
-    /// The colour of rays that hit nothing.
+    /// The colour of rays that hit nothing: a constant environment light.
     pub fn background(self, background: Color) -> Self {
         Self { background, ..self }
     }
 
-    /// Samples per pixel.
-    pub fn samples_per_pixel(self, samples_per_pixel: u32) -> Self {
-        Self { samples_per_pixel, ..self }
+    /// Adds a light (point, directional or sphere).
+    pub fn light(mut self, light: Light) -> Self {
+        self.lights.push(light);
+        self
     }
 
-    /// Lights and effect settings.
-    pub fn lighting(self, lighting: Lighting) -> Self {
-        Self { lighting, ..self }
-    }
-
-    /// How colours are encoded into 8-bit pixels.
-    pub fn color_space(self, color_space: ColorSpace) -> Self {
-        Self { color_space, ..self }
+    /// Light reaching every point from everywhere, times the diffuse albedo
+    /// (the direct-lighting tracer's ambient term).
+    pub fn ambient(self, ambient: Color) -> Self {
+        Self { ambient, ..self }
     }
 
     /// The intersection routines.
@@ -263,10 +216,6 @@ impl SceneBuilder {
 
     /// Checks the parts and builds the scene's BVH.
     pub fn build(self) -> Result<Scene, SceneBuildError> {
-        check_image_size(self.width, self.height)?;
-        if !(1..=MAX_SAMPLES_PER_PIXEL).contains(&self.samples_per_pixel) {
-            return Err(SceneBuildError::SamplesPerPixel(self.samples_per_pixel));
-        }
         let (material_names, materials): (Vec<String>, Vec<Material>) = self.materials.into_iter().unzip();
         for (i, name) in material_names.iter().enumerate() {
             if material_names[..i].contains(name) {
@@ -297,21 +246,15 @@ impl SceneBuilder {
             if materials[o.material].subsurface.is_none() {
                 continue;
             }
-            let reason = if self.lighting.global_illumination.is_none() {
-                Some(String::from(
-                    "which needs global illumination: add effects: (global_illumination: ()) to the scene",
-                ))
-            } else {
-                match &o.primitive {
-                    Primitive::Sphere(_) | Primitive::Aabb(_) => None,
-                    Primitive::Mesh(mesh) => {
-                        mesh.closed().err().map(|why| format!("but the mesh is not closed: {why}"))
-                    }
-                    other => Some(format!(
-                        "but a {} has no inside (only spheres, boxes and closed meshes do)",
-                        other.kind()
-                    )),
+            let reason = match &o.primitive {
+                Primitive::Sphere(_) | Primitive::Aabb(_) => None,
+                Primitive::Mesh(mesh) => {
+                    mesh.closed().err().map(|why| format!("but the mesh is not closed: {why}"))
                 }
+                other => Some(format!(
+                    "but a {} has no inside (only spheres, boxes and closed meshes do)",
+                    other.kind()
+                )),
             };
             if let Some(reason) = reason {
                 let material = material_names[o.material].clone();
@@ -337,15 +280,11 @@ impl SceneBuilder {
         let bvh = Bvh::build(&objects);
         let radius = bvh.bounds().map_or(1.0, |b| (0.5 * b.size().length()).max(1.0));
         let light_sampler =
-            LightSampler::new(&self.lighting.lights, &emitters, self.background, objects.len(), radius);
+            LightSampler::new(&self.lights, &emitters, self.background, objects.len(), radius);
         Ok(Scene {
-            camera: self.camera,
-            width: self.width,
-            height: self.height,
             background: self.background,
-            samples_per_pixel: self.samples_per_pixel,
-            lighting: self.lighting,
-            color_space: self.color_space,
+            lights: self.lights,
+            ambient: self.ambient,
             methods: self.methods,
             materials,
             material_names,
@@ -374,8 +313,29 @@ impl Scene {
     }
 
     /// The intersection routines the scene is traced with.
-    pub(crate) fn methods(&self) -> Methods {
+    pub fn methods(&self) -> Methods {
         self.methods
+    }
+
+    /// The same world traced with other intersection routines (nothing is
+    /// rebuilt: the BVH does not depend on them).
+    pub fn with_methods(self, methods: Methods) -> Self {
+        Self { methods, ..self }
+    }
+
+    /// The colour of rays that hit nothing: a constant environment light.
+    pub fn background(&self) -> Color {
+        self.background
+    }
+
+    /// The point, directional and sphere lights.
+    pub fn lights(&self) -> &[Light] {
+        &self.lights
+    }
+
+    /// Light reaching every point from everywhere, times the diffuse albedo.
+    pub fn ambient(&self) -> Color {
+        self.ambient
     }
 
     /// What building the BVH took and produced.
@@ -560,15 +520,16 @@ impl Scene {
         &self.light_sampler
     }
 
-    /// The effects this scene asks for: its lighting, and the materials its
-    /// objects use.
-    pub fn effect_plan(&self) -> EffectPlan {
-        EffectPlan::new(&self.lighting, self.objects.iter().map(|o| &self.materials[o.material]))
-    }
-
-    /// The view plane of the scene's camera for a `width`×`height` image.
-    pub fn view_plane(&self, width: u32, height: u32) -> Result<ViewPlane, ViewPlaneError> {
-        ViewPlane::new(self.camera, width, height)
+    /// The rays a render with `effects` casts in this scene: what
+    /// `effects` asks for that its lights and the materials its objects use
+    /// give something to find ([`EffectPlan::new`]).
+    pub fn effect_plan(&self, effects: &Effects) -> EffectPlan {
+        EffectPlan::new(
+            &self.lights,
+            self.ambient,
+            effects,
+            self.objects.iter().map(|o| &self.materials[o.material]),
+        )
     }
 }
 

@@ -3,13 +3,17 @@
 use crate::aabb::Aabb;
 use crate::camera::{Camera, Projection};
 use crate::color::Color;
+use crate::effects::Effects;
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::plane::Plane;
 use crate::polygon::Polygon;
 use crate::primitive::Primitive;
 use crate::real::{Real, Vec3, to_f32};
+use crate::render::Renderer;
 use crate::scene::{Scene, SceneBuilder};
+use crate::scene_file::LoadedScene;
+use crate::settings::{ImageSize, RenderSettings, SamplesPerPixel};
 use crate::sphere::Sphere;
 use crate::triangle::Triangle;
 use proptest::prelude::*;
@@ -83,11 +87,44 @@ pub fn icosahedron_mesh(center: Vec3, radius: Real) -> Mesh {
     Mesh::new(positions, faces.to_vec()).unwrap()
 }
 
-/// A scene of `primitives`, one white material, camera at the origin looking along +z.
+/// A scene of `primitives`, one white material.
 pub fn scene_of(primitives: Vec<Primitive>) -> Scene {
-    let camera = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 60.0, 1.0, Projection::Perspective).unwrap();
-    let builder = SceneBuilder::new(camera).image_size(8, 8).material("white", Material::flat(Color::ONE));
+    let builder = SceneBuilder::new().material("white", Material::flat(Color::ONE));
     primitives.into_iter().fold(builder, |b, p| b.object(p, "white")).build().unwrap()
+}
+
+/// A camera at `position` looking at `center_of_interest`, up +y, with a
+/// vertical field of view of `fov_y` degrees, `near` 1, perspective.
+pub fn camera_at(position: Vec3, center_of_interest: Vec3, fov_y: Real) -> Camera {
+    Camera::new(position, center_of_interest, Vec3::Y, fov_y, 1.0, Projection::Perspective).unwrap()
+}
+
+/// A renderer of a loaded scene through its own camera with its own
+/// settings, at `width`×`height` and `spp` samples per pixel.
+pub fn renderer(loaded: &LoadedScene, width: u32, height: u32, spp: u32) -> Renderer<'_> {
+    let settings = RenderSettings {
+        image: ImageSize::new(width, height).unwrap(),
+        samples: SamplesPerPixel::new(spp).unwrap(),
+        ..loaded.settings
+    };
+    Renderer::new(&loaded.scene, loaded.camera, &settings).unwrap()
+}
+
+/// A renderer of `scene` through `camera` with `effects`, at
+/// `width`×`height` and `spp` samples per pixel.
+pub fn renderer_of<'s>(
+    scene: &'s Scene,
+    camera: Camera,
+    effects: Effects,
+    (width, height, spp): (u32, u32, u32),
+) -> Renderer<'s> {
+    let settings = RenderSettings {
+        image: ImageSize::new(width, height).unwrap(),
+        samples: SamplesPerPixel::new(spp).unwrap(),
+        effects,
+        ..RenderSettings::default()
+    };
+    Renderer::new(scene, camera, &settings).unwrap()
 }
 
 /// `renderer`'s image, rendered on a rayon pool of `threads` threads.

@@ -85,7 +85,7 @@ impl<'s> Tracer<'s> {
     ) -> Color {
         counts.primary += 1;
         let Some(hit) = hit else {
-            return self.scene.background;
+            return self.scene.background();
         };
         if !self.plan.shading {
             return self.scene.hit_color(&hit, ray);
@@ -97,21 +97,20 @@ impl<'s> Tracer<'s> {
     fn trace_secondary(&self, ray: &Ray, path: Path, rng: &mut SampleRng, counts: &mut RayCounts) -> Color {
         match self.scene.closest_hit(ray, Interval::new(0.0, Real::INFINITY)) {
             Some(hit) => self.shade(ray, &hit, path, rng, counts),
-            None => self.scene.background,
+            None => self.scene.background(),
         }
     }
 
     fn shade(&self, ray: &Ray, hit: &Hit, path: Path, rng: &mut SampleRng, counts: &mut RayCounts) -> Color {
         let object = &self.scene.objects()[hit.object];
         let Some(d) = normalize_robust(ray.dir) else {
-            return self.scene.background;
+            return self.scene.background();
         };
         let sp = object.primitive.surface_point(hit.primitive, hit.normal, ray.at(hit.t));
         let m = &self.scene.material_at(hit.object, hit.primitive, sp.p);
         let wo = -d;
         let front = wo.dot(sp.normal) > 0.0;
         let n = if front { sp.normal } else { -sp.normal };
-        let lighting = &self.scene.lighting;
 
         let mut color = if front { m.emission } else { Color::ZERO };
         let shading = object.primitive.shading_normal(hit.primitive, sp.p);
@@ -119,11 +118,11 @@ impl<'s> Tracer<'s> {
         if bsdf.has_smooth_lobes() {
             let lambert =
                 m.color * ((1.0 - m.reflectivity - m.transparency) * (1.0 - m.specular) * m.diffuse);
-            if lambert != Color::ZERO && lighting.ambient != Color::ZERO {
+            if lambert != Color::ZERO && self.scene.ambient() != Color::ZERO {
                 let ao = self.ambient_occlusion(&sp, n, rng, counts);
-                color += lighting.ambient * lambert * ao;
+                color += self.scene.ambient() * lambert * ao;
             }
-            for light in &lighting.lights {
+            for light in self.scene.lights() {
                 let samples = light.sample_count();
                 for k in 0..samples {
                     let jitter = if samples > 1 { rng.next_pair() } else { (0.5, 0.5) };
@@ -223,17 +222,18 @@ impl Path {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::Renderer;
+    use crate::scene_file::LoadedScene;
+    use crate::test_support::{renderer, renderer_of};
     use std::path::Path;
 
     /// A scene from RON text.
-    fn scene(text: &str) -> Scene {
+    fn scene(text: &str) -> LoadedScene {
         crate::parse_scene(text, "test.ron", Path::new(".")).unwrap()
     }
 
     /// A camera at (0, 0, −5) looking at a grey wall z = 0 that fills the view,
     /// lit by `lights`, plus `extra` objects and `effects`.
-    fn wall(materials: &str, objects: &str, lights: &str, effects: &str) -> Scene {
+    fn wall(materials: &str, objects: &str, lights: &str, effects: &str) -> LoadedScene {
         scene(&format!(
             r#"(
             camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1),
@@ -246,8 +246,9 @@ mod tests {
         ))
     }
 
-    fn render(s: &Scene, spp: u32) -> crate::render::Frame {
-        Renderer::new(s, s.width, s.height, spp).unwrap().render(|_| {})
+    fn render(s: &LoadedScene, spp: u32) -> crate::render::Frame {
+        let image = s.settings.image;
+        renderer(s, image.width(), image.height(), spp).render(|_| {})
     }
 
     #[test]
@@ -277,7 +278,7 @@ mod tests {
             let light = format!("Point(position: (0, 0, {z}), intensity: 4, shadows: false)");
             let s = wall("", "", &light, "");
             // In a 15×11 image pixel (7, 5) is centred on the axis: the light is straight ahead.
-            let r = Renderer::new(&s, 15, 11, 1).unwrap();
+            let r = renderer(&s, 15, 11, 1);
             r.pixel(7, 5, &mut RayCounts::default()).x
         };
         let lambert = 0.5 / std::f32::consts::PI;
@@ -293,7 +294,7 @@ mod tests {
         let point = "Point(position: (0, 3, -3), intensity: 9)";
         let no_shadow = "Point(position: (0, 3, -3), intensity: 9, shadows: false)";
         let ao = "ambient: (0.2, 0.2, 0.2), effects: (ambient_occlusion: (samples: 3, radius: 1)),";
-        let counts = |s: Scene| render(&s, 1).rays;
+        let counts = |s: LoadedScene| render(&s, 1).rays;
         let none = counts(wall(shiny, sphere, "", ao));
         assert_eq!(none, RayCounts { primary: 192, ..RayCounts::default() }, "no lights: casting only");
         let lit = counts(wall(shiny, sphere, no_shadow, ""));
@@ -389,7 +390,7 @@ mod tests {
             "Directional(direction: (0, 0, 1), shadows: false)",
             "",
         );
-        let r = Renderer::new(&s, 15, 15, 1).unwrap();
+        let r = renderer(&s, 15, 15, 1);
         let mut counts = RayCounts::default();
         let through = r.pixel(7, 7, &mut counts);
         // Refracted in at the front (4 % reflects off it); out at the back,
@@ -413,7 +414,7 @@ mod tests {
             "Sphere(center: (1, 3, -3), radius: 0.7, intensity: 12, samples: 4), Point(position: (-2, 1, -4), intensity: 5)",
             "ambient: (0.2, 0.2, 0.2), effects: (ambient_occlusion: (samples: 4, radius: 1)),",
         );
-        let r = Renderer::new(&s, 48, 36, 4).unwrap();
+        let r = renderer(&s, 48, 36, 4);
         let run = |threads| crate::test_support::render_on_threads(&r, threads);
         let one = run(1);
         assert_eq!(one, run(2));
@@ -444,12 +445,12 @@ mod tests {
             centre = p(o),
         ));
         let light = -Vec3::new(0.3, -1.0, 0.2).normalize();
-        let r = Renderer::new(&s, 64, 48, 1).unwrap();
+        let r = renderer(&s, 64, 48, 1);
         let mut dark = 0;
         for y in 0..48 {
             for x in 0..64 {
                 let ray = r.view_plane().center_ray(x, y);
-                let Some(hit) = s.cast(&ray) else { continue };
+                let Some(hit) = s.scene.cast(&ray) else { continue };
                 let n = if hit.object == 1 { hit.normal } else { Vec3::Y };
                 let cos = n.dot(light);
                 // The floor under the sphere is legitimately in shadow: skip
@@ -481,26 +482,21 @@ mod tests {
     /// A lit sphere of radius 1 at the origin, as `primitive`, 48×48 pixels
     /// with a point light up and to the left (no shadows: only shading differs).
     fn lit_sphere(primitive: crate::primitive::Primitive) -> Vec<Color> {
-        use crate::camera::{Camera, Projection};
-        use crate::effects::Lighting;
         use crate::light::{Light, LightKind};
         use crate::material::Material;
-        let camera =
-            Camera::new(Vec3::new(0.0, 0.0, -4.0), Vec3::ZERO, Vec3::Y, 35.0, 1.0, Projection::Perspective)
-                .unwrap();
+        let camera = crate::test_support::camera_at(Vec3::new(0.0, 0.0, -4.0), Vec3::ZERO, 35.0);
         let light = Light {
             kind: LightKind::Point { position: Vec3::new(-3.0, 3.0, -3.0) },
             power: Color::splat(40.0),
             shadows: false,
         };
-        let scene = crate::scene::SceneBuilder::new(camera)
-            .image_size(48, 48)
-            .lighting(Lighting { lights: vec![light], ..Lighting::default() })
+        let scene = crate::scene::SceneBuilder::new()
+            .light(light)
             .material("m", Material { specular: 0.3, shininess: 60.0, ..Material::flat(Color::splat(0.8)) })
             .object(primitive, "m")
             .build()
             .unwrap();
-        Renderer::new(&scene, 48, 48, 1).unwrap().render(|_| {}).pixels
+        renderer_of(&scene, camera, Default::default(), (48, 48, 1)).render(|_| {}).pixels
     }
 
     #[test]

@@ -61,7 +61,7 @@ fn printed_numbers_round_trip_to_the_values_the_library_computes() {
         let num = |i: usize| cols[i].parse::<rt_core::Real>().unwrap();
         assert_eq!([num(0), num(1), num(2)], ray.origin.to_array(), "{row}");
         assert_eq!([num(3), num(4), num(5)], ray.dir.to_array(), "{row}");
-        match scene.cast(&ray) {
+        match scene.scene.cast(&ray) {
             Some(h) => {
                 hits += 1;
                 assert_eq!(cols[6], "1");
@@ -158,13 +158,13 @@ fn cast_pixels_works_on_every_scene_and_agrees_with_render() {
             // Without lights a hit shows its material's flat colour; with
             // lights or global illumination it is shaded, so only misses are
             // predictable.
-            let lit = scene.effect_plan().shading;
+            let lit = scene.scene.effect_plan(&scene.settings.effects).shading;
             let expected = if cols[8] == "1" {
                 hits += 1;
                 let object: usize = cols[10].parse().unwrap();
-                (!lit).then(|| to_rgb8(scene.object_material(object).color))
+                (!lit).then(|| to_rgb8(scene.scene.object_material(object).color))
             } else {
-                Some(scene.color_space.encode(scene.background))
+                Some(scene.settings.color_space.encode(scene.scene.background()))
             };
             if let Some(expected) = expected {
                 assert_eq!(img.get_pixel(px, py).0, expected, "{name} pixel ({px},{py})");

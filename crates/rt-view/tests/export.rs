@@ -95,9 +95,9 @@ fn export_writes_every_object_material_and_light_with_defaults_resolved() {
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     let loaded = rt_core::load_scene(&scene).unwrap();
     let objects = json["objects"].as_array().unwrap();
-    assert_eq!(objects.len(), loaded.objects().len());
-    assert_eq!(json["materials"].as_array().unwrap().len(), loaded.materials().len());
-    assert_eq!(json["width"], loaded.width);
+    assert_eq!(objects.len(), loaded.scene.objects().len());
+    assert_eq!(json["materials"].as_array().unwrap().len(), loaded.scene.materials().len());
+    assert_eq!(json["width"], loaded.settings.image.width());
     assert_eq!(json["camera"]["projection"], "Perspective");
     assert!(json["global_illumination"].is_null());
     // A default filled in: every material has its shininess and roughness.
@@ -112,7 +112,7 @@ fn export_writes_every_object_material_and_light_with_defaults_resolved() {
         kinds.contains(&"Sphere") && kinds.contains(&"Plane") && kinds.contains(&"Triangles"),
         "{kinds:?}"
     );
-    for (o, object) in objects.iter().zip(loaded.objects()) {
+    for (o, object) in objects.iter().zip(loaded.scene.objects()) {
         if o["kind"] != "Triangles" {
             continue;
         }
@@ -270,9 +270,9 @@ fn the_lights_of_the_every_effect_scene_are_exported_as_rt_view_loads_them() {
     let json = export(&scene, dir.path(), "effects");
     let loaded = rt_core::load_scene(&scene).unwrap();
     let lights = json["lights"].as_array().unwrap();
-    assert_eq!(lights.len(), loaded.lighting.lights.len());
+    assert_eq!(lights.len(), loaded.scene.lights().len());
     assert!(!lights.is_empty());
-    for (j, l) in lights.iter().zip(&loaded.lighting.lights) {
+    for (j, l) in lights.iter().zip(loaded.scene.lights()) {
         assert_eq!(colour(&j["power"]), l.power.to_array(), "{j}");
         assert_eq!(j["shadows"], l.shadows, "{j}");
         match l.kind {
@@ -348,7 +348,7 @@ fn every_object_is_exported_with_its_geometry_and_triangles_with_their_vertices_
     let poly = triangles(3);
     assert_eq!(poly.len(), 3);
     let corners = [[0.0, 0.0, 2.0], [2.0, 0.0, 2.0], [2.0, 1.0, 2.0], [1.0, 2.0, 2.0], [0.0, 1.0, 2.0]];
-    let rt_core::Primitive::Polygon(polygon) = &loaded.objects()[3].primitive else {
+    let rt_core::Primitive::Polygon(polygon) = &loaded.scene.objects()[3].primitive else {
         panic!("not a polygon")
     };
     let normal = wide(polygon.normal());
@@ -389,7 +389,7 @@ fn every_object_is_exported_with_its_geometry_and_triangles_with_their_vertices_
     // A mesh: its triangles in world space (scaled and moved), in order,
     // vertex for vertex as rt-view intersects them.
     let mesh_triangles = triangles(5);
-    let rt_core::Primitive::Mesh(mesh) = &loaded.objects()[5].primitive else { panic!("not a mesh") };
+    let rt_core::Primitive::Mesh(mesh) = &loaded.scene.objects()[5].primitive else { panic!("not a mesh") };
     assert_eq!(mesh_triangles.len(), mesh.triangle_count());
     assert_eq!(objects[5]["smooth"], mesh.has_vertex_normals());
     for (i, t) in mesh_triangles.iter().enumerate() {

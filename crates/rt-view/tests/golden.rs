@@ -148,7 +148,7 @@ fn compare_render(name: &str, reference: &Path, extra: &[&str]) {
         100.0 * fraction,
         reference.display()
     );
-    let color_space = rt_core::load_scene(&scene).unwrap().color_space;
+    let color_space = rt_core::load_scene(&scene).unwrap().settings.color_space;
     let biased = biased_blocks(&got, &want, color_space);
     assert!(
         biased.is_empty(),
@@ -269,7 +269,7 @@ fn references(files: &[(&str, &str)]) -> Vec<(PathBuf, ColorSpace)> {
         .iter()
         .map(|(file, scene)| {
             let color_space =
-                rt_core::load_scene(&scenes_dir().join(format!("{scene}.ron"))).unwrap().color_space;
+                rt_core::load_scene(&scenes_dir().join(format!("{scene}.ron"))).unwrap().settings.color_space;
             (root.join(file), color_space)
         })
         .collect()

@@ -3,11 +3,10 @@
 
 use serde::Deserialize;
 
-use super::values::{Finite, V3, check_count};
+use super::values::{Finite, V3};
 use crate::camera::{Camera, CameraBasis, CameraError, Projection};
 use crate::real::Vec3;
-use crate::sampler::MAX_SAMPLES_PER_PIXEL;
-use crate::view_plane::{ViewPlaneError, check_image_size};
+use crate::settings::{ImageSize, SamplesPerPixel, SettingsError};
 
 /// The camera as written, validated field by field as it is read, so that an
 /// error points at the field that makes the camera degenerate: `fov_y` and
@@ -104,33 +103,23 @@ pub(super) struct ImageFields {
 
 #[derive(Deserialize)]
 #[serde(try_from = "ImageFields")]
-pub(super) struct ImageDesc {
-    pub(super) width: u32,
-    pub(super) height: u32,
-}
+pub(super) struct ImageDesc(pub(super) ImageSize);
 
 impl TryFrom<ImageFields> for ImageDesc {
-    type Error = ViewPlaneError;
-    fn try_from(f: ImageFields) -> Result<Self, ViewPlaneError> {
-        check_image_size(f.width, f.height)?;
-        Ok(Self { width: f.width, height: f.height })
+    type Error = SettingsError;
+    fn try_from(f: ImageFields) -> Result<Self, SettingsError> {
+        ImageSize::new(f.width, f.height).map(Self)
     }
 }
 
-/// Samples per pixel, 1 to [`MAX_SAMPLES_PER_PIXEL`]; 1 when absent.
-#[derive(Deserialize)]
+/// Samples per pixel ([`SamplesPerPixel`]); 1 when absent.
+#[derive(Default, Deserialize)]
 #[serde(try_from = "u32")]
-pub(super) struct SamplesDesc(pub(super) u32);
-
-impl Default for SamplesDesc {
-    fn default() -> Self {
-        Self(1)
-    }
-}
+pub(super) struct SamplesDesc(pub(super) SamplesPerPixel);
 
 impl TryFrom<u32> for SamplesDesc {
-    type Error = String;
-    fn try_from(n: u32) -> Result<Self, String> {
-        check_count("samples_per_pixel", 1..=MAX_SAMPLES_PER_PIXEL, n).map(Self)
+    type Error = SettingsError;
+    fn try_from(n: u32) -> Result<Self, SettingsError> {
+        SamplesPerPixel::new(n).map(Self)
     }
 }

@@ -1,4 +1,6 @@
-//! Scene files: RON text → description types (serde) → a validated [`Scene`].
+//! Scene files: RON text → description types (serde) → a validated
+//! [`LoadedScene`]: the world ([`Scene`]), its camera, and the render
+//! settings the file asks for ([`RenderSettings`]).
 //!
 //! Values are checked where they are read, so RON can point at them: every
 //! number must be finite (a `values::Finite` reads it), and each camera, image size
@@ -21,11 +23,13 @@ use std::path::Path;
 use serde::Deserialize;
 use thiserror::Error;
 
+use crate::camera::Camera;
 use crate::color::ColorSpace;
-use crate::effects::Lighting;
+use crate::effects::Effects;
 use crate::method::Methods;
 use crate::model::ModelError;
 use crate::scene::{Scene, SceneBuildError, SceneBuilder};
+use crate::settings::RenderSettings;
 use camera::{CameraDesc, ImageDesc, SamplesDesc};
 use effects::EffectsDesc;
 use light::LightDesc;
@@ -78,9 +82,22 @@ pub enum SceneError {
     },
 }
 
+/// What a scene file holds: the world, the camera it is seen through, and
+/// how to render it. Each part is validated.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadedScene {
+    /// The world.
+    pub scene: Scene,
+    /// The file's camera.
+    pub camera: Camera,
+    /// The file's image size, samples per pixel, colour space and effects
+    /// (seed 0, nothing toggled off).
+    pub settings: RenderSettings,
+}
+
 /// Reads and validates the scene file at `path`; OBJ paths are relative to
 /// its directory.
-pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
+pub fn load_scene(path: &Path) -> Result<LoadedScene, SceneError> {
     let file = path.display().to_string();
     let text =
         std::fs::read_to_string(path).map_err(|reason| SceneError::Read { file: file.clone(), reason })?;
@@ -90,7 +107,7 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
 
 /// Parses and validates scene text. `file` names it in errors; OBJ paths are
 /// relative to `base_dir`.
-pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<Scene, SceneError> {
+pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<LoadedScene, SceneError> {
     let desc: SceneDesc = ron::from_str(text).map_err(|e| SceneError::Parse {
         file: file.to_owned(),
         line: e.span.start.line,
@@ -98,19 +115,23 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<Scene, Sce
         message: e.code.to_string(),
     })?;
 
-    let mut scene = SceneBuilder::new(desc.camera.0)
-        .image_size(desc.image.width, desc.image.height)
-        .background(desc.background.0)
-        .samples_per_pixel(desc.samples_per_pixel.0)
-        .color_space(desc.color_space)
-        .methods(desc.methods)
-        .lighting(Lighting {
-            lights: desc.lights.into_iter().map(|l| l.0).collect(),
-            ambient: desc.ambient.0,
-            max_depth: desc.effects.max_depth.0,
-            ambient_occlusion: desc.effects.ambient_occlusion.map(|a| a.0),
-            global_illumination: desc.effects.global_illumination.map(|g| g.0),
-        });
+    let effects = Effects {
+        max_depth: desc.effects.max_depth.0,
+        ambient_occlusion: desc.effects.ambient_occlusion.map(|a| a.0),
+        global_illumination: desc.effects.global_illumination.map(|g| g.0),
+    };
+    let settings = RenderSettings {
+        image: desc.image.0,
+        samples: desc.samples_per_pixel.0,
+        color_space: desc.color_space,
+        effects,
+        ..RenderSettings::default()
+    };
+    let mut scene =
+        SceneBuilder::new().background(desc.background.0).ambient(desc.ambient.0).methods(desc.methods);
+    for light in desc.lights {
+        scene = scene.light(light.0);
+    }
     for (name, material) in desc.materials {
         scene = scene.material(name, material.0);
     }
@@ -131,10 +152,27 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<Scene, Sce
         }
         entry_of.push(index);
     }
-    scene.build().map_err(|reason| SceneError::Invalid {
+    let invalid = |reason: SceneBuildError| SceneError::Invalid {
         file: file.to_owned(),
         reason: reason.with_object_index(|k| entry_of.get(k).copied().unwrap_or(k)),
-    })
+    };
+    let scene = scene.build().map_err(invalid)?;
+    // A translucent inside is simulated only by the path tracer.
+    if effects.global_illumination.is_none()
+        && let Some(index) =
+            scene.objects().iter().position(|o| scene.material(o.material).subsurface.is_some())
+    {
+        let o = &scene.objects()[index];
+        return Err(invalid(SceneBuildError::Subsurface {
+            index,
+            kind: o.primitive.kind(),
+            material: scene.material_names()[o.material].clone(),
+            reason: String::from(
+                "which needs global illumination: add effects: (global_illumination: ()) to the scene",
+            ),
+        }));
+    }
+    Ok(LoadedScene { scene, camera: desc.camera.0, settings })
 }
 
 #[derive(Deserialize)]
@@ -208,7 +246,7 @@ mod tests {
     ],
 )"#;
 
-    fn parse(text: &str) -> Result<Scene, SceneError> {
+    fn parse(text: &str) -> Result<LoadedScene, SceneError> {
         parse_scene(text, "bad.ron", Path::new("."))
     }
 
@@ -220,20 +258,22 @@ mod tests {
 
     #[test]
     fn a_good_scene_loads_with_defaults_filled_in() {
-        let s = parse(GOOD).unwrap();
-        assert_eq!((s.width, s.height, s.samples_per_pixel), (32, 24, 1));
-        assert_eq!(s.background, Color::ZERO);
+        let loaded = parse(GOOD).unwrap();
+        let s = &loaded.scene;
+        let image = loaded.settings.image;
+        assert_eq!((image.width(), image.height(), loaded.settings.samples.get()), (32, 24, 1));
+        assert_eq!(s.background(), Color::ZERO);
         assert_eq!(s.material_names(), ["grey", "red"]);
         assert_eq!(s.objects().len(), 2);
         assert_eq!(s.objects()[0].material, 1);
-        assert_eq!(s.camera.projection(), Projection::Perspective);
+        assert_eq!(loaded.camera.projection(), Projection::Perspective);
     }
 
     #[test]
     fn intersection_methods_default_to_the_careful_ones_and_can_be_chosen() {
-        assert!(parse(GOOD).unwrap().methods.is_default());
+        assert!(parse(GOOD).unwrap().scene.methods().is_default());
         let chosen = GOOD.replace("image:", "methods: (triangle: AreaRatio, box: SixPlane),\n    image:");
-        let methods = parse(&chosen).unwrap().methods;
+        let methods = parse(&chosen).unwrap().scene.methods();
         assert_eq!(
             methods,
             Methods {
@@ -372,15 +412,17 @@ mod tests {
         let e = error_after("width: 32", "width: -4");
         assert!(e.starts_with("bad.ron:3:"), "{e}");
         let e = error_after("image:", "samples_per_pixel: 0, image:");
-        assert!(e.contains("samples_per_pixel must be 1 to"), "{e}");
+        assert!(e.contains("samples per pixel must be 1 to"), "{e}");
     }
 
     #[test]
     fn a_flat_scene_has_no_lights_and_plain_materials() {
-        let s = parse(GOOD).unwrap();
-        assert_eq!(s.lighting, Lighting { max_depth: 5, ..Lighting::default() });
+        let loaded = parse(GOOD).unwrap();
+        let s = &loaded.scene;
+        assert!(s.lights().is_empty() && s.ambient() == Color::ZERO);
+        assert_eq!(loaded.settings.effects, Effects { max_depth: 5, ..Effects::default() });
         assert_eq!(s.materials()[1], Material::flat(Color::new(1.0, 0.0, 0.0)));
-        assert_eq!(s.color_space, ColorSpace::Linear);
+        assert_eq!(loaded.settings.color_space, ColorSpace::Linear);
     }
 
     #[test]
@@ -401,26 +443,28 @@ mod tests {
                 effects: (max_depth: 3, ambient_occlusion: (samples: 8, radius: 2)),
                 objects: [",
             );
-        let s = parse(&text).unwrap();
-        assert_eq!(s.color_space, ColorSpace::Srgb);
+        let loaded = parse(&text).unwrap();
+        let s = &loaded.scene;
+        assert_eq!(loaded.settings.color_space, ColorSpace::Srgb);
         let grey = s.materials()[0];
         assert_eq!((grey.specular, grey.shininess, grey.transparency, grey.ior), (0.4, 64.0, 0.5, 1.33));
         assert_eq!((grey.diffuse, grey.reflectivity, grey.emission), (1.0, 0.0, Color::ZERO));
-        let l = &s.lighting;
-        assert_eq!(l.ambient, Color::splat(0.1));
+        assert_eq!(s.ambient(), Color::splat(0.1));
+        let lights = s.lights();
         assert_eq!(
-            l.lights[0],
+            lights[0],
             Light {
                 kind: LightKind::Point { position: Vec3::new(0.0, 5.0, 0.0) },
                 power: Color::ONE,
                 shadows: true
             }
         );
-        assert_eq!(l.lights[1].kind, LightKind::Directional { direction: -Vec3::Y });
-        assert_eq!((l.lights[1].power, l.lights[1].shadows), (Color::new(2.0, 1.0, 0.0), false));
-        assert_eq!(l.lights[2].sample_count(), 9);
-        assert_eq!(l.max_depth, 3);
-        assert_eq!(l.ambient_occlusion, Some(AmbientOcclusion { samples: 8, radius: 2.0 }));
+        assert_eq!(lights[1].kind, LightKind::Directional { direction: -Vec3::Y });
+        assert_eq!((lights[1].power, lights[1].shadows), (Color::new(2.0, 1.0, 0.0), false));
+        assert_eq!(lights[2].sample_count(), 9);
+        let effects = loaded.settings.effects;
+        assert_eq!(effects.max_depth, 3);
+        assert_eq!(effects.ambient_occlusion, Some(AmbientOcclusion { samples: 8, radius: 2.0 }));
     }
 
     #[test]
@@ -481,7 +525,7 @@ mod tests {
         let gi = |fields: &str| {
             let text = GOOD
                 .replace("objects: [", &format!("effects: (global_illumination: ({fields})), objects: ["));
-            parse(&text).unwrap().lighting.global_illumination.unwrap()
+            parse(&text).unwrap().settings.effects.global_illumination.unwrap()
         };
         assert_eq!(
             gi(""),
@@ -491,7 +535,7 @@ mod tests {
             gi("max_bounces: 3, russian_roulette: false, max_walk_steps: 20"),
             GlobalIllumination { max_bounces: 3, russian_roulette: false, max_walk_steps: 20 }
         );
-        assert_eq!(parse(GOOD).unwrap().lighting.global_illumination, None);
+        assert_eq!(parse(GOOD).unwrap().settings.effects.global_illumination, None);
     }
 
     #[test]
@@ -505,12 +549,12 @@ mod tests {
         };
         let s = parse(&with("albedo: (0.9, 0.8, 0.7), mean_free_path: (0.1, 0.2, 0.3), anisotropy: 0.4"))
             .unwrap();
-        let m = s.materials()[s.objects()[0].material].subsurface.unwrap();
+        let m = s.scene.materials()[s.scene.objects()[0].material].subsurface.unwrap();
         assert_eq!(m.albedo, Color::new(0.9, 0.8, 0.7));
         assert_eq!(m.mean_free_path, Color::new(0.1, 0.2, 0.3));
         assert_eq!(m.anisotropy, 0.4);
         let g0 = parse(&with("albedo: (1, 1, 1), mean_free_path: (1, 1, 1)")).unwrap();
-        assert_eq!(g0.materials()[g0.objects()[0].material].subsurface.unwrap().anisotropy, 0.0);
+        assert_eq!(g0.scene.materials()[g0.scene.objects()[0].material].subsurface.unwrap().anisotropy, 0.0);
         let bad = |fields: &str| parse(&with(fields)).unwrap_err().to_string();
         let e = bad("albedo: (1.2, 1, 1), mean_free_path: (1, 1, 1)");
         assert!(
@@ -622,7 +666,7 @@ mod tests {
         let path = dir.path().join("scene.ron");
         std::fs::write(&path, text).unwrap();
         let scene = load_scene(&path).unwrap();
-        assert!(matches!(&scene.objects()[0].primitive, Primitive::Mesh(m) if m.triangle_count() == 1));
+        assert!(matches!(&scene.scene.objects()[0].primitive, Primitive::Mesh(m) if m.triangle_count() == 1));
     }
 
     #[test]
@@ -648,7 +692,7 @@ mod tests {
         );
         let path = dir.path().join("scene.ron");
         std::fs::write(&path, &text).unwrap();
-        let scene = load_scene(&path).unwrap();
+        let scene = load_scene(&path).unwrap().scene;
         // Two parts, then the overridden mesh as one object, then the plane.
         let names: Vec<&str> =
             scene.objects().iter().map(|o| scene.material_names()[o.material].as_str()).collect();

@@ -25,7 +25,7 @@ use clap::Args;
 use plotters::prelude::*;
 use rt_core::hard_cases::{CaseKind, all_cases};
 use rt_core::method::{BoxMethod, Methods, SphereMethod, TriangleMethod};
-use rt_core::{Renderer, Scene, load_scene};
+use rt_core::{Camera, RenderSettings, Renderer, SamplesPerPixel, Scene, load_scene};
 
 use crate::timing::median_time;
 
@@ -355,11 +355,11 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
     let mut rows = Vec::new();
     for sweep in sweeps {
         let path = args.scenes.join(sweep.scene);
-        let scene = load_scene(&path).with_context(|| format!("cannot load {}", path.display()))?;
+        let loaded = load_scene(&path).with_context(|| format!("cannot load {}", path.display()))?;
         eprintln!("images: {} ({}) ...", sweep.experiment, path.display());
         // The method sweep renders at the scene's own size: its differences are single pixels.
         let size = if sweep.experiment.starts_with("methods") && !args.quick {
-            (scene.width, scene.height)
+            (loaded.settings.image.width(), loaded.settings.image.height())
         } else if sweep.experiment.starts_with("global") {
             if args.quick { (32, 32) } else { (128, 128) }
         } else if sweep.experiment.starts_with("subsurface") {
@@ -367,16 +367,13 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         } else {
             size
         };
-        let mut scene = scene;
-        if let Some(spp) = sweep.spp {
-            scene.samples_per_pixel = spp;
-        }
+        let settings = loaded.settings.overridden(Some(size.0), Some(size.1), sweep.spp)?;
         let mut renders = Vec::new();
         for &setting in &sweep.settings {
-            renders.push((setting, render(&scene, setting, size, runs)?));
+            renders.push((setting, render(&loaded.scene, loaded.camera, settings, setting, runs)?));
         }
         // The reference too (its error is 0 by definition), timed once: it is the slowest.
-        let reference = render(&scene, sweep.reference, size, 1)?;
+        let reference = render(&loaded.scene, loaded.camera, settings, sweep.reference, 1)?;
         renders.push((sweep.reference, reference.clone()));
         for (setting, (image, time)) in renders {
             let (rmse, max_error) = image_error(&image.0, &reference.0.0);
@@ -400,27 +397,30 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
 /// Pixels as 8-bit values, and the rays one render cast.
 type Image = (Vec<[u8; 3]>, u64);
 
-/// Renders `scene` with one setting changed, `runs` times: the last image
-/// and the median time.
+/// Renders `scene` through `camera` with `settings` and one setting
+/// changed, `runs` times: the last image and the median time.
 fn render(
     scene: &Scene,
+    camera: Camera,
+    mut settings: RenderSettings,
     setting: Setting,
-    (w, h): (u32, u32),
     runs: usize,
 ) -> anyhow::Result<(Image, Duration)> {
-    let mut scene = scene.clone();
-    let mut spp = scene.samples_per_pixel;
-    let gi = scene.lighting.global_illumination.as_mut();
+    let mut other_methods = None;
+    let gi = settings.effects.global_illumination.as_mut();
     match (setting, gi) {
-        (Setting::Spp(n), _) => spp = n,
-        (Setting::Depth(n), _) => scene.lighting.max_depth = n,
-        (Setting::Methods(m), _) => scene.methods = m,
+        (Setting::Spp(n), _) => settings.samples = SamplesPerPixel::new(n)?,
+        (Setting::Depth(n), _) => settings.effects.max_depth = n,
+        (Setting::Methods(m), _) => other_methods = Some(scene.clone().with_methods(m)),
         (Setting::Bounces(n), Some(gi)) => gi.max_bounces = n,
-        (Setting::Roulette(on, n), Some(gi)) => (gi.russian_roulette, spp) = (on, n),
+        (Setting::Roulette(on, n), Some(gi)) => {
+            gi.russian_roulette = on;
+            settings.samples = SamplesPerPixel::new(n)?;
+        }
         (Setting::WalkSteps(n), Some(gi)) => gi.max_walk_steps = n,
         (_, None) => bail!("{setting:?} needs a scene with global illumination"),
     }
-    let renderer = Renderer::new(&scene, w, h, spp)?;
+    let renderer = Renderer::new(other_methods.as_ref().unwrap_or(scene), camera, &settings)?;
     let mut frame = None;
     let time = median_time(runs, || frame = Some(renderer.render(|_| {})));
     let frame = frame.expect("at least one run");

@@ -21,7 +21,8 @@ use rt_core::mesh::Mesh;
 use rt_core::real::to_f32;
 use rt_core::sampler::{SampleRng, cosine_hemisphere};
 use rt_core::{
-    Camera, Color, Interval, Material, Primitive, Projection, Ray, Real, Renderer, Scene, SceneBuilder, Vec3,
+    Camera, Color, ImageSize, Interval, Material, Primitive, Projection, Ray, Real, RenderSettings, Renderer,
+    Scene, SceneBuilder, Vec3,
 };
 
 use crate::timing::median;
@@ -87,8 +88,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         let mesh = Mesh::new(positions, triangles).context("generated mesh")?;
         let mesh_bytes = mesh.memory_bytes();
         let scene_of = |mesh: Mesh| {
-            SceneBuilder::new(camera)
-                .image_size(WIDTH, HEIGHT)
+            SceneBuilder::new()
                 .background(Color::ONE)
                 .material("ground", Material::flat(Color::new(0.4, 0.6, 0.3)))
                 .object(Primitive::Mesh(mesh), "ground")
@@ -96,7 +96,8 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         };
         let scene = scene_of(mesh.clone())?;
         let stats = scene.bvh_stats();
-        let renderer = Renderer::new(&scene, WIDTH, HEIGHT, 1)?;
+        let settings = RenderSettings { image: ImageSize::new(WIDTH, HEIGHT)?, ..RenderSettings::default() };
+        let renderer = Renderer::new(&scene, camera, &settings)?;
         let view = renderer.view_plane();
         let primary: Vec<Ray> =
             (0..HEIGHT).flat_map(|y| (0..WIDTH).map(move |x| view.center_ray(x, y))).collect();
@@ -222,12 +223,12 @@ fn time_scene(path: &Path, runs: usize) -> anyhow::Result<Option<(Duration, u32,
     if !path.exists() {
         return Ok(None);
     }
-    let scene = rt_core::load_scene(path)?;
-    let renderer = Renderer::new(&scene, scene.width, scene.height, scene.samples_per_pixel)?;
+    let loaded = rt_core::load_scene(path)?;
+    let renderer = Renderer::new(&loaded.scene, loaded.camera, &loaded.settings)?;
     let time = median_of(runs, || {
         renderer.render(|_| {});
     });
-    Ok(Some((time, scene.width, scene.height)))
+    Ok(Some((time, loaded.settings.image.width(), loaded.settings.image.height())))
 }
 
 fn report(args: &BenchArgs, rows: &[Row], showcase: Option<(Duration, u32, u32)>) -> anyhow::Result<()> {

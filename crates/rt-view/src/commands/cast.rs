@@ -44,14 +44,14 @@ const BATCH: usize = 1 << 14;
 /// Runs `cast`, writing the CSV to standard output. All input is read and
 /// validated first; after that nothing can fail but the write itself.
 pub fn run(args: &CastArgs) -> anyhow::Result<()> {
-    let scene = rt_core::load_scene(&args.scene)?;
+    let loaded = rt_core::load_scene(&args.scene)?;
+    let scene = &loaded.scene;
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     if args.pixels {
-        let width = args.width.unwrap_or(scene.width);
-        let height = args.height.unwrap_or(scene.height);
-        let view = scene
-            .view_plane(width, height)
-            .with_context(|| format!("{}: cannot cast pixels", args.scene.display()))?;
+        let cannot = || format!("{}: cannot cast pixels", args.scene.display());
+        let image = loaded.settings.overridden(args.width, args.height, None).with_context(cannot)?.image;
+        let (width, height) = (image.width(), image.height());
+        let view = rt_core::ViewPlane::new(loaded.camera, width, height).with_context(cannot)?;
         writeln!(out, "px,py,{HEADER}")?;
         let pixels = width as usize * height as usize;
         for start in (0..pixels).step_by(BATCH) {
@@ -72,7 +72,7 @@ pub fn run(args: &CastArgs) -> anyhow::Result<()> {
         let rays = parse_rays(&text).map_err(|e| anyhow::anyhow!("{name}:{e}"))?;
         writeln!(out, "{HEADER}")?;
         for chunk in rays.chunks(BATCH) {
-            out.write_all(rays_rows(&scene, chunk).as_bytes())?;
+            out.write_all(rays_rows(scene, chunk).as_bytes())?;
         }
     }
     out.flush().context("cannot write to standard output")

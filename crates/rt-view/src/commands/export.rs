@@ -142,7 +142,8 @@ fn c3(c: Color) -> [f32; 3] {
 
 /// Writes the scene's JSON and its OBJ files.
 pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
-    let scene = rt_core::load_scene(&args.scene)?;
+    let loaded = rt_core::load_scene(&args.scene)?;
+    let (scene, settings) = (&loaded.scene, &loaded.settings);
     let json = PendingFile::create(&args.output)?;
     let stem = args.output.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let dir = args.output.parent().unwrap_or(Path::new("."));
@@ -190,8 +191,7 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
         })
         .collect();
     let lights = scene
-        .lighting
-        .lights
+        .lights()
         .iter()
         .map(|l| {
             let (power, shadows) = (c3(l.power), l.shadows);
@@ -206,7 +206,7 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
             }
         })
         .collect();
-    let c = &scene.camera;
+    let c = &loaded.camera;
     let out = SceneJson {
         camera: CameraJson {
             position: v3(c.position()),
@@ -219,17 +219,17 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
                 rt_core::Projection::Orthographic => "Orthographic",
             },
         },
-        width: scene.width,
-        height: scene.height,
-        samples_per_pixel: scene.samples_per_pixel,
-        background: c3(scene.background),
-        color_space: match scene.color_space {
+        width: settings.image.width(),
+        height: settings.image.height(),
+        samples_per_pixel: settings.samples.get(),
+        background: c3(scene.background()),
+        color_space: match settings.color_space {
             rt_core::color::ColorSpace::Linear => "Linear",
             rt_core::color::ColorSpace::Srgb => "Srgb",
         },
-        ambient: c3(scene.lighting.ambient),
-        max_depth: scene.lighting.max_depth,
-        global_illumination: scene.lighting.global_illumination.map(|g| GiJson {
+        ambient: c3(scene.ambient()),
+        max_depth: settings.effects.max_depth,
+        global_illumination: settings.effects.global_illumination.map(|g| GiJson {
             max_bounces: g.max_bounces,
             russian_roulette: g.russian_roulette,
             max_walk_steps: g.max_walk_steps,

@@ -54,17 +54,20 @@ pub struct Interrupted;
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let output = PendingImage::create(&args.output)?;
     let load_start = Instant::now();
-    let scene = rt_core::load_scene(&args.scene)?;
+    let loaded = rt_core::load_scene(&args.scene)?;
     let load_time = load_start.elapsed();
+    let scene = &loaded.scene;
     for warning in scene.warnings() {
         eprintln!("warning: {}: {warning}", args.scene.display());
     }
-    let width = args.width.unwrap_or(scene.width);
-    let height = args.height.unwrap_or(scene.height);
-    let spp = args.spp.unwrap_or(scene.samples_per_pixel);
-    let renderer = Renderer::new(&scene, width, height, spp)
+    let settings = loaded
+        .settings
+        .overridden(args.width, args.height, args.spp)
         .with_context(|| format!("{}: cannot render", args.scene.display()))?
         .with_seed(args.seed);
+    let (width, height, spp) = (settings.image.width(), settings.image.height(), settings.samples.get());
+    let renderer = Renderer::new(scene, loaded.camera, &settings)
+        .with_context(|| format!("{}: cannot render", args.scene.display()))?;
 
     let stop = Arc::new(AtomicBool::new(false));
     let handler_stop = stop.clone();
@@ -102,7 +105,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             bvh.bytes as f64 / 1024.0,
             bvh.bytes as f64 / bvh.primitives.max(1) as f64
         );
-        if let Some(line) = describe_geometry(&scene) {
+        if let Some(line) = describe_geometry(scene) {
             eprintln!("{line}");
         }
         eprintln!("effects: {}", describe_plan(renderer.plan()));

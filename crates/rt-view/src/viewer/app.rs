@@ -82,7 +82,7 @@ impl Viewer {
     /// The viewer on `scene` (loaded from `options.scene`), its first render started.
     pub(super) fn new(
         ctx: &egui::Context,
-        scene: rt_core::Scene,
+        scene: rt_core::LoadedScene,
         options: ViewerOptions,
         outcome: Outcome,
     ) -> Self {
@@ -92,7 +92,7 @@ impl Viewer {
     /// [`Viewer::new`] with the recent-files list given (tests keep theirs apart).
     fn with_recent(
         ctx: &egui::Context,
-        scene: rt_core::Scene,
+        scene: rt_core::LoadedScene,
         options: ViewerOptions,
         outcome: Outcome,
         recent: RecentFiles,
@@ -121,8 +121,8 @@ impl Viewer {
         let scene = self.source.scene();
         let camera = self.camera.settings().to_camera().ok()?;
         let (width, height) = self.image.full_size(scene);
-        let plan = self.image.plan(scene);
-        Some(JobSpec { scene: scene.clone(), camera, width, height, spp: self.image.spp(), plan })
+        let toggles = self.image.toggles();
+        Some(JobSpec { scene: scene.clone(), camera, width, height, spp: self.image.spp(), toggles })
     }
 
     /// Starts a job of `kind` now.
@@ -334,7 +334,7 @@ impl Viewer {
 /// shows and hits: its linear colour from `job` (if that rendered the full
 /// image), and its primary ray's hit as `rt-view cast --pixels` reports it.
 fn inspect(
-    scene: &rt_core::Scene,
+    scene: &rt_core::LoadedScene,
     settings: &CameraSettings,
     (w, h): (u32, u32),
     job: Option<&RenderJob>,
@@ -351,10 +351,10 @@ fn inspect(
     let view = settings.to_camera().ok().and_then(|c| ViewPlane::new(c, w, h).ok());
     if let Some(view) = view {
         let ray = view.center_ray(x, y);
-        match scene.cast(&ray) {
+        match scene.scene.cast(&ray) {
             Some(hit) => {
-                let object = &scene.objects()[hit.object];
-                let material = &scene.material_names()[object.material];
+                let object = &scene.scene.objects()[hit.object];
+                let material = &scene.scene.material_names()[object.material];
                 let distance = hit.t * ray.dir.length();
                 lines.push(format!(
                     "object {} ({}, material \"{material}\"), primitive {}",
@@ -575,9 +575,9 @@ mod tests {
         let look = |p| inspect(scene, v.camera.settings(), size, job, p);
         // What `rt-view cast --pixels` prints for pixel (x, y): its CSV row
         // ox,oy,oz,dx,dy,dz,hit,t,object,primitive,nx,ny,nz, split.
-        let view = scene.view_plane(size.0, size.1).unwrap();
+        let view = rt_core::ViewPlane::new(scene.camera, size.0, size.1).unwrap();
         let cast = |x: u32, y: u32| -> Vec<String> {
-            let row = crate::commands::cast::rays_rows(scene, &[view.center_ray(x, y)]);
+            let row = crate::commands::cast::rays_rows(&scene.scene, &[view.center_ray(x, y)]);
             row.trim_end().split(',').map(str::to_owned).collect()
         };
         let hits = |x: u32, y: u32| cast(x, y)[6] == "1";
@@ -603,8 +603,8 @@ mod tests {
                 let object: usize = row[8].parse().unwrap();
                 let expected = format!(
                     "object {object} ({}, material \"{}\"), primitive {}",
-                    scene.objects()[object].primitive.kind(),
-                    scene.material_names()[scene.objects()[object].material],
+                    scene.scene.objects()[object].primitive.kind(),
+                    scene.scene.material_names()[scene.scene.objects()[object].material],
                     row[9]
                 );
                 let object_line = text.lines().find(|l| l.starts_with("object ")).expect("object line");
@@ -618,7 +618,7 @@ mod tests {
                 assert_eq!(distance, t * dir.length(), "{text}");
                 let normal: Vec<rt_core::Real> = numbers_after(&text, "normal (", ")");
                 assert_eq!(normal, [num(10), num(11), num(12)], "{text}");
-                let color = scene.materials()[scene.objects()[object].material].color;
+                let color = scene.scene.materials()[scene.scene.objects()[object].material].color;
                 if interior {
                     for (got, want) in linear.iter().zip(color.to_array()) {
                         assert!((got - want as f64).abs() <= 0.5e-4, "{text}: want {color}");
@@ -629,8 +629,12 @@ mod tests {
                 assert!(text.ends_with("\nno hit: background"), "{text}");
                 assert!(!text.contains("object ") && !text.contains("normal ("), "{text}");
                 if interior {
-                    for (got, want) in linear.iter().zip(scene.background.to_array()) {
-                        assert!((got - want as f64).abs() <= 0.5e-4, "{text}: want {}", scene.background);
+                    for (got, want) in linear.iter().zip(scene.scene.background().to_array()) {
+                        assert!(
+                            (got - want as f64).abs() <= 0.5e-4,
+                            "{text}: want {}",
+                            scene.scene.background()
+                        );
                     }
                 }
             }

@@ -1,7 +1,7 @@
 //! The image section of the side panel: resolution scale, samples per pixel
 //! and the effects the user has switched off.
 
-use rt_core::Scene;
+use rt_core::LoadedScene;
 use rt_core::effects::{EffectPlan, EffectToggles};
 use rt_core::view_plane::MAX_IMAGE_SIDE;
 
@@ -19,15 +19,15 @@ pub(super) struct ImageSettings {
 
 impl ImageSettings {
     /// The settings for `scene`: its size and samples, every effect on.
-    pub fn new(scene: &Scene) -> Self {
-        Self { resolution_scale: 1.0, spp: scene.samples_per_pixel, toggles: EffectToggles::default() }
+    pub fn new(scene: &LoadedScene) -> Self {
+        Self { resolution_scale: 1.0, spp: scene.settings.samples.get(), toggles: EffectToggles::default() }
     }
 
     /// A new scene was loaded: its sample count is taken if `reset` or if the
     /// file's count changed (otherwise the user's choice stays).
-    pub fn scene_loaded(&mut self, scene: &Scene, previous: &Scene, reset: bool) {
-        if reset || scene.samples_per_pixel != previous.samples_per_pixel {
-            self.spp = scene.samples_per_pixel;
+    pub fn scene_loaded(&mut self, scene: &LoadedScene, previous: &LoadedScene, reset: bool) {
+        if reset || scene.settings.samples != previous.settings.samples {
+            self.spp = scene.settings.samples.get();
         }
     }
 
@@ -37,18 +37,19 @@ impl ImageSettings {
     }
 
     /// Full-resolution image size: the scene's, times the resolution scale.
-    pub fn full_size(&self, scene: &Scene) -> (u32, u32) {
+    pub fn full_size(&self, scene: &LoadedScene) -> (u32, u32) {
         let scale = |n: u32| ((n as f32 * self.resolution_scale).round() as u32).clamp(1, MAX_IMAGE_SIDE);
-        (scale(scene.width), scale(scene.height))
+        let image = scene.settings.image;
+        (scale(image.width()), scale(image.height()))
     }
 
-    /// The effects to simulate: what `scene` asks for, less what is switched off.
-    pub fn plan(&self, scene: &Scene) -> EffectPlan {
-        scene.effect_plan().restricted(self.toggles)
+    /// The effects the user has switched off.
+    pub fn toggles(&self) -> EffectToggles {
+        self.toggles
     }
 
     /// The resolution, sample and effect controls.
-    pub fn ui(&mut self, ui: &mut egui::Ui, scene: &Scene) -> Interaction {
+    pub fn ui(&mut self, ui: &mut egui::Ui, scene: &LoadedScene) -> Interaction {
         ui.heading("Image");
         let r = ui.add(egui::Slider::new(&mut self.resolution_scale, 0.25..=2.0).text("resolution scale"));
         let mut interaction = Interaction { changed: r.changed(), dragging: r.dragged() };
@@ -58,7 +59,7 @@ impl ImageSettings {
             .add(egui::Slider::new(&mut self.spp, 1..=1024).logarithmic(true).text("samples per pixel"))
             .on_hover_text("Anti-aliasing and soft-shadow quality: shows 1 sample first, then refines");
         interaction = interaction | Interaction { changed: r.changed(), dragging: r.dragged() };
-        interaction.changed |= self.effects_ui(ui, &scene.effect_plan());
+        interaction.changed |= self.effects_ui(ui, &scene.scene.effect_plan(&scene.settings.effects));
         interaction
     }
 

@@ -29,9 +29,9 @@ use std::time::{Duration, Instant};
 
 use egui::Color32;
 use rt_core::color::Color;
-use rt_core::effects::{EffectPlan, RayCounts};
+use rt_core::effects::{EffectToggles, RayCounts};
 use rt_core::render::{BAND_ROWS, RenderError};
-use rt_core::{Camera, Renderer, Scene};
+use rt_core::{Camera, LoadedScene, RenderSettings, Renderer, SettingsError};
 
 /// The sample ranges of the progressive passes for `spp` samples per pixel:
 /// `0..1`, then ranges four times longer than all before them together
@@ -63,7 +63,7 @@ type BandFn = dyn Fn(&Renderer, Range<u32>, Range<u32>, &mut [Color]) -> RayCoun
 #[derive(Clone, Debug)]
 pub struct JobSpec {
     /// The scene (shared with the UI, never copied).
-    pub scene: Arc<Scene>,
+    pub scene: Arc<LoadedScene>,
     /// The camera to render with (the viewer's, not necessarily the file's).
     pub camera: Camera,
     /// Image width in pixels.
@@ -72,14 +72,30 @@ pub struct JobSpec {
     pub height: u32,
     /// Samples per pixel.
     pub spp: u32,
-    /// The effects to simulate (the scene's, less the viewer's toggles).
-    pub plan: EffectPlan,
+    /// The effects the user switched off (the rest of the settings are the file's).
+    pub toggles: EffectToggles,
 }
 
 impl JobSpec {
-    fn renderer(&self) -> Result<Renderer<'_>, RenderError> {
-        Renderer::with_plan(&self.scene, self.camera, self.width, self.height, self.spp, self.plan)
+    fn renderer(&self) -> Result<Renderer<'_>, JobError> {
+        let settings = RenderSettings { toggles: self.toggles, ..self.scene.settings }.overridden(
+            Some(self.width),
+            Some(self.height),
+            Some(self.spp),
+        )?;
+        Ok(Renderer::new(&self.scene.scene, self.camera, &settings)?)
     }
+}
+
+/// Why a job cannot start.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum JobError {
+    /// The size or sample count is out of range.
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
+    /// The camera's view plane at that size is unusable.
+    #[error(transparent)]
+    Render(#[from] RenderError),
 }
 
 /// One finished row.
@@ -181,7 +197,7 @@ impl RenderJob {
         spec: JobSpec,
         generation: u64,
         on_row: impl Fn() + Send + Sync + 'static,
-    ) -> Result<Self, RenderError> {
+    ) -> Result<Self, JobError> {
         Self::spawn(
             spec,
             generation,
@@ -198,7 +214,7 @@ impl RenderJob {
         generation: u64,
         on_row: impl Fn() + Send + Sync + 'static,
         render_band: Box<BandFn>,
-    ) -> Result<Self, RenderError> {
+    ) -> Result<Self, JobError> {
         // Validate on the caller's thread, so errors are returned, not lost.
         spec.renderer()?;
         let shared = Arc::new(Shared::new(spec.width, spec.height));
@@ -420,8 +436,7 @@ mod tests {
     fn spec(width: u32, height: u32) -> JobSpec {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/showcase.ron");
         let scene = Arc::new(rt_core::load_scene(&path).unwrap());
-        let plan = scene.effect_plan();
-        JobSpec { camera: scene.camera, scene, width, height, spp: 1, plan }
+        JobSpec { camera: scene.camera, scene, width, height, spp: 1, toggles: EffectToggles::default() }
     }
 
     #[test]
@@ -439,7 +454,13 @@ mod tests {
     #[test]
     fn streamed_rows_equal_the_headless_render_bit_for_bit() {
         let s = spec(80, 45);
-        let frame = Renderer::with_camera(&s.scene, s.camera, 80, 45, 1).unwrap().render(|_| {});
+        let frame = Renderer::new(
+            &s.scene.scene,
+            s.camera,
+            &s.scene.settings.overridden(Some(80), Some(45), Some(1)).unwrap(),
+        )
+        .unwrap()
+        .render(|_| {});
         let job = RenderJob::start(s, 1, || {}).unwrap();
         let mut image = vec![Color32::BLACK; 80 * 45];
         while let Some(row) = job.next_row_blocking() {
@@ -463,7 +484,13 @@ mod tests {
     fn a_progressive_render_streams_every_pass_and_ends_equal_to_the_headless_render() {
         let mut s = spec(48, 27);
         s.spp = 9;
-        let frame = Renderer::with_camera(&s.scene, s.camera, 48, 27, 9).unwrap().render(|_| {});
+        let frame = Renderer::new(
+            &s.scene.scene,
+            s.camera,
+            &s.scene.settings.overridden(Some(48), Some(27), Some(9)).unwrap(),
+        )
+        .unwrap()
+        .render(|_| {});
         let job = RenderJob::start(s, 1, || {}).unwrap();
         let mut image = vec![Color32::BLACK; 48 * 27];
         let mut seen = vec![Vec::new(); 27];
@@ -574,6 +601,9 @@ mod tests {
     fn invalid_specs_are_refused_before_a_thread_starts() {
         let mut s = spec(10, 10);
         s.spp = 0;
-        assert!(matches!(RenderJob::start(s, 1, || {}), Err(RenderError::SamplesPerPixel(0))));
+        assert!(matches!(
+            RenderJob::start(s, 1, || {}),
+            Err(JobError::Settings(SettingsError::SamplesPerPixel(0)))
+        ));
     }
 }

@@ -12,7 +12,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use egui::Color32;
-use rt_core::Scene;
+use rt_core::LoadedScene;
 
 use super::file_browser::FileBrowser;
 use super::recent::RecentFiles;
@@ -24,7 +24,7 @@ pub const DEFAULT_SCENE: &str = include_str!("../../../../scenes/default.ron");
 pub const DEFAULT_SCENE_NAME: &str = "<built-in default scene>";
 
 /// Loads the scene (the built-in one for `None`).
-pub fn load(path: Option<&Path>) -> Result<Scene, rt_core::SceneError> {
+pub fn load(path: Option<&Path>) -> Result<LoadedScene, rt_core::SceneError> {
     match path {
         Some(p) => rt_core::load_scene(p),
         None => rt_core::parse_scene(DEFAULT_SCENE, DEFAULT_SCENE_NAME, Path::new(".")),
@@ -39,7 +39,7 @@ const RELOAD_DEBOUNCE: Duration = Duration::from_millis(100);
 #[derive(Clone, Debug)]
 pub(super) struct SceneChange {
     /// The scene shown before.
-    pub previous: Arc<Scene>,
+    pub previous: Arc<LoadedScene>,
     /// Another file was opened: the view starts from its camera and settings.
     pub opened: bool,
 }
@@ -47,7 +47,7 @@ pub(super) struct SceneChange {
 /// The scene, where it came from, and its watcher.
 pub(super) struct SceneSource {
     path: Option<PathBuf>,
-    scene: Arc<Scene>,
+    scene: Arc<LoadedScene>,
     watcher: Option<SceneWatcher>,
     reload_at: Option<Instant>,
     /// The text of the path field.
@@ -63,7 +63,7 @@ pub(super) struct SceneSource {
 impl SceneSource {
     /// The source of `scene`, loaded from `path` (`None`: the built-in scene),
     /// watched from now on; `ctx` is repainted when a file changes.
-    pub fn new(path: Option<PathBuf>, scene: Scene, recent: RecentFiles, ctx: &egui::Context) -> Self {
+    pub fn new(path: Option<PathBuf>, scene: LoadedScene, recent: RecentFiles, ctx: &egui::Context) -> Self {
         let start = path.as_ref().and_then(|p| p.parent()).map_or_else(|| PathBuf::from("."), Path::to_owned);
         let mut source = Self {
             open_path: path.as_ref().map(|p| p.display().to_string()).unwrap_or_default(),
@@ -84,7 +84,7 @@ impl SceneSource {
     }
 
     /// The scene shown.
-    pub fn scene(&self) -> &Arc<Scene> {
+    pub fn scene(&self) -> &Arc<LoadedScene> {
         &self.scene
     }
 
@@ -144,7 +144,7 @@ impl SceneSource {
         }
     }
 
-    fn replace(&mut self, scene: Scene, opened: bool) -> SceneChange {
+    fn replace(&mut self, scene: LoadedScene, opened: bool) -> SceneChange {
         self.error = None;
         let previous = std::mem::replace(&mut self.scene, Arc::new(scene));
         SceneChange { previous, opened }
@@ -156,7 +156,7 @@ impl SceneSource {
         self.watch_problem = None;
         if let Some(path) = &self.path {
             let mut files = vec![path.clone()];
-            files.extend(self.scene.source_files().iter().cloned());
+            files.extend(self.scene.scene.source_files().iter().cloned());
             let repaint = ctx.clone();
             match SceneWatcher::new(&files, move || repaint.request_repaint()) {
                 Ok(w) => self.watcher = Some(w),
@@ -233,7 +233,7 @@ impl SceneSource {
         for problem in [&self.error, &self.watch_problem].into_iter().flatten() {
             ui.colored_label(Color32::from_rgb(220, 60, 50), problem);
         }
-        let warnings = self.scene.warnings();
+        let warnings = self.scene.scene.warnings();
         if !warnings.is_empty() {
             let plural = if warnings.len() == 1 { "" } else { "s" };
             egui::CollapsingHeader::new(format!("{} warning{plural}", warnings.len()))

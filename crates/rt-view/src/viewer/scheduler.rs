@@ -300,8 +300,7 @@ mod tests {
             c.projection(),
         )
         .unwrap();
-        let plan = scene.effect_plan();
-        JobSpec { scene, camera, width: 160, height: 90, spp: 1, plan }
+        JobSpec { scene, camera, width: 160, height: 90, spp: 1, toggles: Default::default() }
     }
 
     fn wait(
@@ -330,7 +329,8 @@ mod tests {
         s.start(&ctx, || Some(first.clone()), Kind::NewScene).unwrap();
         wait(&ctx, &mut s, Scheduler::frame_is_final, |_| {});
         let old = s.canvas().unwrap().pixels().to_vec();
-        let expected_old: Vec<egui::Color32> = Renderer::with_camera(&first.scene, first.camera, 160, 90, 1)
+        let settings = first.scene.settings.overridden(Some(160), Some(90), Some(1)).unwrap();
+        let expected_old: Vec<egui::Color32> = Renderer::new(&first.scene.scene, first.camera, &settings)
             .unwrap()
             .render(|_| {})
             .to_rgb8()
