@@ -28,6 +28,7 @@
 mod build;
 mod collapse;
 mod huge_pages;
+mod item;
 mod leaf;
 mod packet;
 mod query;
@@ -45,7 +46,7 @@ use crate::primitive::Primitive;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, gamma, to_f64};
 use crate::triangle::TriangleRay;
-use build::Item;
+use item::Item;
 use leaf::{Lanes, Leaf, lanes_of};
 pub use packet::PACKET_RAYS;
 use query::{Best, Query};
