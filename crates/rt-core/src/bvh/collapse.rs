@@ -4,7 +4,7 @@
 //! area) until it has eight children, which keeps the SAH tree's splits.
 
 use super::build::BuildNode;
-use super::{Child, Node, WIDTH};
+use super::node::{Child, Node, WIDTH};
 use crate::real::to_f64;
 
 /// What collapsing a subtree produced: its child entry, the 8-wide nodes on

@@ -26,7 +26,7 @@
 //! occupy a lane too, but only their object index is stored: they are
 //! looked up in the scene and tested whole.
 
-use super::build::Item;
+use super::item::Item;
 use crate::method::TriangleMethod;
 use crate::object::Object;
 use crate::primitive::Primitive;

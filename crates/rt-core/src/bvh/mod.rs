@@ -28,7 +28,9 @@
 mod build;
 mod collapse;
 mod huge_pages;
+mod item;
 mod leaf;
+mod node;
 mod packet;
 mod query;
 
@@ -45,48 +47,20 @@ use crate::primitive::Primitive;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, gamma, to_f64};
 use crate::triangle::TriangleRay;
-use build::Item;
+use item::Item;
 use leaf::{Lanes, Leaf, lanes_of};
-pub use packet::PACKET_RAYS;
-use query::{Best, Query};
+use node::{Child, Node, WIDTH};
+use query::{Best, Query, object_primitive};
 
 /// Traversal stack entries kept on the machine stack at most: a node visit
 /// leaves at most seven children waiting, so enough for any tree up to 13
 /// levels deep (8¹³ leaves); the 1 M-triangle terrain's tree needs 46.
 const INLINE_STACK: usize = 96;
-/// Children per node.
-const WIDTH: usize = 8;
 
-/// A child slot of a [`Node`]: an inner node (`lanes` 0), or the leaf
-/// whose blocks start at `leaves[index]`, with its [`Lanes`] (which also
-/// tell how many blocks it has).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Child {
-    index: u32,
-    lanes: Lanes,
-}
-
-impl Child {
-    /// The inner node `nodes[index]`.
-    const fn node(index: u32) -> Self {
-        Self { index, lanes: Lanes(0) }
-    }
-    fn is_leaf(self) -> bool {
-        self.lanes.0 != 0
-    }
-}
-
-/// An 8-wide node: the boxes of its children, stored axis by axis
-/// (`bounds[min or max][axis][slot]`) so that one slab test covers all
-/// eight. Unused slots have the empty box (min = +∞, max = −∞), which no ray
-/// enters.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(64))]
-pub(super) struct Node {
-    /// `bounds[0]` are the minima, `bounds[1]` the maxima.
-    bounds: [[[Real; WIDTH]; 3]; 2],
-    children: [Child; WIDTH],
-}
+/// The most rays a packet holds ([`Bvh::closest_hits`] traces its rays in
+/// packets of this many, `bvh/packet.rs`): a pixel's 64 samples, or a run
+/// of 64 pixels of a row at one sample each.
+pub const PACKET_RAYS: usize = 64;
 
 /// What a build produced, for `--stats` and benchmarks.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -232,7 +206,7 @@ impl Bvh {
         methods: Methods,
     ) -> Option<Hit> {
         let mut query = Query::new(ray, range);
-        query.test_unbounded(self, objects, methods);
+        query.test_unbounded(&self.unbounded, objects, methods);
         // Boxes entering beyond the best hit so far cannot improve on it (one
         // entering exactly there can still win a tie, and is visited).
         let range = Interval::new(range.min, query.t_max());
@@ -439,28 +413,6 @@ impl Bvh {
                 );
             }
         }
-    }
-}
-
-/// The primitive of object `o`.
-fn object_primitive(objects: &[Object], o: u32) -> &Primitive {
-    &objects[o as usize].primitive
-}
-
-impl Node {
-    /// A node with four empty slots.
-    const EMPTY: Node = Node {
-        bounds: [[[Real::INFINITY; WIDTH]; 3], [[Real::NEG_INFINITY; WIDTH]; 3]],
-        children: [Child::node(0); WIDTH],
-    };
-
-    /// Puts `child` with `bounds` into `slot`.
-    fn set(&mut self, slot: usize, bounds: Aabb, child: Child) {
-        for axis in 0..3 {
-            self.bounds[0][axis][slot] = bounds.min()[axis];
-            self.bounds[1][axis][slot] = bounds.max()[axis];
-        }
-        self.children[slot] = child;
     }
 }
 

@@ -24,17 +24,14 @@
 use std::mem::MaybeUninit;
 
 use super::leaf::lanes_of;
+use super::node::{Child, Node, WIDTH};
 use super::query::Query;
-use super::{Bvh, Child, INLINE_STACK, Node, WIDTH};
+use super::{Bvh, INLINE_STACK, PACKET_RAYS};
 use crate::hit::Hit;
 use crate::method::Methods;
 use crate::object::Object;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, divide, gamma};
-
-/// The most rays a packet holds: a pixel's 64 samples, or a run of 64
-/// pixels of a row at one sample each.
-pub const PACKET_RAYS: usize = 64;
 
 /// Bounds on a packet's rays, per axis: origins in `[origin_lo, origin_hi]`,
 /// inverse directions in `[inv_lo, inv_hi]` (all of one sign, finite), and
@@ -419,7 +416,7 @@ impl Bvh {
             // stalls the store-to-load forwarding.
             let query = queries[i].write(Query::new(&rays[i], ranges[i]));
             if !self.unbounded.is_empty() {
-                query.test_unbounded(self, objects, methods);
+                query.test_unbounded(&self.unbounded, objects, methods);
             }
             // The single-ray test's inverse direction (`Slabs::new` divides
             // lane by lane; a correctly rounded quotient either way).

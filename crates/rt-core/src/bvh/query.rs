@@ -3,7 +3,6 @@
 //! do at a leaf.
 
 use super::leaf::{LANES, Lanes, Leaf, lanes_of};
-use super::{Bvh, object_primitive};
 use crate::hit::Hit;
 use crate::method::Methods;
 use crate::object::Object;
@@ -74,9 +73,9 @@ impl Query {
         better
     }
 
-    /// Tests the objects without bounds (planes).
-    pub fn test_unbounded(&mut self, bvh: &Bvh, objects: &[Object], methods: Methods) {
-        for &object in &bvh.unbounded {
+    /// Tests the objects without bounds (planes), `unbounded`.
+    pub fn test_unbounded(&mut self, unbounded: &[u32], objects: &[Object], methods: Methods) {
+        for &object in unbounded {
             self.test_object(objects, object, methods);
         }
     }
@@ -139,4 +138,9 @@ impl Query {
             best.normal = mesh.normal(best.primitive);
         }
     }
+}
+
+/// The primitive of object `o`.
+pub(super) fn object_primitive(objects: &[Object], o: u32) -> &Primitive {
+    &objects[o as usize].primitive
 }
