@@ -1,6 +1,7 @@
 //! The viewer app: composes the parts of the window, handles the keyboard
-//! shortcuts, and passes each frame's input from the parts to the
-//! [`Scheduler`].
+//! shortcuts, passes each frame's input from the parts to the
+//! [`Scheduler`], and gathers what the parts remember between runs into one
+//! [`Remembered`] for eframe to save (and hands it back out at the start).
 //!
 //! The side panel (scrollable, fixed width) stacks the scene source, the
 //! camera panel, the image settings and Save; the status line and the image
@@ -18,9 +19,9 @@ use super::camera_panel::CameraPanel;
 use super::image_settings::ImageSettings;
 use super::image_view::ImageView;
 use super::interaction::Interaction;
-use super::recent::RecentFiles;
+use super::remembered::{LastScene, Remembered, absolute};
 use super::render_job::{JobSpec, RenderJob};
-use super::scene_source::{SceneChange, SceneSource};
+use super::scene_source::{SceneChange, SceneSource, load};
 use super::scheduler::{Kind, Scheduler};
 use super::screenshot::{Outcome, Screenshot};
 use crate::image_out::PendingImage;
@@ -28,11 +29,48 @@ use crate::image_out::PendingImage;
 /// How the viewer is started.
 #[derive(Clone, Debug, Default)]
 pub struct ViewerOptions {
-    /// Scene file to open; the built-in default scene when `None`.
+    /// Scene file to open; when `None`, the scene shown when the viewer last
+    /// closed (if it still loads), else the built-in default scene.
     pub scene: Option<PathBuf>,
     /// Save a screenshot of the window here once the first full-resolution
     /// frame is complete, then exit (used by the smoke test).
     pub screenshot: Option<PathBuf>,
+}
+
+/// The scene the window opens with.
+pub(super) struct Opening {
+    /// Its file (`None`: the built-in scene).
+    pub path: Option<PathBuf>,
+    /// The scene.
+    pub scene: rt_core::LoadedScene,
+    /// Why the last scene shown did not open again, if it did not.
+    pub note: Option<String>,
+}
+
+impl Opening {
+    /// The scene `named` on the command line (its path and the scene read
+    /// from it); else the `last` one shown, if it still loads; else the
+    /// built-in scene.
+    pub fn choose(
+        named: Option<(PathBuf, rt_core::LoadedScene)>,
+        last: Option<&LastScene>,
+    ) -> Result<Self, rt_core::SceneError> {
+        if let Some((path, scene)) = named {
+            return Ok(Self { path: Some(path), scene, note: None });
+        }
+        let mut note = None;
+        if let Some(last) = last {
+            match load(Some(&last.path)) {
+                Ok(scene) => return Ok(Self { path: Some(last.path.clone()), scene, note: None }),
+                Err(e) => {
+                    let why = format!("the last scene did not open again: {e}");
+                    eprintln!("warning: {why}");
+                    note = Some(why);
+                }
+            }
+        }
+        Ok(Self { path: None, scene: load(None)?, note })
+    }
 }
 
 /// How long a notice (a save's result, a render that could not start) stays.
@@ -79,41 +117,61 @@ pub struct Viewer {
 }
 
 impl Viewer {
-    /// The viewer on `scene` (loaded from `options.scene`), its first render started.
+    /// The viewer on the `opening` scene, as `remembered` left it, its first
+    /// render started; `screenshot`: save the window there once rendered.
+    ///
+    /// The remembered camera comes back only for the same scene file, with
+    /// the file's camera unchanged ([`LastScene::camera_for`]).
     pub(super) fn new(
         ctx: &egui::Context,
-        scene: rt_core::LoadedScene,
-        options: ViewerOptions,
+        opening: Opening,
+        screenshot: Option<PathBuf>,
+        remembered: Remembered,
         outcome: Outcome,
     ) -> Self {
-        Self::with_recent(ctx, scene, options, outcome, RecentFiles::load())
-    }
-
-    /// [`Viewer::new`] with the recent-files list given (tests keep theirs apart).
-    fn with_recent(
-        ctx: &egui::Context,
-        scene: rt_core::LoadedScene,
-        options: ViewerOptions,
-        outcome: Outcome,
-        recent: RecentFiles,
-    ) -> Self {
+        let Opening { path, scene, note } = opening;
+        let mut camera = CameraPanel::new(&scene.camera);
+        if let (Some(path), Some(last)) = (&path, &remembered.last_scene)
+            && let Some(view) = last.camera_for(path, &camera.file_settings())
+        {
+            camera.restore(view);
+        }
+        let mut image = ImageSettings::new(&scene);
+        image.set_resolution_scale(remembered.resolution_scale);
         let mut viewer = Self {
-            camera: CameraPanel::new(&scene.camera),
-            image: ImageSettings::new(&scene),
-            source: SceneSource::new(options.scene, scene, recent, ctx),
+            camera,
+            image,
+            source: SceneSource::new(path, scene, remembered.recent, ctx),
             scheduler: Scheduler::default(),
             view: ImageView::default(),
             save_path: "render.png".to_owned(),
             notice: None,
-            show_panel: true,
+            show_panel: remembered.show_panel,
             show_help: false,
-            screenshot: options.screenshot.map(Screenshot::new),
+            screenshot: screenshot.map(Screenshot::new),
             outcome,
             #[cfg(test)]
             save_button: None,
         };
         viewer.start(ctx, Kind::NewScene);
+        if let Some(note) = note {
+            viewer.notify(note);
+        }
         viewer
+    }
+
+    /// What to remember of this run: the parts' state gathered into one value.
+    fn remembered(&self) -> Remembered {
+        Remembered {
+            recent: self.source.recent().clone(),
+            show_panel: self.show_panel,
+            resolution_scale: self.image.resolution_scale(),
+            last_scene: self.source.path().map(|path| LastScene {
+                path: absolute(path),
+                camera: *self.camera.settings(),
+                file_camera: self.camera.file_settings(),
+            }),
+        }
     }
 
     /// The full-resolution job for the current scene, camera and settings.
@@ -375,6 +433,17 @@ impl eframe::App for Viewer {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         self.frame(ui);
     }
+
+    /// Called when the window closes and every 30 s.
+    fn save(&mut self, storage: &mut dyn eframe::Storage) {
+        self.remembered().save(storage);
+    }
+
+    /// egui's own widget memory (scroll offsets, where the help window was,
+    /// the zoom) is not kept: what is remembered is [`Remembered`] and the window.
+    fn persist_egui_memory(&self) -> bool {
+        false
+    }
 }
 
 #[cfg(test)]
@@ -384,22 +453,22 @@ mod tests {
 
     use super::*;
     use crate::viewer::canvas::Canvas;
-    use crate::viewer::scene_source::load;
 
     fn scenes() -> PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
     }
 
-    /// A viewer on `path` (the built-in scene for `None`) that remembers no recent files.
+    /// A viewer on `path` (the built-in scene for `None`) that remembers nothing.
     fn viewer(ctx: &egui::Context, path: Option<PathBuf>) -> Viewer {
-        let options = ViewerOptions { scene: path.clone(), screenshot: None };
-        Viewer::with_recent(
-            ctx,
-            load(path.as_deref()).unwrap(),
-            options,
-            Outcome::default(),
-            RecentFiles::load_from(None),
-        )
+        remembering(ctx, path, Remembered::default())
+    }
+
+    /// A viewer on `path` (the built-in scene for `None`) as `remembered` left it.
+    fn remembering(ctx: &egui::Context, path: Option<PathBuf>, remembered: Remembered) -> Viewer {
+        let scene = load(path.as_deref()).unwrap();
+        let named = path.map(|p| (p, scene));
+        let opening = Opening::choose(named, remembered.last_scene.as_ref()).unwrap();
+        Viewer::new(ctx, opening, None, remembered, Outcome::default())
     }
 
     /// Runs one frame of the whole window, `size` points large, with `events`.
@@ -641,6 +710,98 @@ mod tests {
         }
         assert!(hits(160, 120) && !hits(0, 0));
         assert!(hit_count > 100 && miss_count > 100, "{hit_count} hits, {miss_count} misses");
+        drop_textures(&ctx, v);
+    }
+
+    /// What `v` would leave behind, saved as eframe saves it and read back.
+    fn saved_and_read(v: &Viewer) -> Remembered {
+        let text = ron::ser::to_string(&v.remembered()).unwrap();
+        Remembered::from_ron(&text).unwrap()
+    }
+
+    #[test]
+    fn started_again_without_a_scene_the_viewer_is_as_it_was_left() {
+        let ctx = egui::Context::default();
+        let path = scenes().join("box.ron");
+        let mut v = viewer(&ctx, Some(path.clone()));
+        v.camera.edit(|s| s.orbit(0.4, 0.1).zoom(0.8));
+        v.image.set_resolution_scale(0.5);
+        frame(&ctx, &mut v, egui::vec2(1000.0, 700.0), vec![key(Key::P)]);
+        let (camera, file_camera) = (*v.camera.settings(), v.camera.file_settings());
+        assert_ne!(camera, file_camera);
+        let remembered = saved_and_read(&v);
+        drop_textures(&ctx, v);
+
+        let v = remembering(&ctx, None, remembered);
+        let canonical = std::fs::canonicalize(&path).unwrap();
+        assert_eq!(v.source.path(), Some(canonical.as_path()));
+        assert_eq!(*v.camera.settings(), camera);
+        assert_eq!(v.camera.file_settings(), file_camera, "Reset still goes to the file's camera");
+        assert!(!v.show_panel);
+        assert_eq!(v.image.full_size(v.source.scene()), (160, 120));
+        assert_eq!(v.source.recent().files(), [canonical]);
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn a_scene_named_on_the_command_line_wins_and_opens_with_its_own_camera() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        v.camera.edit(|s| s.orbit(0.4, 0.1));
+        let remembered = saved_and_read(&v);
+        drop_textures(&ctx, v);
+
+        let sphere = scenes().join("sphere.ron");
+        let v = remembering(&ctx, Some(sphere.clone()), remembered.clone());
+        assert_eq!(v.source.path(), Some(sphere.as_path()));
+        assert_eq!(v.camera.settings().to_camera().unwrap(), rt_core::load_scene(&sphere).unwrap().camera);
+        assert_eq!(v.source.recent().files().len(), 2, "both are recent files");
+        drop_textures(&ctx, v);
+        // The same file named again: its view comes back.
+        let v = remembering(&ctx, Some(scenes().join("box.ron")), remembered.clone());
+        assert_eq!(Some(*v.camera.settings()), remembered.last_scene.map(|l| l.camera));
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn the_last_scene_opens_with_the_files_camera_once_the_file_changed_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("scene.ron");
+        let text = std::fs::read_to_string(scenes().join("sphere.ron")).unwrap();
+        std::fs::write(&path, &text).unwrap();
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(path.clone()));
+        v.camera.edit(|s| s.orbit(0.4, 0.1));
+        let remembered = saved_and_read(&v);
+        drop_textures(&ctx, v);
+
+        let moved = text.replacen("fov_y: ", "fov_y: 1", 1);
+        assert_ne!(moved, text);
+        std::fs::write(&path, moved).unwrap();
+        let v = remembering(&ctx, None, remembered);
+        assert_eq!(v.source.path(), Some(std::fs::canonicalize(&path).unwrap().as_path()));
+        assert_eq!(v.camera.settings().to_camera().unwrap(), rt_core::load_scene(&path).unwrap().camera);
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn a_last_scene_that_no_longer_loads_gives_the_built_in_scene_and_says_why() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("scene.ron");
+        std::fs::copy(scenes().join("sphere.ron"), &path).unwrap();
+        let ctx = egui::Context::default();
+        let v = viewer(&ctx, Some(path.clone()));
+        let remembered = saved_and_read(&v);
+        drop_textures(&ctx, v);
+
+        std::fs::remove_file(&path).unwrap();
+        let v = remembering(&ctx, None, remembered);
+        assert_eq!(v.source.path(), None);
+        let notice = &v.notice.as_ref().expect("a notice says why").text;
+        assert!(
+            notice.starts_with("the last scene did not open again: ") && notice.contains("scene.ron"),
+            "{notice}"
+        );
         drop_textures(&ctx, v);
     }
 

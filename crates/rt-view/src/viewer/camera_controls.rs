@@ -16,8 +16,9 @@ pub const NEAR_RANGE: RangeInclusive<Real> = 1e-3..=1e4;
 /// Orbiting stops this close (degrees) to looking straight along ±up.
 pub const MIN_POLAR_DEGREES: Real = 1.0;
 
-/// The editable camera parameters.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The editable camera parameters (remembered between runs as they are
+/// named here, see `remembered.rs`).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CameraSettings {
     /// Eye position C.
     pub position: Vec3,

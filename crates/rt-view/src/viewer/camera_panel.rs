@@ -47,6 +47,17 @@ impl CameraPanel {
         self.refused = false;
     }
 
+    /// The scene file's camera, as settings.
+    pub fn file_settings(&self) -> CameraSettings {
+        CameraSettings::from_camera(&self.file_camera)
+    }
+
+    /// Starts from `view` (a remembered camera) instead of the file's, if it
+    /// is a valid camera (fov and near brought into the controls' ranges).
+    pub fn restore(&mut self, view: CameraSettings) {
+        self.settings = self.settings.accept(view);
+    }
+
     /// Back to the scene file's camera; returns whether that changed it.
     pub fn reset(&mut self) -> bool {
         self.refused = false;

@@ -1,15 +1,20 @@
 //! The image section of the side panel: resolution scale, samples per pixel
 //! and the effects the user has switched off.
 
+use std::ops::RangeInclusive;
+
 use rt_core::LoadedScene;
 use rt_core::effects::{EffectPlan, EffectToggles};
 use rt_core::view_plane::MAX_IMAGE_SIDE;
 
 use super::interaction::Interaction;
 
+/// The range of the resolution scale.
+pub const RESOLUTION_SCALE: RangeInclusive<f32> = 0.25..=2.0;
+
 /// What the full-resolution render is made of, besides the camera.
 pub(super) struct ImageSettings {
-    /// The image size is the scene's times this, 0.25 to 2.
+    /// The image size is the scene's times this, in [`RESOLUTION_SCALE`].
     resolution_scale: f32,
     /// Samples per pixel of full renders (the scene's until the user changes it).
     spp: u32,
@@ -29,6 +34,16 @@ impl ImageSettings {
         if reset || scene.settings.samples != previous.settings.samples {
             self.spp = scene.settings.samples.get();
         }
+    }
+
+    /// The image size as a multiple of the scene's.
+    pub fn resolution_scale(&self) -> f32 {
+        self.resolution_scale
+    }
+
+    /// Sets the resolution scale (brought into [`RESOLUTION_SCALE`]).
+    pub fn set_resolution_scale(&mut self, scale: f32) {
+        self.resolution_scale = scale.clamp(*RESOLUTION_SCALE.start(), *RESOLUTION_SCALE.end());
     }
 
     /// Samples per pixel of full renders.
@@ -51,7 +66,8 @@ impl ImageSettings {
     /// The resolution, sample and effect controls.
     pub fn ui(&mut self, ui: &mut egui::Ui, scene: &LoadedScene) -> Interaction {
         ui.heading("Image");
-        let r = ui.add(egui::Slider::new(&mut self.resolution_scale, 0.25..=2.0).text("resolution scale"));
+        let r =
+            ui.add(egui::Slider::new(&mut self.resolution_scale, RESOLUTION_SCALE).text("resolution scale"));
         let mut interaction = Interaction { changed: r.changed(), dragging: r.dragged() };
         let (w, h) = self.full_size(scene);
         ui.label(format!("{w} × {h} pixels"));

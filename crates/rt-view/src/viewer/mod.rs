@@ -5,7 +5,7 @@
 //! composes them):
 //!
 //! - `scene_source`: the scene file (or the built-in scene), opening another
-//!   (path field, `file_browser`, drop, `recent` files), Reload, watching
+//!   (path field, `file_browser`, drop, recent files), Reload, watching
 //!   its files ([`scene_watch`]) and load errors;
 //! - `camera_panel`: the camera controls, on top of the pure camera
 //!   functions of [`camera_controls`];
@@ -16,7 +16,10 @@
 //!   [`canvas`], from where they reach an egui texture;
 //! - `image_view`: the image on screen (fit, 1:1, zoom), orbit, pan and
 //!   zoom with the mouse, and pixel inspection;
-//! - `screenshot`: `--screenshot`, saving the window once the frame is done.
+//! - `screenshot`: `--screenshot`, saving the window once the frame is done;
+//! - `remembered`: what the viewer remembers between runs (recent files,
+//!   the panel, the resolution scale, the last scene and its camera), one
+//!   value saved through eframe's storage beside the window's size and place.
 //!
 //! Rows flow one way: scene → job spec → render job (worker threads) →
 //! rows over a channel → canvas (UI thread) → texture. The UI thread never
@@ -30,7 +33,7 @@ mod file_browser;
 mod image_settings;
 mod image_view;
 mod interaction;
-mod recent;
+mod remembered;
 pub mod render_job;
 mod scene_source;
 pub mod scene_watch;
@@ -41,16 +44,21 @@ use std::sync::{Arc, Mutex};
 
 use anyhow::anyhow;
 
+use app::Opening;
 pub use app::{SHORTCUTS, ViewerOptions};
+use remembered::Remembered;
 pub use scene_source::{DEFAULT_SCENE, DEFAULT_SCENE_NAME, load};
 
 use crate::image_out::PendingImage;
 
 /// Opens the window and runs until it is closed.
 pub fn run(options: ViewerOptions) -> anyhow::Result<()> {
-    // A scene that cannot be read at start-up is an error on the command line;
-    // later reloads show their errors in the window instead.
-    let scene = load(options.scene.as_deref())?;
+    // A scene named on the command line that cannot be read is an error
+    // there; later reloads show their errors in the window instead.
+    let named = match &options.scene {
+        Some(path) => Some((path.clone(), load(Some(path))?)),
+        None => None,
+    };
     if let Some(out) = &options.screenshot {
         // Check the output path now, not after the window has run.
         drop(PendingImage::png(out)?);
@@ -61,13 +69,23 @@ pub fn run(options: ViewerOptions) -> anyhow::Result<()> {
             .with_inner_size([1180.0, 720.0])
             .with_min_inner_size([640.0, 400.0])
             .with_title("rt-view"),
+        // The window comes back where it was, as large as it was: eframe's
+        // own entry in the file that holds `remembered::Remembered`.
+        persist_window: true,
+        // The RON file itself (eframe 0.37 opens this path as its file).
+        persistence_path: remembered::storage_override(),
         ..Default::default()
     };
     let app_outcome = outcome.clone();
     eframe::run_native(
         "rt-view",
         native,
-        Box::new(move |cc| Ok(Box::new(app::Viewer::new(&cc.egui_ctx, scene, options, app_outcome)))),
+        Box::new(move |cc| {
+            let remembered = Remembered::load(cc.storage);
+            let opening = Opening::choose(named, remembered.last_scene.as_ref())?;
+            let screenshot = options.screenshot;
+            Ok(Box::new(app::Viewer::new(&cc.egui_ctx, opening, screenshot, remembered, app_outcome)))
+        }),
     )
     .map_err(|e| anyhow!("cannot open the viewer window: {}", without_source_location(&e.to_string())))?;
     let result = outcome.lock().unwrap().take();

@@ -15,7 +15,7 @@ use egui::Color32;
 use rt_core::LoadedScene;
 
 use super::file_browser::FileBrowser;
-use super::recent::RecentFiles;
+use super::remembered::RecentFiles;
 use super::scene_watch::SceneWatcher;
 
 /// The built-in default scene's text (`scenes/default.ron`).
@@ -86,6 +86,16 @@ impl SceneSource {
     /// The scene shown.
     pub fn scene(&self) -> &Arc<LoadedScene> {
         &self.scene
+    }
+
+    /// The scene file (`None`: the built-in scene).
+    pub fn path(&self) -> Option<&Path> {
+        self.path.as_deref()
+    }
+
+    /// The scene files opened lately.
+    pub fn recent(&self) -> &RecentFiles {
+        &self.recent
     }
 
     /// Why the last load failed, if it did.
