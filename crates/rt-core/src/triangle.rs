@@ -570,17 +570,24 @@ mod tests {
         // along the normal; and that bound is a few ulps of the coordinates
         // involved — the point's and, through the normal's angle error, the
         // triangle's size over the sine of its corner angle (the sliver's
-        // 2·10⁻³ rad makes that term 500 times the size), no more.
+        // 2·10⁻³ rad makes that term 500 times the size), no more. The first
+        // triangle also comes shrunk to √(smallest normal)/4, where products
+        // of its edges underflow unless they are scaled first; the exact
+        // distance is computed on coordinates scaled by a power of two (exact)
+        // to about 1, away from double-double's own underflow.
         use crate::double_double::{DdVec3, DoubleDouble};
         use crate::real::{UNIT_ROUNDOFF, to_f64, widen};
-        for (i, [a, b, c]) in test_triangles().into_iter().enumerate() {
+        let tiny = test_triangles()[0].map(|p| p * (Real::MIN_POSITIVE.sqrt() / 4.0));
+        for (i, [a, b, c]) in test_triangles().into_iter().chain([tiny]).enumerate() {
             let n = geometric_normal(a, b, c).unwrap();
             let (e1, e2) = (b - a, c - a);
-            let exact_n =
-                DdVec3::difference(widen(b), widen(a)).cross(DdVec3::difference(widen(c), widen(a)));
-            let n_length = exact_n.dot(exact_n).sqrt();
-            let sine = e1.cross(e2).length() / (e1.length() * e2.length());
             let size = e1.length().max(e2.length());
+            let unit = 2f64.powi(-to_f64(size).log2().floor() as i32);
+            let wide = |p: Vec3| widen(p) * unit;
+            let exact_n = DdVec3::difference(wide(b), wide(a)).cross(DdVec3::difference(wide(c), wide(a)));
+            let n_length = exact_n.dot(exact_n).sqrt();
+            let (f1, f2) = (e1 / size, e2 / size);
+            let sine = f1.cross(f2).length() / (f1.length() * f2.length());
             for k in 0..300u32 {
                 let rng = &mut crate::sampler::SampleRng::new(k, 17, i as u32);
                 let (u, v) = rng.next_pair();
@@ -588,7 +595,8 @@ mod tests {
                 let (h, _) = rng.next_pair();
                 let p = a + e1 * u + e2 * v + n * ((h - 0.5) * 1e-4 * size);
                 let sp = triangle_surface_point([a, b, c], n, p);
-                let distance = (DdVec3::difference(widen(sp.p), widen(a)).dot(exact_n) / n_length).abs();
+                let distance = (DdVec3::difference(wide(sp.p), wide(a)).dot(exact_n) / n_length).abs()
+                    / DoubleDouble::new(unit);
                 let bound = widen(sp.error).dot(widen(n).abs());
                 let at = format!("triangle {i}, point {k}: {}", sp.p);
                 assert!(
@@ -619,6 +627,21 @@ mod tests {
             let first = intersect_watertight(p00, p10, p11, &ray, ALL);
             let second = intersect_watertight(p00, p11, p01, &ray, ALL);
             assert!(first.is_some() || second.is_some(), "leak at s = {s}");
+        }
+        // Rays straight along z through points of the diagonal: the shared
+        // edge's function is exactly 0 for both triangles, and both count
+        // it, whichever of the three edge functions it is (the corners
+        // taken from each starting corner).
+        for i in 1..16 {
+            let s = i as Real / 16.0;
+            let ray = Ray::new(Vec3::new(s, s, -1.0), Vec3::Z);
+            for start in 0..3 {
+                let rotated = |t: [Vec3; 3]| [t[start], t[(start + 1) % 3], t[(start + 2) % 3]];
+                let ([a, b, c], [d, e, f]) = (rotated([p00, p10, p11]), rotated([p00, p11, p01]));
+                let (first, second) =
+                    (intersect_watertight(a, b, c, &ray, ALL), intersect_watertight(d, e, f, &ray, ALL));
+                assert!(first.is_some() && second.is_some(), "on the edge at s = {s}: {first:?}, {second:?}");
+            }
         }
     }
 }
