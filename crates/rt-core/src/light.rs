@@ -70,6 +70,19 @@ pub struct LightSample {
 }
 
 impl Light {
+    /// The power it gives off, for choosing among lights (the mean of the
+    /// colour channels): `4π·I` for a point or sphere light of intensity I,
+    /// `π·R²·E` for a directional light of irradiance E falling on a scene
+    /// that fits in a sphere of radius `radius`.
+    pub fn power(&self, radius: Real) -> Real {
+        let pi = std::f64::consts::PI as Real;
+        let mean = (self.power.element_sum() / 3.0) as Real;
+        match self.kind {
+            LightKind::Point { .. } | LightKind::Sphere { .. } => 4.0 * pi * mean,
+            LightKind::Directional { .. } => pi * radius * radius * mean,
+        }
+    }
+
     /// How many samples [`Light::sample`] takes per shaded point.
     pub fn sample_count(&self) -> u32 {
         match self.kind {

@@ -18,9 +18,9 @@
 //! The choice only steers where samples go: any choice with a positive
 //! probability for every light gives the same image in the mean.
 
-use crate::color::Color;
 use crate::emitter::Emitter;
-use crate::light::{Light, LightKind};
+use crate::environment::Environment;
+use crate::light::Light;
 use crate::real::Real;
 
 /// A source of light that can be chosen.
@@ -40,39 +40,33 @@ pub struct LightSampler {
     sources: Vec<Source>,
     /// Running sums of the candidates' powers.
     cumulative: Vec<Real>,
-    /// Probability of choosing each object's emitter (0 for the others).
-    object_probability: Vec<Real>,
+    /// Probability of choosing each light of the scene file.
+    light_probability: Vec<Real>,
+    /// Probability of choosing each emitter (0 for one that gives off nothing).
+    emitter_probability: Vec<Real>,
     environment_probability: Real,
 }
 
 impl LightSampler {
-    /// The sampler for `lights`, the `emitters` of a scene of `objects`
-    /// objects, and `background`, in a scene of radius `radius`.
-    pub fn new(
-        lights: &[Light],
-        emitters: &[Emitter],
-        background: Color,
-        objects: usize,
-        radius: Real,
-    ) -> Self {
-        let pi = std::f64::consts::PI as Real;
-        let mean = |c: Color| (c.element_sum() / 3.0) as Real;
+    /// The sampler for `lights`, `emitters` and the `environment`, in a
+    /// scene that fits in a sphere of radius `radius`.
+    pub fn new(lights: &[Light], emitters: &[Emitter], environment: &Environment, radius: Real) -> Self {
         let mut candidates: Vec<(Source, Real)> = Vec::new();
         for (i, light) in lights.iter().enumerate() {
-            let power = match light.kind {
-                LightKind::Point { .. } | LightKind::Sphere { .. } => 4.0 * pi * mean(light.power),
-                LightKind::Directional { .. } => pi * radius * radius * mean(light.power),
-            };
-            candidates.push((Source::Light(i), power));
+            candidates.push((Source::Light(i), light.power(radius)));
         }
         for (i, e) in emitters.iter().enumerate() {
             candidates.push((Source::Emitter(i), e.power()));
         }
-        candidates.push((Source::Environment, 4.0 * pi * pi * radius * radius * mean(background)));
+        candidates.push((Source::Environment, environment.power(radius)));
         candidates.retain(|&(_, power)| power > 0.0 && power.is_finite());
 
         let total: Real = candidates.iter().map(|c| c.1).sum();
-        let mut sampler = Self { object_probability: vec![0.0; objects], ..Self::default() };
+        let mut sampler = Self {
+            light_probability: vec![0.0; lights.len()],
+            emitter_probability: vec![0.0; emitters.len()],
+            ..Self::default()
+        };
         let mut running = 0.0;
         for (source, power) in candidates {
             running += power;
@@ -80,9 +74,9 @@ impl LightSampler {
             sampler.cumulative.push(running);
             let p = power / total;
             match source {
-                Source::Emitter(i) => sampler.object_probability[emitters[i].object] = p,
+                Source::Light(i) => sampler.light_probability[i] = p,
+                Source::Emitter(i) => sampler.emitter_probability[i] = p,
                 Source::Environment => sampler.environment_probability = p,
-                Source::Light(_) => {}
             }
         }
         sampler
@@ -102,15 +96,13 @@ impl LightSampler {
         Some((self.sources[i], (self.cumulative[i] - below) / total))
     }
 
-    /// The probability of choosing the emitter of object `object` (0 if it
-    /// is not a sampled emitter).
-    pub fn object_probability(&self, object: usize) -> Real {
-        self.object_probability.get(object).copied().unwrap_or(0.0)
-    }
-
-    /// The probability of choosing the environment.
-    pub fn environment_probability(&self) -> Real {
-        self.environment_probability
+    /// The probability of choosing `source` (0 for one that gives off nothing).
+    pub fn probability(&self, source: Source) -> Real {
+        match source {
+            Source::Light(i) => self.light_probability.get(i).copied().unwrap_or(0.0),
+            Source::Emitter(i) => self.emitter_probability.get(i).copied().unwrap_or(0.0),
+            Source::Environment => self.environment_probability,
+        }
     }
 }
 
@@ -118,6 +110,8 @@ impl LightSampler {
 mod tests {
     use super::*;
     use crate::chi_square;
+    use crate::color::Color;
+    use crate::light::LightKind;
     use crate::primitive::Primitive;
     use crate::real::{Vec3, to_f64};
     use crate::sampler::SampleRng;
@@ -131,7 +125,7 @@ mod tests {
         let sphere = Primitive::Sphere(Sphere::new(Vec3::ZERO, 1.0).unwrap());
         // Radiance 1, area 4π: power π·4π = 4π², against the point light's 4π.
         let emitter = Emitter::new(2, &sphere, Color::ONE).unwrap();
-        let s = LightSampler::new(&[point], &[emitter], Color::ZERO, 3, 10.0);
+        let s = LightSampler::new(&[point], &[emitter], &Environment::default(), 10.0);
         let pi = std::f64::consts::PI as Real;
         let p_point = 4.0 * pi / (4.0 * pi + 4.0 * pi * pi);
         let (source, p) = s.choose(0.0).unwrap();
@@ -140,16 +134,17 @@ mod tests {
         let (source, p) = s.choose(0.99).unwrap();
         assert_eq!(source, Source::Emitter(0));
         assert!((p + p_point - 1.0).abs() < 1e-6);
-        assert!((s.object_probability(2) - p).abs() < 1e-12);
-        assert_eq!((s.object_probability(0), s.environment_probability()), (0.0, 0.0));
+        assert!((s.probability(Source::Emitter(0)) - p).abs() < 1e-12);
+        assert!((s.probability(Source::Light(0)) - p_point).abs() < 1e-6);
+        assert_eq!((s.probability(Source::Environment), s.probability(Source::Emitter(1))), (0.0, 0.0));
     }
 
     #[test]
     fn a_dark_scene_has_nothing_to_sample() {
-        let s = LightSampler::new(&[], &[], Color::ZERO, 4, 1.0);
+        let s = LightSampler::new(&[], &[], &Environment::default(), 1.0);
         assert!(s.is_empty());
         assert_eq!(s.choose(0.5), None);
-        let lit = LightSampler::new(&[], &[], Color::splat(0.5), 4, 1.0);
+        let lit = LightSampler::new(&[], &[], &Environment::Constant(Color::splat(0.5)), 1.0);
         assert!(!lit.is_empty());
         assert_eq!(lit.choose(0.5).unwrap(), (Source::Environment, 1.0));
     }
@@ -164,7 +159,7 @@ mod tests {
             power: Color::splat(1.0),
             shadows: true,
         };
-        let s = LightSampler::new(&[light(0.0), light(1.0), light(2.0)], &[], Color::ZERO, 4, 1.0);
+        let s = LightSampler::new(&[light(0.0), light(1.0), light(2.0)], &[], &Environment::default(), 1.0);
         assert_eq!(s.choose(1.0).unwrap().0, Source::Light(2));
         // The largest number below 1.
         assert_eq!(s.choose(1.0 - Real::EPSILON / 2.0).unwrap().0, Source::Light(2));
@@ -206,7 +201,8 @@ mod tests {
         ];
         let total: f64 = power.iter().sum();
         let expected: Vec<f64> = power.iter().map(|p| p / total).collect();
-        let s = LightSampler::new(&[point, sun], &emitters, background, 4, radius as Real);
+        let s =
+            LightSampler::new(&[point, sun], &emitters, &Environment::Constant(background), radius as Real);
         let index = |source: Source| match source {
             Source::Light(i) => i,
             Source::Emitter(i) => 2 + i,
@@ -219,9 +215,12 @@ mod tests {
             Some(i)
         };
         chi_square::discrete("light choice", &expected, 200_000, draw);
-        assert!((to_f64(s.object_probability(1)) - expected[2]).abs() < 1e-6);
-        assert!((to_f64(s.object_probability(3)) - expected[3]).abs() < 1e-6);
-        assert!((to_f64(s.environment_probability()) - expected[4]).abs() < 1e-6);
-        assert_eq!((s.object_probability(0), s.object_probability(2)), (0.0, 0.0));
+        for (i, source) in
+            [Source::Light(0), Source::Light(1), Source::Emitter(0), Source::Emitter(1), Source::Environment]
+                .into_iter()
+                .enumerate()
+        {
+            assert!((to_f64(s.probability(source)) - expected[i]).abs() < 1e-6, "{source:?}");
+        }
     }
 }

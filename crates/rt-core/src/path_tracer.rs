@@ -49,10 +49,6 @@ use crate::surface::SurfacePoint;
 /// surface the camera ray meets as bounce 1).
 pub const ROULETTE_FROM: u32 = 3;
 
-/// A shadow ray towards a sampled point on an emitter stops this fraction of
-/// its length short, so that it does not find the emitter itself.
-const SHADOW_SHORTEN: Real = 1e-4;
-
 /// Traces paths through one scene.
 #[derive(Clone, Copy, Debug)]
 pub struct PathTracer<'s> {
@@ -130,14 +126,12 @@ impl<'s> PathTracer<'s> {
         let mut bounce = 0;
         while let Some(d) = normalize_robust(ray.dir) {
             let Some(h) = hit else {
-                // The background, as a constant environment light.
-                let w = match previous {
-                    Previous::Specular => 1.0,
-                    Previous::Smooth { pdf, .. } => {
-                        bsdf::power_heuristic(pdf, lights.environment_probability() * uniform_sphere_pdf())
-                    }
-                };
-                radiance += beta * scene.background() * to_f32(w);
+                // 1. The environment found by this ray.
+                let environment = scene.light_source(Source::Environment);
+                let w = found_light_weight(previous, |p| {
+                    lights.probability(Source::Environment) * environment.pdf(p, d, Real::INFINITY, -d)
+                });
+                radiance += beta * scene.environment().radiance(d) * to_f32(w);
                 break;
             };
             let object = &scene.objects()[h.object];
@@ -157,19 +151,14 @@ impl<'s> PathTracer<'s> {
 
             // 1. Emission found by this ray.
             if m.is_emissive() && wo.dot(sp.normal) > 0.0 {
-                let w = match previous {
-                    Previous::Specular => 1.0,
-                    Previous::Smooth { p, pdf } => {
-                        let light_pdf = match scene.emitter_of(h.object) {
-                            Some(e) => {
-                                let distance = (sp.p - p).length();
-                                lights.object_probability(h.object) * e.pdf(p, d, distance, sp.normal)
-                            }
-                            None => 0.0,
-                        };
-                        bsdf::power_heuristic(pdf, light_pdf)
+                let w = found_light_weight(previous, |p| match scene.emitter_index(h.object) {
+                    Some(i) => {
+                        let distance = (sp.p - p).length();
+                        let source = Source::Emitter(i);
+                        lights.probability(source) * scene.light_source(source).pdf(p, d, distance, sp.normal)
                     }
-                };
+                    None => 0.0,
+                });
                 radiance += beta * m.emission * to_f32(w);
             }
 
@@ -385,7 +374,12 @@ impl<'s> PathTracer<'s> {
         moved.then(|| Ray::new(p, ray.dir))
     }
 
-    /// One light sample's contribution at `sp` (throughput not applied).
+    /// One light sample's contribution at `sp` (throughput not applied):
+    /// a light chosen by the [`LightSampler`], a direction towards it
+    /// ([`crate::light_source::LightSource::sample`]), and, unless a shadow
+    /// ray finds something in the way, `f·cos θ·weight·w/P(light)` with w the
+    /// power heuristic of the light's density against the BSDF's (1 for a
+    /// light no ray can find).
     fn next_event(
         &self,
         sp: &SurfacePoint,
@@ -398,57 +392,37 @@ impl<'s> PathTracer<'s> {
         let (u, _) = rng.next_pair();
         let uv = rng.next_pair();
         let Some((source, chosen)) = lights.choose(u) else { return Color::ZERO };
-        let scene = self.scene;
-        // (direction, distance to the light, what arrives over its density,
-        // the density for MIS (None: the light cannot be hit), shadow test on)
-        let (wi, distance, arriving, light_pdf, shadows) = match source {
-            Source::Light(i) => {
-                let light = &scene.lights()[i];
-                let Some(s) = light.sample_one(sp.p, uv) else { return Color::ZERO };
-                (s.to_light, s.distance, s.irradiance, None, light.shadows)
-            }
-            Source::Emitter(i) => {
-                let e = &scene.emitters()[i];
-                let Some(s) = e.sample(sp.p, uv) else { return Color::ZERO };
-                let distance = s.distance * (1.0 - SHADOW_SHORTEN);
-                (s.wi, distance, s.radiance / to_f32(s.pdf), Some(s.pdf), true)
-            }
-            Source::Environment => {
-                let wi = uniform_sphere(uv);
-                let pdf = uniform_sphere_pdf();
-                (wi, Real::INFINITY, scene.background() / to_f32(pdf), Some(pdf), true)
-            }
-        };
-        let f = bsdf.eval(wo, wi);
+        let Some(s) = self.scene.light_source(source).sample(sp.p, uv) else { return Color::ZERO };
+        let f = bsdf.eval(wo, s.wi);
         if f == Color::ZERO {
             return Color::ZERO;
         }
-        let w = match light_pdf {
-            Some(pdf) => bsdf::power_heuristic(chosen * pdf, bsdf.pdf(wo, wi)),
+        let w = match s.pdf {
+            Some(pdf) => bsdf::power_heuristic(chosen * pdf, bsdf.pdf(wo, s.wi)),
             None => 1.0,
         };
-        if shadows {
+        if s.shadows {
             counts.next_event += 1;
-            let shadow = Ray::new(sp.spawn_origin(wi), wi);
-            if scene.any_hit(&shadow, Interval::new(0.0, distance)) {
+            let shadow = Ray::new(sp.spawn_origin(s.wi), s.wi);
+            if self.scene.any_hit(&shadow, Interval::new(0.0, s.distance)) {
                 return Color::ZERO;
             }
         }
-        f * arriving * to_f32(bsdf.cosine(wi) * w / chosen)
+        f * s.weight * to_f32(bsdf.cosine(s.wi) * w / chosen)
     }
 }
 
-/// A direction uniform over the unit sphere for (u, v) ∈ [0,1)².
-fn uniform_sphere((u, v): (Real, Real)) -> Vec3 {
-    let z = 1.0 - 2.0 * u;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * std::f64::consts::PI as Real * v;
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
-}
-
-/// The density of [`uniform_sphere`] over solid angle, `1/(4π)`.
-fn uniform_sphere_pdf() -> Real {
-    1.0 / (4.0 * std::f64::consts::PI as Real)
+/// The multiple-importance weight of light that a ray drawn by `previous`
+/// found (step 1): 1 after the camera or a δ lobe, which light sampling
+/// cannot produce; else the power heuristic of the BSDF's density against
+/// `light_pdf(p)`, the density with which next-event estimation from the
+/// previous point p would have sampled the same direction (the light's
+/// choice probability times its own density).
+fn found_light_weight(previous: Previous, light_pdf: impl FnOnce(Vec3) -> Real) -> Real {
+    match previous {
+        Previous::Specular => 1.0,
+        Previous::Smooth { p, pdf } => bsdf::power_heuristic(pdf, light_pdf(p)),
+    }
 }
 
 #[cfg(test)]
@@ -982,7 +956,7 @@ mod tests {
                 for k in 0..4000u32 {
                     let rng = &mut SampleRng::new(k, 1, 2);
                     // Enter at a random point of the surface, straight inwards.
-                    let d = uniform_sphere(rng.next_pair());
+                    let d = crate::sampler::uniform_sphere(rng.next_pair());
                     let ray = Ray::new(centre + d * 10.0, -d);
                     let h = s.scene.closest_hit(&ray, Interval::new(0.0, Real::INFINITY)).unwrap();
                     let sp = o.primitive.surface_point(h.primitive, h.normal, ray.at(h.t));

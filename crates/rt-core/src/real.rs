@@ -69,6 +69,20 @@ pub fn cast_min_t(origin: Vec3, dir: Vec3) -> Real {
     }
 }
 
+/// The fraction of its length by which a shadow ray towards a sampled point
+/// on an emitter stops short, so that it does not find the emitter itself.
+///
+/// The sampled point lies on the emitter's surface only to rounding (a few
+/// ulps of its coordinates, relative 2⁻²² in f32), and the shadow ray's
+/// origin is pushed off the shading point's surface; an emitter hit within
+/// the last 10⁻⁴ of the way would be the emitter itself. 10⁻⁴ is about 800
+/// f32 ulps of relative distance, so rounding never reaches it, and 10⁻⁴ of
+/// the distance to a light is far below what an occluder between them can
+/// be noticed at. A principled alternative (pbrt-v4's `SpawnRayTo`, offsetting
+/// both ends by their error bounds) would change which rays are blocked and
+/// so the images' bits.
+pub const SHADOW_SHORTEN: Real = 1e-4;
+
 /// `v / |v|`, or `None` for a zero or non-finite `v`, for any finite `v`:
 /// `v` is first divided by its largest absolute component, so `|v|²` can
 /// neither overflow (components near 10³⁸ in f32) nor underflow (near 10⁻²⁰).

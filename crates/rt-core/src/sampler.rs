@@ -133,6 +133,20 @@ pub fn cosine_hemisphere(n: Vec3, square: (Real, Real)) -> Vec3 {
     (x * u + y * v + z * n).normalize_or(n)
 }
 
+/// A direction uniform over the unit sphere for (u, v) ∈ [0,1)²: z = 1 − 2u,
+/// φ = 2πv (pbrt-v4 §A.5.2, `SampleUniformSphere`).
+pub fn uniform_sphere((u, v): (Real, Real)) -> Vec3 {
+    let z = 1.0 - 2.0 * u;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * std::f64::consts::PI as Real * v;
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// The density of [`uniform_sphere`] over solid angle, `1/(4π)`.
+pub fn uniform_sphere_pdf() -> Real {
+    1.0 / (4.0 * std::f64::consts::PI as Real)
+}
+
 /// The random numbers of one sample of one pixel: a SplitMix64 stream seeded
 /// by (x, y, sample). Draw order within a sample is fixed by the tracer.
 #[derive(Clone, Debug)]

@@ -1,5 +1,5 @@
 //! The world: objects and their materials and textures, lights, the
-//! background, the BVH over the objects, and the ray queries over all of
+//! environment, the BVH over the objects, and the ray queries over all of
 //! them. How it is seen (the camera) and rendered ([`crate::settings`]) are
 //! values of their own.
 //!
@@ -17,9 +17,11 @@ use crate::bvh::{Bvh, BvhStats, PACKET_RAYS};
 use crate::color::Color;
 use crate::effects::{EffectPlan, Effects};
 use crate::emitter::{Emitter, EmitterError};
+use crate::environment::Environment;
 use crate::hit::Hit;
 use crate::light::Light;
-use crate::light_sampler::LightSampler;
+use crate::light_sampler::{LightSampler, Source};
+use crate::light_source::LightSource;
 use crate::material::Material;
 use crate::method::Methods;
 use crate::object::Object;
@@ -32,7 +34,7 @@ use crate::texture::Texture;
 /// through a method.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
-    background: Color,
+    environment: Environment,
     lights: Vec<Light>,
     ambient: Color,
     methods: Methods,
@@ -136,7 +138,7 @@ impl SceneBuildError {
 /// ```
 #[derive(Clone, Debug, Default)]
 pub struct SceneBuilder {
-    background: Color,
+    environment: Environment,
     lights: Vec<Light>,
     ambient: Color,
     methods: Methods,
@@ -148,15 +150,21 @@ pub struct SceneBuilder {
 }
 
 impl SceneBuilder {
-    /// An empty world: a black background, no materials, objects or lights,
+    /// An empty world: a black environment, no materials, objects or lights,
     /// and the default intersection methods until set otherwise.
     pub fn new() -> Self {
         Self::default()
     }
 
-    /// The colour of rays that hit nothing: a constant environment light.
+    /// The colour of rays that hit nothing: a constant environment
+    /// ([`Environment::Constant`]).
     pub fn background(self, background: Color) -> Self {
-        Self { background, ..self }
+        self.environment(Environment::Constant(background))
+    }
+
+    /// The light arriving along rays that leave the scene.
+    pub fn environment(self, environment: Environment) -> Self {
+        Self { environment, ..self }
     }
 
     /// Adds a light (point, directional or sphere).
@@ -279,10 +287,9 @@ impl SceneBuilder {
         }
         let bvh = Bvh::build(&objects);
         let radius = bvh.bounds().map_or(1.0, |b| (0.5 * b.size().length()).max(1.0));
-        let light_sampler =
-            LightSampler::new(&self.lights, &emitters, self.background, objects.len(), radius);
+        let light_sampler = LightSampler::new(&self.lights, &emitters, &self.environment, radius);
         Ok(Scene {
-            background: self.background,
+            environment: self.environment,
             lights: self.lights,
             ambient: self.ambient,
             methods: self.methods,
@@ -323,9 +330,9 @@ impl Scene {
         Self { methods, ..self }
     }
 
-    /// The colour of rays that hit nothing: a constant environment light.
-    pub fn background(&self) -> Color {
-        self.background
+    /// The light arriving along rays that leave the scene.
+    pub fn environment(&self) -> &Environment {
+        &self.environment
     }
 
     /// The point, directional and sphere lights.
@@ -510,9 +517,18 @@ impl Scene {
         &self.emitters
     }
 
-    /// The emitter of object `object`, if it is emissive.
-    pub fn emitter_of(&self, object: usize) -> Option<&Emitter> {
-        self.emitter_of.get(object).copied().flatten().map(|i| &self.emitters[i as usize])
+    /// The index in [`Scene::emitters`] of object `object`'s emitter, if it is emissive.
+    pub fn emitter_index(&self, object: usize) -> Option<usize> {
+        self.emitter_of.get(object).copied().flatten().map(|i| i as usize)
+    }
+
+    /// The light `source` names, through the interface every light shares.
+    pub fn light_source(&self, source: Source) -> LightSource<'_> {
+        match source {
+            Source::Light(i) => LightSource::Light(&self.lights[i]),
+            Source::Emitter(i) => LightSource::Emitter(&self.emitters[i]),
+            Source::Environment => LightSource::Environment(&self.environment),
+        }
     }
 
     /// How global illumination chooses among the scene's lights.

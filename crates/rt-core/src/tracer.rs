@@ -85,7 +85,7 @@ impl<'s> Tracer<'s> {
     ) -> Color {
         counts.primary += 1;
         let Some(hit) = hit else {
-            return self.scene.background();
+            return self.scene.environment().radiance(ray.dir);
         };
         if !self.plan.shading {
             return self.scene.hit_color(&hit, ray);
@@ -97,14 +97,14 @@ impl<'s> Tracer<'s> {
     fn trace_secondary(&self, ray: &Ray, path: Path, rng: &mut SampleRng, counts: &mut RayCounts) -> Color {
         match self.scene.closest_hit(ray, Interval::new(0.0, Real::INFINITY)) {
             Some(hit) => self.shade(ray, &hit, path, rng, counts),
-            None => self.scene.background(),
+            None => self.scene.environment().radiance(ray.dir),
         }
     }
 
     fn shade(&self, ray: &Ray, hit: &Hit, path: Path, rng: &mut SampleRng, counts: &mut RayCounts) -> Color {
         let object = &self.scene.objects()[hit.object];
         let Some(d) = normalize_robust(ray.dir) else {
-            return self.scene.background();
+            return self.scene.environment().radiance(ray.dir);
         };
         let sp = object.primitive.surface_point(hit.primitive, hit.normal, ray.at(hit.t));
         let m = &self.scene.material_at(hit.object, hit.primitive, sp.p);

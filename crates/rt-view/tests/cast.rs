@@ -164,7 +164,7 @@ fn cast_pixels_works_on_every_scene_and_agrees_with_render() {
                 let object: usize = cols[10].parse().unwrap();
                 (!lit).then(|| to_rgb8(scene.scene.object_material(object).color))
             } else {
-                Some(scene.settings.color_space.encode(scene.scene.background()))
+                Some(scene.settings.color_space.encode(scene.scene.environment().radiance(rt_core::Vec3::Z)))
             };
             if let Some(expected) = expected {
                 assert_eq!(img.get_pixel(px, py).0, expected, "{name} pixel ({px},{py})");

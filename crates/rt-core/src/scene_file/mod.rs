@@ -262,7 +262,7 @@ mod tests {
         let s = &loaded.scene;
         let image = loaded.settings.image;
         assert_eq!((image.width(), image.height(), loaded.settings.samples.get()), (32, 24, 1));
-        assert_eq!(s.background(), Color::ZERO);
+        assert_eq!(*s.environment(), crate::environment::Environment::Constant(Color::ZERO));
         assert_eq!(s.material_names(), ["grey", "red"]);
         assert_eq!(s.objects().len(), 2);
         assert_eq!(s.objects()[0].material, 1);

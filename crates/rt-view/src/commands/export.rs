@@ -222,7 +222,9 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
         width: settings.image.width(),
         height: settings.image.height(),
         samples_per_pixel: settings.samples.get(),
-        background: c3(scene.background()),
+        background: c3(match scene.environment() {
+            rt_core::environment::Environment::Constant(c) => *c,
+        }),
         color_space: match settings.color_space {
             rt_core::color::ColorSpace::Linear => "Linear",
             rt_core::color::ColorSpace::Srgb => "Srgb",

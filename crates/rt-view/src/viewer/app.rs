@@ -698,11 +698,13 @@ mod tests {
                 assert!(text.ends_with("\nno hit: background"), "{text}");
                 assert!(!text.contains("object ") && !text.contains("normal ("), "{text}");
                 if interior {
-                    for (got, want) in linear.iter().zip(scene.scene.background().to_array()) {
+                    for (got, want) in
+                        linear.iter().zip(scene.scene.environment().radiance(rt_core::Vec3::Z).to_array())
+                    {
                         assert!(
                             (got - want as f64).abs() <= 0.5e-4,
                             "{text}: want {}",
-                            scene.scene.background()
+                            scene.scene.environment().radiance(rt_core::Vec3::Z)
                         );
                     }
                 }
