@@ -213,6 +213,13 @@ impl Bsdf {
         self.n
     }
 
+    /// The Lambert lobe's albedo ρ (its value is ρ/π): what it reflects of
+    /// light arriving equally from every direction (the direct-lighting
+    /// tracer's ambient term).
+    pub fn diffuse_albedo(&self) -> Color {
+        self.diffuse
+    }
+
     /// Whether the BSDF has a smooth (non-δ) part, which light sampling can reach.
     pub fn has_smooth_lobes(&self) -> bool {
         self.choose[0] > 0.0 || self.choose[1] > 0.0

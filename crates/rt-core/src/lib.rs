@@ -55,6 +55,7 @@ pub mod geometry_error;
 pub mod gltf_model;
 pub mod hard_cases;
 pub mod hit;
+pub mod interaction;
 pub mod light;
 pub mod light_sampler;
 pub mod light_source;

@@ -391,6 +391,31 @@ impl Mesh {
         Some((at(0), at(1)))
     }
 
+    /// The tangents `(∂p/∂u, ∂p/∂v)` of triangle `i` along its texture
+    /// coordinates: with `Δp₀₂ = p₀ − p₂`, `Δp₁₂ = p₁ − p₂` and the same
+    /// differences of (u, v), the solution of `Δpᵢ₂ = Δuᵢ₂·∂p/∂u + Δvᵢ₂·∂p/∂v`
+    /// (pbrt-v4 §6.5.3, `Triangle::InteractionFromIntersection`), in f64.
+    /// `None` when the mesh has no coordinates or they do not span the
+    /// triangle (a zero determinant, or parallel tangents).
+    pub fn tangents(&self, i: usize) -> Option<(Vec3, Vec3)> {
+        let uvs = self.uvs();
+        if uvs.is_empty() {
+            return None;
+        }
+        let [p0, p1, p2] = self.triangle(i).map(widen);
+        let [t0, t1, t2] = self.triangles[i].map(|v| uvs[v as usize].map(f64::from));
+        let (duv02, duv12) = ([t0[0] - t2[0], t0[1] - t2[1]], [t1[0] - t2[0], t1[1] - t2[1]]);
+        let (dp02, dp12) = (p0 - p2, p1 - p2);
+        let det = duv02[0] * duv12[1] - duv02[1] * duv12[0];
+        if !(det != 0.0 && det.is_finite()) {
+            return None;
+        }
+        let dpdu = (duv12[1] * dp02 - duv02[1] * dp12) / det;
+        let dpdv = (duv02[0] * dp12 - duv12[0] * dp02) / det;
+        let spans = dpdu.cross(dpdv).length_squared() > 0.0 && dpdu.is_finite() && dpdv.is_finite();
+        spans.then(|| (narrow(dpdu), narrow(dpdv)))
+    }
+
     /// The hit on triangle `i` alone with `t` in `range`. Degenerate
     /// triangles are never hit.
     pub fn intersect_triangle(
@@ -637,6 +662,41 @@ mod tests {
         let mut f = tempfile::Builder::new().suffix(".obj").tempfile().unwrap();
         f.write_all(text.as_bytes()).unwrap();
         f
+    }
+
+    #[test]
+    fn tangents_solve_the_edge_equations_of_the_texture_coordinates() {
+        // For random triangles and texture coordinates, p₀ − p₂ and p₁ − p₂
+        // are the (u, v) differences times (∂p/∂u, ∂p/∂v); coordinates that
+        // do not span the triangle give none, as does a mesh without any.
+        for k in 0..200u32 {
+            let rng = &mut crate::sampler::SampleRng::new(k, 41, 0);
+            let mut point = || {
+                let ((a, b), (c, _)) = (rng.next_pair(), rng.next_pair());
+                Vec3::new(a * 4.0 - 2.0, b * 4.0 - 2.0, c * 4.0 - 2.0)
+            };
+            let positions = vec![point(), point(), point()];
+            let uvs: Vec<[f32; 2]> =
+                (0..3).map(|_| [crate::real::to_f32(point().x), crate::real::to_f32(point().y)]).collect();
+            let Some(mesh) = Mesh::new(positions.clone(), vec![[0, 1, 2]]) else { continue };
+            let mesh = mesh.with_vertex_attributes(Vec::new(), uvs.clone()).unwrap();
+            let Some((dpdu, dpdv)) = mesh.tangents(0) else { continue };
+            let uv = |i: usize| (uvs[i][0] as Real, uvs[i][1] as Real);
+            for i in [0, 1] {
+                let (du, dv) = (uv(i).0 - uv(2).0, uv(i).1 - uv(2).1);
+                let rebuilt = dpdu * du + dpdv * dv;
+                let edge = positions[i] - positions[2];
+                assert!(
+                    (rebuilt - edge).length() <= 1e-3 * (1.0 + edge.length()),
+                    "triangle {k}, edge {i}: {rebuilt} for {edge}"
+                );
+            }
+        }
+        let flat = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]).unwrap();
+        assert_eq!(flat.tangents(0), None);
+        let collinear =
+            flat.with_vertex_attributes(Vec::new(), vec![[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]).unwrap();
+        assert_eq!(collinear.tangents(0), None);
     }
 
     #[test]

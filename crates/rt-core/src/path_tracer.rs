@@ -36,6 +36,7 @@ use crate::bsdf::{self, Bsdf};
 use crate::color::Color;
 use crate::effects::{GlobalIllumination, RayCounts};
 use crate::hit::Hit;
+use crate::interaction::SurfaceInteraction;
 use crate::light_sampler::{LightSampler, Source};
 use crate::material::Material;
 use crate::medium::{Subsurface, WalkWeight, sample_henyey_greenstein};
@@ -92,14 +93,9 @@ impl<'s> PathTracer<'s> {
         Self { scene, settings, subsurface }
     }
 
-    /// The radiance arriving along a camera ray (the `cast` rule decides
-    /// what counts as its hit); `rng` is this pixel sample's random stream.
-    pub fn trace_primary(&self, ray: &Ray, rng: &mut SampleRng, counts: &mut RayCounts) -> Color {
-        self.trace_primary_hit(ray, self.scene.cast(ray), rng, counts)
-    }
-
-    /// [`PathTracer::trace_primary`] for a primary ray already cast: `hit`
-    /// is what [`Scene::cast`] gave for `ray`.
+    /// The radiance arriving along a camera ray already cast: `hit` is what
+    /// [`Scene::cast`] gave for `ray`; `rng` is this pixel sample's random
+    /// stream.
     pub fn trace_primary_hit(
         &self,
         ray: &Ray,
@@ -134,23 +130,21 @@ impl<'s> PathTracer<'s> {
                 radiance += beta * scene.environment().radiance(d) * to_f32(w);
                 break;
             };
-            let object = &scene.objects()[h.object];
-            let sp = object.primitive.surface_point(h.primitive, h.normal, ray.at(h.t));
-            let material = scene.material_at(h.object, h.primitive, sp.p);
+            let Some(si) = SurfaceInteraction::new(scene, &ray, &h) else { break };
+            let (sp, wo) = (si.point, si.wo);
             // A translucent object's surface is its dielectric boundary; the
             // medium inside does the rest (step 6).
-            let medium = material.subsurface.filter(|_| self.subsurface);
+            let medium = si.material.subsurface.filter(|_| self.subsurface);
             let boundary;
             let m = if medium.is_some() {
-                boundary = material.boundary();
+                boundary = si.material.boundary();
                 &boundary
             } else {
-                &*material
+                &*si.material
             };
-            let wo = -d;
 
             // 1. Emission found by this ray.
-            if m.is_emissive() && wo.dot(sp.normal) > 0.0 {
+            if m.is_emissive() && si.front() {
                 let w = found_light_weight(previous, |p| match scene.emitter_index(h.object) {
                     Some(i) => {
                         let distance = (sp.p - p).length();
@@ -169,8 +163,7 @@ impl<'s> PathTracer<'s> {
             }
             // A translucent object's boundary stays flat: the walk's inside
             // and outside are the facets' (step 6).
-            let shading = object.primitive.shading_normal(h.primitive, sp.p).filter(|_| medium.is_none());
-            let bsdf = Bsdf::shaded(m, sp.normal, shading.unwrap_or(sp.normal), wo);
+            let bsdf = si.bsdf_of(m, si.shading_normal.filter(|_| medium.is_none()));
 
             // 3. Next-event estimation.
             if bsdf.has_smooth_lobes() {

@@ -74,6 +74,18 @@ impl Primitive {
         }
     }
 
+    /// The tangent frame `(∂p/∂u, ∂p/∂v)` at a hit on `primitive` with unit
+    /// geometric `normal`: a mesh's along its texture coordinates
+    /// ([`Mesh::tangents`]); elsewhere, and where those do not span the
+    /// triangle, two unit vectors completing `normal` to an orthonormal frame.
+    pub fn tangents(&self, primitive: usize, normal: Vec3) -> (Vec3, Vec3) {
+        let along_uv = match self {
+            Self::Mesh(m) => m.tangents(primitive),
+            _ => None,
+        };
+        along_uv.unwrap_or_else(|| normal.any_orthonormal_pair())
+    }
+
     /// The hit point `p = o + t·d` of a hit on `primitive` (the triangle
     /// index in a mesh) with geometric `normal`, moved onto the surface and
     /// given an error bound, so secondary rays can leave it safely.

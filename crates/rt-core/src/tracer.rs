@@ -34,12 +34,12 @@
 //! object as opaque, glass too. Secondary rays start at the hit point pushed
 //! off the surface by its error bound ([`crate::surface`]).
 
-use crate::bsdf::Bsdf;
 use crate::color::Color;
 use crate::effects::{EffectPlan, RayCounts};
 use crate::hit::Hit;
+use crate::interaction::SurfaceInteraction;
 use crate::ray::{Interval, Ray};
-use crate::real::{Real, Vec3, normalize_robust, to_f32};
+use crate::real::{Real, Vec3, to_f32};
 use crate::sampler::{SampleRng, cosine_hemisphere, stratified};
 use crate::scene::Scene;
 use crate::shading::{fresnel_dielectric, reflect, refract};
@@ -67,15 +67,10 @@ impl<'s> Tracer<'s> {
         &self.plan
     }
 
-    /// The colour seen along a camera ray (the `cast` rule decides what
-    /// counts as a hit); `rng` is this pixel sample's random stream.
-    pub fn trace_primary(&self, ray: &Ray, rng: &mut SampleRng, counts: &mut RayCounts) -> Color {
-        self.trace_primary_hit(ray, self.scene.cast(ray), rng, counts)
-    }
-
-    /// [`Tracer::trace_primary`] for a primary ray already cast: `hit` is
-    /// what [`Scene::cast`] gave for `ray` (packets of primary rays are cast
-    /// together, [`Scene::cast_all`]).
+    /// The colour seen along a camera ray already cast: `hit` is what
+    /// [`Scene::cast`] gave for `ray` (packets of primary rays are cast
+    /// together, [`Scene::cast_all`]); `rng` is this pixel sample's random
+    /// stream.
     pub fn trace_primary_hit(
         &self,
         ray: &Ray,
@@ -102,22 +97,18 @@ impl<'s> Tracer<'s> {
     }
 
     fn shade(&self, ray: &Ray, hit: &Hit, path: Path, rng: &mut SampleRng, counts: &mut RayCounts) -> Color {
-        let object = &self.scene.objects()[hit.object];
-        let Some(d) = normalize_robust(ray.dir) else {
+        let Some(si) = SurfaceInteraction::new(self.scene, ray, hit) else {
             return self.scene.environment().radiance(ray.dir);
         };
-        let sp = object.primitive.surface_point(hit.primitive, hit.normal, ray.at(hit.t));
-        let m = &self.scene.material_at(hit.object, hit.primitive, sp.p);
-        let wo = -d;
-        let front = wo.dot(sp.normal) > 0.0;
-        let n = if front { sp.normal } else { -sp.normal };
+        let (sp, m, wo, d) = (&si.point, &*si.material, si.wo, -si.wo);
+        let front = si.front();
+        let n = si.facing_normal();
 
-        let mut color = if front { m.emission } else { Color::ZERO };
-        let shading = object.primitive.shading_normal(hit.primitive, sp.p);
-        let bsdf = Bsdf::shaded(m, sp.normal, shading.unwrap_or(sp.normal), wo);
+        let mut color = si.emitted();
+        let shading = si.shading_normal;
+        let bsdf = si.bsdf();
         if bsdf.has_smooth_lobes() {
-            let lambert =
-                m.color * ((1.0 - m.reflectivity - m.transparency) * (1.0 - m.specular) * m.diffuse);
+            let lambert = bsdf.diffuse_albedo();
             if lambert != Color::ZERO && self.scene.ambient() != Color::ZERO {
                 let ao = self.ambient_occlusion(&sp, n, rng, counts);
                 color += self.scene.ambient() * lambert * ao;
@@ -133,7 +124,7 @@ impl<'s> Tracer<'s> {
                     }
                     if self.plan.shadows && light.shadows {
                         counts.shadow += 1;
-                        let shadow = Ray::new(sp.spawn_origin(s.to_light), s.to_light);
+                        let shadow = si.spawn_ray(s.to_light);
                         if self.scene.any_hit(&shadow, Interval::new(0.0, s.distance)) {
                             continue;
                         }
@@ -156,7 +147,7 @@ impl<'s> Tracer<'s> {
             if self.plan.reflection && next.weight >= MIN_WEIGHT {
                 counts.reflection += 1;
                 let r = Some(reflect(d, ns)).filter(|r| r.dot(n) > 0.0).unwrap_or_else(|| reflect(d, n));
-                let ray = Ray::new(sp.spawn_origin(r), r);
+                let ray = si.spawn_ray(r);
                 color += reflected * self.trace_secondary(&ray, next, rng, counts);
             }
             let transmitted = m.color * (m.transparency * (1.0 - fresnel));
@@ -172,7 +163,7 @@ impl<'s> Tracer<'s> {
                     .or_else(|| refract(d, n, eta_i, eta_t))
             {
                 counts.refraction += 1;
-                let ray = Ray::new(sp.spawn_origin(t), t);
+                let ray = si.spawn_ray(t);
                 color += transmitted * self.trace_secondary(&ray, next, rng, counts);
             }
         }
