@@ -110,7 +110,7 @@ impl<'s> Tracer<'s> {
         if bsdf.has_smooth_lobes() {
             let lambert = bsdf.diffuse_albedo();
             if lambert != Color::ZERO && self.scene.ambient() != Color::ZERO {
-                let ao = self.ambient_occlusion(&sp, n, rng, counts);
+                let ao = self.ambient_occlusion(sp, n, rng, counts);
                 color += self.scene.ambient() * lambert * ao;
             }
             for light in self.scene.lights() {
