@@ -1,5 +1,5 @@
-//! The render loop: pixels → samples → primary rays → [`Tracer`] (or, under
-//! global illumination, [`PathTracer`]) → colours → rows → image.
+//! The render loop: pixels → samples → primary rays → the render's
+//! [`Integrator`] → colours → rows → image.
 //!
 //! Rows are independent: [`Renderer::render_row`] fills one, and
 //! [`Renderer::render`] fills all of them in parallel with rayon, in bands
@@ -19,13 +19,12 @@ use crate::camera::Camera;
 use crate::color::{Color, ColorSpace};
 use crate::effects::{EffectPlan, RayCounts};
 use crate::hit::Hit;
-use crate::path_tracer::PathTracer;
+use crate::integrator::Integrator;
 use crate::ray::Ray;
 use crate::real::Vec3;
 use crate::sampler::{SampleRng, Strata};
 use crate::scene::Scene;
 use crate::settings::RenderSettings;
-use crate::tracer::Tracer;
 use crate::view_plane::{ViewPlane, ViewPlaneError};
 
 /// The most rows [`Renderer::render`] renders together, their rays cast in
@@ -70,9 +69,9 @@ impl Frame {
 #[derive(Clone, Copy, Debug)]
 pub struct Renderer<'s> {
     scene: &'s Scene,
-    tracer: Tracer<'s>,
-    /// Under global illumination, the path tracer that replaces `tracer`.
-    path_tracer: Option<PathTracer<'s>>,
+    /// The effects simulated.
+    plan: EffectPlan,
+    integrator: Integrator<'s>,
     view: ViewPlane,
     spp: u32,
     /// The pixel's cells of `spp` stratified samples.
@@ -90,8 +89,8 @@ impl<'s> Renderer<'s> {
         let spp = settings.samples.get();
         Ok(Self {
             scene,
-            tracer: Tracer::new(scene, plan),
-            path_tracer: plan.global_illumination.map(|gi| PathTracer::new(scene, gi, plan.subsurface)),
+            plan,
+            integrator: Integrator::new(scene, plan),
             view: ViewPlane::new(camera, settings.image.width(), settings.image.height())?,
             spp,
             strata: Strata::new(spp),
@@ -107,7 +106,7 @@ impl<'s> Renderer<'s> {
 
     /// The effects this renderer simulates.
     pub fn plan(&self) -> &EffectPlan {
-        self.tracer.plan()
+        &self.plan
     }
 
     /// Samples per pixel.
@@ -152,10 +151,7 @@ impl<'s> Renderer<'s> {
         counts: &mut RayCounts,
     ) -> Color {
         let rng = &mut SampleRng::seeded(x, y, k, self.seed);
-        match &self.path_tracer {
-            Some(path_tracer) => path_tracer.trace_primary_hit(ray, hit, rng, counts),
-            None => self.tracer.trace_primary_hit(ray, hit, rng, counts),
-        }
+        self.integrator.radiance(ray, hit, rng, counts)
     }
 
     /// The mean colour of pixel (x, y) over its samples, summed in order
