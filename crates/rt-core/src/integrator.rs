@@ -16,7 +16,7 @@ use crate::effects::{EffectPlan, RayCounts};
 use crate::hit::Hit;
 use crate::path_tracer::PathTracer;
 use crate::ray::Ray;
-use crate::sampler::SampleRng;
+use crate::sampler::Sampler;
 use crate::scene::Scene;
 use crate::tracer::Tracer;
 
@@ -40,18 +40,18 @@ impl<'s> Integrator<'s> {
     }
 
     /// The radiance arriving along the camera ray `ray`, whose hit was found
-    /// already (`hit`, by [`Scene::cast`]); `rng` is this pixel sample's
-    /// random stream.
+    /// already (`hit`, by [`Scene::cast`]); `sampler` hands out this pixel
+    /// sample's random numbers.
     pub fn radiance(
         &self,
         ray: &Ray,
         hit: Option<Hit>,
-        rng: &mut SampleRng,
+        sampler: &mut Sampler,
         counts: &mut RayCounts,
     ) -> Color {
         match self {
-            Self::Direct(tracer) => tracer.trace_primary_hit(ray, hit, rng, counts),
-            Self::Path(path_tracer) => path_tracer.trace_primary_hit(ray, hit, rng, counts),
+            Self::Direct(tracer) => tracer.trace_primary_hit(ray, hit, sampler, counts),
+            Self::Path(path_tracer) => path_tracer.trace_primary_hit(ray, hit, sampler, counts),
         }
     }
 }

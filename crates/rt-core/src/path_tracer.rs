@@ -41,7 +41,7 @@ use crate::light_sampler::{LightSampler, Source};
 use crate::random_walk::{RandomWalk, WalkEnd};
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, normalize_robust, to_f32};
-use crate::sampler::SampleRng;
+use crate::sampler::Sampler;
 use crate::scene::Scene;
 use crate::surface::SurfacePoint;
 
@@ -77,24 +77,24 @@ impl<'s> PathTracer<'s> {
     }
 
     /// The radiance arriving along a camera ray already cast: `hit` is what
-    /// [`Scene::cast`] gave for `ray`; `rng` is this pixel sample's random
-    /// stream.
+    /// [`Scene::cast`] gave for `ray`; `sampler` hands out this pixel
+    /// sample's random numbers.
     pub fn trace_primary_hit(
         &self,
         ray: &Ray,
         hit: Option<Hit>,
-        rng: &mut SampleRng,
+        sampler: &mut Sampler,
         counts: &mut RayCounts,
     ) -> Color {
         counts.primary += 1;
-        self.trace_path(*ray, hit, rng, counts)
+        self.trace_path(*ray, hit, sampler, counts)
     }
 
     fn trace_path(
         &self,
         mut ray: Ray,
         mut hit: Option<Hit>,
-        rng: &mut SampleRng,
+        sampler: &mut Sampler,
         counts: &mut RayCounts,
     ) -> Color {
         let scene = self.scene;
@@ -150,12 +150,12 @@ impl<'s> PathTracer<'s> {
 
             // 3. Next-event estimation.
             if bsdf.has_smooth_lobes() {
-                radiance += beta * self.next_event(&sp, &bsdf, wo, lights, rng, counts);
+                radiance += beta * self.next_event(&sp, &bsdf, wo, lights, sampler, counts);
             }
 
             // 4. BSDF sampling.
-            let (u, _) = rng.next_pair();
-            let Some(s) = bsdf.sample(wo, u, rng.next_pair()) else { break };
+            let u = sampler.get_1d();
+            let Some(s) = bsdf.sample(wo, u, sampler.get_2d()) else { break };
             beta *= s.weight;
             if beta.max_element() <= 0.0 || !beta.is_finite() {
                 break;
@@ -167,7 +167,7 @@ impl<'s> PathTracer<'s> {
             if self.settings.russian_roulette && bounce >= ROULETTE_FROM {
                 let survive = beta.max_element();
                 if survive < 1.0 {
-                    let (u, _) = rng.next_pair();
+                    let u = sampler.get_1d();
                     if to_f32(u) >= survive {
                         break;
                     }
@@ -181,7 +181,7 @@ impl<'s> PathTracer<'s> {
                 && s.wi.dot(sp.normal) < 0.0
             {
                 match RandomWalk::new(scene, self.settings)
-                    .walk(h.object, &medium, m, &sp, s.wi, beta, rng, counts)
+                    .walk(h.object, &medium, m, &sp, s.wi, beta, sampler, counts)
                 {
                     WalkEnd::Ended => break,
                     WalkEnd::Out { ray: out, hit: out_hit, weight } => {
@@ -216,11 +216,11 @@ impl<'s> PathTracer<'s> {
         bsdf: &Bsdf,
         wo: Vec3,
         lights: &LightSampler,
-        rng: &mut SampleRng,
+        sampler: &mut Sampler,
         counts: &mut RayCounts,
     ) -> Color {
-        let (u, _) = rng.next_pair();
-        let uv = rng.next_pair();
+        let u = sampler.get_1d();
+        let uv = sampler.get_2d();
         let Some((source, chosen)) = lights.choose(u) else { return Color::ZERO };
         let Some(s) = self.scene.light_source(source).sample(sp.p, uv) else { return Color::ZERO };
         let f = bsdf.eval(wo, s.wi);
@@ -463,10 +463,12 @@ mod tests {
             for (x, y) in (0..12).flat_map(|y| (0..12).map(move |x| (x, y))) {
                 let mut sphere = Vec::new();
                 for k in 0..spp {
-                    let (sx, sy) = SampleRng::seeded(x, y, k, 7).next_pair();
+                    let (sx, sy) = crate::sampler::SampleRng::seeded(x, y, k, 7).next_pair();
                     let ray = view.primary_ray(x, y, sx, sy);
                     let hit = s.scene.cast(&ray);
-                    let c = tracer.trace_primary_hit(&ray, hit, &mut SampleRng::new(x, y, k), &mut counts);
+                    let mut sampler = Sampler::new(1, 0);
+                    sampler.start_pixel_sample(x, y, k);
+                    let c = tracer.trace_primary_hit(&ray, hit, &mut sampler, &mut counts);
                     match hit {
                         None => assert_eq!(c, Color::ONE, "{effects}: background at ({x}, {y})"),
                         Some(_) => sphere.push(c),

@@ -12,7 +12,7 @@ use crate::material::Material;
 use crate::medium::{Subsurface, WalkWeight, sample_henyey_greenstein};
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, gamma, to_f32};
-use crate::sampler::SampleRng;
+use crate::sampler::Sampler;
 use crate::scene::Scene;
 use crate::surface::SurfacePoint;
 
@@ -76,12 +76,12 @@ impl<'s> RandomWalk<'s> {
         entry: &SurfacePoint,
         w: Vec3,
         beta: Color,
-        rng: &mut SampleRng,
+        sampler: &mut Sampler,
         counts: &mut RayCounts,
     ) -> WalkEnd {
         let scene = self.scene;
         let g = medium.anisotropy as Real;
-        let mut spectral = WalkWeight::new(rng.next_pair().0);
+        let mut spectral = WalkWeight::new(sampler.get_1d());
         let mut ray = Ray::new(entry.spawn_origin(w), w);
         let mut steps = 0;
         loop {
@@ -100,7 +100,7 @@ impl<'s> RandomWalk<'s> {
                 ray = back;
                 hit = scene.closest_hit(&ray, Interval::new(0.0, Real::INFINITY));
             }
-            let t = spectral.sample_distance(medium, rng.next_pair().0);
+            let t = spectral.sample_distance(medium, sampler.get_1d());
             match hit {
                 None => return WalkEnd::Escaped { ray, weight: spectral.weight() },
                 Some(h) if t >= h.t => {
@@ -117,8 +117,8 @@ impl<'s> RandomWalk<'s> {
                     }
                     let wo = -ray.dir;
                     let bsdf = Bsdf::new(boundary, sp.normal, wo);
-                    let (u, _) = rng.next_pair();
-                    let Some(s) = bsdf.sample(wo, u, rng.next_pair()) else { return WalkEnd::Ended };
+                    let u = sampler.get_1d();
+                    let Some(s) = bsdf.sample(wo, u, sampler.get_2d()) else { return WalkEnd::Ended };
                     spectral.scale(s.weight);
                     if s.wi.dot(sp.normal) > 0.0 {
                         counts.bounce += 1;
@@ -142,7 +142,7 @@ impl<'s> RandomWalk<'s> {
                     if self.settings.russian_roulette {
                         let survive = (beta * weight).max_element();
                         if survive < 1.0 {
-                            let (u, _) = rng.next_pair();
+                            let u = sampler.get_1d();
                             if to_f32(u) >= survive {
                                 return WalkEnd::Ended;
                             }
@@ -157,7 +157,7 @@ impl<'s> RandomWalk<'s> {
                     let margin = 4.0 * gamma(3) * (ray.origin.abs().max_element() + h.t);
                     let t = if h.t - t < margin { (h.t - margin).max(0.0) } else { t };
                     let at = ray.at(t);
-                    ray = Ray::new(at, sample_henyey_greenstein(ray.dir, g, rng.next_pair()));
+                    ray = Ray::new(at, sample_henyey_greenstein(ray.dir, g, sampler.get_2d()));
                 }
             }
         }
@@ -243,9 +243,10 @@ mod tests {
                 let mut counts = RayCounts::default();
                 let mut outcomes = [0u32; 3];
                 for k in 0..4000u32 {
-                    let rng = &mut SampleRng::new(k, 1, 2);
+                    let sampler = &mut Sampler::new(1, 0);
+                    sampler.start_pixel_sample(k, 1, 2);
                     // Enter at a random point of the surface, straight inwards.
-                    let d = crate::sampler::uniform_sphere(rng.next_pair());
+                    let d = crate::sampler::uniform_sphere(sampler.get_2d());
                     let ray = Ray::new(centre + d * 10.0, -d);
                     let h = s.scene.closest_hit(&ray, Interval::new(0.0, Real::INFINITY)).unwrap();
                     let sp = o.primitive.surface_point(h.primitive, h.normal, ray.at(h.t));
@@ -256,7 +257,7 @@ mod tests {
                         &sp,
                         -d,
                         Color::ONE,
-                        rng,
+                        sampler,
                         &mut counts,
                     );
                     outcomes[match end {

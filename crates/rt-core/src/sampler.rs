@@ -147,9 +147,72 @@ pub fn uniform_sphere_pdf() -> Real {
     1.0 / (4.0 * std::f64::consts::PI as Real)
 }
 
+/// Where a render's samples come from: for sample k of pixel (x, y) of the
+/// image of seed `seed`, a film position in the pixel and, in the order a
+/// path asks for them, its 1D and 2D values, one dimension after another
+/// (pbrt-v4's `Sampler`: `StartPixelSample`, `GetPixel2D`, `Get1D`, `Get2D`).
+/// Values depend only on (pixel, sample, seed, dimension), never on the
+/// thread or the order pixels are rendered in.
+///
+/// This first implementation is stratified jitter for the film position
+/// ([`Strata::subpixel_offset`]; the pixel centre at one sample per pixel)
+/// and, for the path, the [`SampleRng`] stream of the sample, which draws
+/// values in pairs: a 1D value is the first of a pair whose second is not
+/// used. That keeps the images of earlier versions bit for bit; a
+/// low-discrepancy sampler gives every dimension its own value instead.
+#[derive(Clone, Copy, Debug)]
+pub struct Sampler {
+    strata: Strata,
+    spp: u32,
+    seed: u64,
+    stream: SampleRng,
+}
+
+impl Sampler {
+    /// A sampler for `spp` samples per pixel (≥ 1) in the image of seed `seed`.
+    pub fn new(spp: u32, seed: u64) -> Self {
+        Self { strata: Strata::new(spp), spp, seed, stream: SampleRng::seeded(0, 0, 0, seed) }
+    }
+
+    /// Starts sample `k` of pixel (`x`, `y`): the values handed out next are that sample's.
+    #[inline]
+    pub fn start_pixel_sample(&mut self, x: u32, y: u32, k: u32) {
+        self.stream = SampleRng::seeded(x, y, k, self.seed);
+    }
+
+    /// The film position of sample `k` of pixel (`x`, `y`) inside the
+    /// pixel, in [0,1)² (`(0.5, 0.5)`, the centre, at one sample per pixel).
+    /// It uses up no dimension of the path, so primary rays can be made
+    /// before their samples' paths start (packets of camera rays).
+    #[inline(always)]
+    pub fn film_position(&self, x: u32, y: u32, k: u32) -> (Real, Real) {
+        if self.spp == 1 { (0.5, 0.5) } else { self.strata.subpixel_offset(x, y, k, self.seed) }
+    }
+
+    /// The lens position of sample `k` of pixel (`x`, `y`), in [0,1)²: the
+    /// lens centre, as long as no camera has a lens
+    /// ([`crate::view_plane::ViewPlane::has_lens`]).
+    #[inline(always)]
+    pub fn lens_position(&self, _x: u32, _y: u32, _k: u32) -> (Real, Real) {
+        (0.5, 0.5)
+    }
+
+    /// The next dimension's value in [0, 1).
+    #[inline]
+    pub fn get_1d(&mut self) -> Real {
+        self.stream.next_pair().0
+    }
+
+    /// The next dimension's pair of values in [0, 1)².
+    #[inline]
+    pub fn get_2d(&mut self) -> (Real, Real) {
+        self.stream.next_pair()
+    }
+}
+
 /// The random numbers of one sample of one pixel: a SplitMix64 stream seeded
 /// by (x, y, sample). Draw order within a sample is fixed by the tracer.
-#[derive(Clone, Debug)]
+#[derive(Clone, Copy, Debug)]
 pub struct SampleRng(u64);
 
 impl SampleRng {
@@ -203,6 +266,33 @@ mod tests {
     use super::*;
     use crate::chi_square::{self, Draw, Interval, Rectangle, SphereGrid};
     use crate::real::{to_f64, widen};
+
+    #[test]
+    fn a_samples_values_depend_on_its_pixel_index_and_seed_alone() {
+        // Started twice, a sample hands out the same dimensions; another
+        // pixel, index or seed gives others. A 1D value is the first of the
+        // stream's pair; the film position is the pixel centre at one
+        // sample per pixel and the stratified offset otherwise, and uses up
+        // no dimension.
+        let draw = |sampler: &mut Sampler, x, y, k| {
+            sampler.start_pixel_sample(x, y, k);
+            (sampler.get_1d(), sampler.get_2d(), sampler.get_1d())
+        };
+        let mut a = Sampler::new(4, 3);
+        let first = draw(&mut a, 5, 6, 2);
+        let _ = draw(&mut a, 9, 9, 0);
+        assert_eq!(draw(&mut a, 5, 6, 2), first);
+        let mut stream = SampleRng::seeded(5, 6, 2, 3);
+        assert_eq!(first, (stream.next_pair().0, stream.next_pair(), stream.next_pair().0));
+        for other in [draw(&mut a, 5, 6, 3), draw(&mut a, 6, 5, 2), draw(&mut Sampler::new(4, 4), 5, 6, 2)] {
+            assert_ne!(other, first);
+        }
+        assert_eq!(Sampler::new(1, 3).film_position(5, 6, 0), (0.5, 0.5));
+        assert_eq!(a.film_position(5, 6, 2), subpixel_offset(5, 6, 2, 4, 3));
+        a.start_pixel_sample(5, 6, 2);
+        let _ = a.film_position(5, 6, 2);
+        assert_eq!(a.get_1d(), first.0);
+    }
 
     #[test]
     fn power_of_two_counts_place_points_with_the_general_arithmetic_bits() {

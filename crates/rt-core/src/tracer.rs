@@ -40,7 +40,7 @@ use crate::hit::Hit;
 use crate::interaction::SurfaceInteraction;
 use crate::ray::{Interval, Ray};
 use crate::real::{Real, Vec3, to_f32};
-use crate::sampler::{SampleRng, cosine_hemisphere, stratified};
+use crate::sampler::{Sampler, cosine_hemisphere, stratified};
 use crate::scene::Scene;
 use crate::shading::{fresnel_dielectric, reflect, refract};
 use crate::surface::SurfacePoint;
@@ -69,13 +69,13 @@ impl<'s> Tracer<'s> {
 
     /// The colour seen along a camera ray already cast: `hit` is what
     /// [`Scene::cast`] gave for `ray` (packets of primary rays are cast
-    /// together, [`Scene::cast_all`]); `rng` is this pixel sample's random
-    /// stream.
+    /// together, [`Scene::cast_all`]); `sampler` hands out this pixel
+    /// sample's random numbers.
     pub fn trace_primary_hit(
         &self,
         ray: &Ray,
         hit: Option<Hit>,
-        rng: &mut SampleRng,
+        sampler: &mut Sampler,
         counts: &mut RayCounts,
     ) -> Color {
         counts.primary += 1;
@@ -85,18 +85,25 @@ impl<'s> Tracer<'s> {
         if !self.plan.shading {
             return self.scene.hit_color(&hit, ray);
         }
-        self.shade(ray, &hit, Path { depth: 0, weight: 1.0 }, rng, counts)
+        self.shade(ray, &hit, Path { depth: 0, weight: 1.0 }, sampler, counts)
     }
 
     /// The colour seen along a reflected or refracted ray.
-    fn trace_secondary(&self, ray: &Ray, path: Path, rng: &mut SampleRng, counts: &mut RayCounts) -> Color {
+    fn trace_secondary(&self, ray: &Ray, path: Path, sampler: &mut Sampler, counts: &mut RayCounts) -> Color {
         match self.scene.closest_hit(ray, Interval::new(0.0, Real::INFINITY)) {
-            Some(hit) => self.shade(ray, &hit, path, rng, counts),
+            Some(hit) => self.shade(ray, &hit, path, sampler, counts),
             None => self.scene.environment().radiance(ray.dir),
         }
     }
 
-    fn shade(&self, ray: &Ray, hit: &Hit, path: Path, rng: &mut SampleRng, counts: &mut RayCounts) -> Color {
+    fn shade(
+        &self,
+        ray: &Ray,
+        hit: &Hit,
+        path: Path,
+        sampler: &mut Sampler,
+        counts: &mut RayCounts,
+    ) -> Color {
         let Some(si) = SurfaceInteraction::new(self.scene, ray, hit) else {
             return self.scene.environment().radiance(ray.dir);
         };
@@ -110,13 +117,13 @@ impl<'s> Tracer<'s> {
         if bsdf.has_smooth_lobes() {
             let lambert = bsdf.diffuse_albedo();
             if lambert != Color::ZERO && self.scene.ambient() != Color::ZERO {
-                let ao = self.ambient_occlusion(sp, n, rng, counts);
+                let ao = self.ambient_occlusion(sp, n, sampler, counts);
                 color += self.scene.ambient() * lambert * ao;
             }
             for light in self.scene.lights() {
                 let samples = light.sample_count();
                 for k in 0..samples {
-                    let jitter = if samples > 1 { rng.next_pair() } else { (0.5, 0.5) };
+                    let jitter = if samples > 1 { sampler.get_2d() } else { (0.5, 0.5) };
                     let Some(s) = light.sample(sp.p, k, jitter) else { continue };
                     let f = bsdf.eval(wo, s.to_light);
                     if f == Color::ZERO {
@@ -148,7 +155,7 @@ impl<'s> Tracer<'s> {
                 counts.reflection += 1;
                 let r = Some(reflect(d, ns)).filter(|r| r.dot(n) > 0.0).unwrap_or_else(|| reflect(d, n));
                 let ray = si.spawn_ray(r);
-                color += reflected * self.trace_secondary(&ray, next, rng, counts);
+                color += reflected * self.trace_secondary(&ray, next, sampler, counts);
             }
             let transmitted = m.color * (m.transparency * (1.0 - fresnel));
             // The η² factors of entering and leaving cancel along a path, so
@@ -164,7 +171,7 @@ impl<'s> Tracer<'s> {
             {
                 counts.refraction += 1;
                 let ray = si.spawn_ray(t);
-                color += transmitted * self.trace_secondary(&ray, next, rng, counts);
+                color += transmitted * self.trace_secondary(&ray, next, sampler, counts);
             }
         }
         color
@@ -176,7 +183,7 @@ impl<'s> Tracer<'s> {
         &self,
         sp: &SurfacePoint,
         n: Vec3,
-        rng: &mut SampleRng,
+        sampler: &mut Sampler,
         counts: &mut RayCounts,
     ) -> f32 {
         let Some(ao) = self.plan.ambient_occlusion else {
@@ -184,7 +191,7 @@ impl<'s> Tracer<'s> {
         };
         let mut open = 0u32;
         for k in 0..ao.samples {
-            let dir = cosine_hemisphere(n, stratified(k, ao.samples, rng.next_pair()));
+            let dir = cosine_hemisphere(n, stratified(k, ao.samples, sampler.get_2d()));
             let ray = Ray::new(sp.spawn_origin(dir), dir);
             counts.ambient_occlusion += 1;
             if !self.scene.any_hit(&ray, Interval::new(0.0, ao.radius)) {

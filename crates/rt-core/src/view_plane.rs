@@ -166,9 +166,26 @@ impl ViewPlane {
         }
     }
 
-    /// The primary ray through the centre of pixel (ix, iy).
+    /// The camera's ray for film position `film` in pixel (ix, iy) and lens
+    /// position `lens`, both in [0,1)²: what every camera answers (a thin
+    /// lens will use `lens`; the pinhole perspective and orthographic
+    /// projections have none and ignore it). It is
+    /// [`ViewPlane::primary_ray`] at sub-pixel offset `film`.
+    #[inline(always)]
+    pub fn camera_ray(&self, ix: u32, iy: u32, film: (Real, Real), _lens: (Real, Real)) -> Ray {
+        self.primary_ray(ix, iy, film.0, film.1)
+    }
+
+    /// Whether the camera's rays depend on the lens position: false for
+    /// both pinhole projections.
+    pub fn has_lens(&self) -> bool {
+        false
+    }
+
+    /// The primary ray through the centre of pixel (ix, iy): the camera's
+    /// ray for film position (0.5, 0.5).
     pub fn center_ray(&self, ix: u32, iy: u32) -> Ray {
-        self.primary_ray(ix, iy, 0.5, 0.5)
+        self.camera_ray(ix, iy, (0.5, 0.5), (0.5, 0.5))
     }
 
     /// `P − C`, the formula above with C taken out; computed relative to the
