@@ -11,8 +11,8 @@ use crate::viewer;
 
 /// A CPU ray tracer: view RON scene files live, render them to PNG, or query rays against them.
 ///
-/// With no command, opens the interactive viewer on SCENE (or a built-in
-/// scene): drag to orbit, shift- or right-drag to pan, wheel to zoom, ctrl+wheel
+/// With no command, opens the interactive viewer on SCENE (default: the
+/// scene shown when the viewer last closed, else a built-in scene): drag to orbit, shift- or right-drag to pan, wheel to zoom, ctrl+wheel
 /// to zoom the image, hover to inspect a pixel, F1 for every shortcut; the
 /// side panel has the camera, image and effect controls. Saving the scene
 /// file or one of its meshes in an editor reloads it.
@@ -22,7 +22,7 @@ use crate::viewer;
     version,
     args_conflicts_with_subcommands = true,
     after_help = "Examples:\n  \
-        rt-view                      (the viewer, on the built-in scene)\n  \
+        rt-view                      (the viewer, on the last scene or the built-in one)\n  \
         rt-view scenes/showcase.ron  (the viewer, on a scene file)\n  \
         rt-view render scenes/showcase.ron -o showcase.png\n  \
         rt-view render scenes/sphere.ron -o sphere.png --width 1280 --height 960 --spp 16\n  \
@@ -32,7 +32,8 @@ use crate::viewer;
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
-    /// Scene to open in the interactive viewer (default: a built-in scene).
+    /// Scene to open in the interactive viewer (default: the scene shown
+    /// when the viewer last closed, else a built-in scene).
     pub scene: Option<PathBuf>,
     /// Viewer: once the first full-resolution frame is on screen, save a
     /// screenshot of the window to this PNG and exit.
