@@ -5,7 +5,7 @@
 # on is "missed". Results: docs/testing.md, "Mutation testing".
 #
 #   cargo install cargo-mutants --locked
-#   scripts/mutants.sh crates/rt-core/src/sphere.rs [more files...]
+#   scripts/mutants.sh crates/rt-core/src/geometry/sphere.rs [more files...]
 #
 # MUTANTS_SHARD=K/N runs every N-th mutant from the K-th (0-based; cargo
 # mutants --shard K/N --sharding round-robin): a sample spread over the

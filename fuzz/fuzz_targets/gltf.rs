@@ -11,7 +11,7 @@ use rt_core::Vec3;
 fuzz_target!(|data: &[u8]| {
     // External buffers and images resolve under a folder that does not exist.
     let name = Path::new("/nonexistent-fuzz-dir/model.glb");
-    let Ok(model) = rt_core::gltf_model::from_slice(data, name, 1.0, Vec3::ZERO) else { return };
+    let Ok(model) = rt_core::files::gltf_model::from_slice(data, name, 1.0, Vec3::ZERO) else { return };
     for (mesh, material) in &model.parts {
         assert!(mesh.bounds().min().is_finite() && mesh.bounds().max().is_finite());
         assert!(material.is_none_or(|m| m < model.materials.len()));

@@ -30,7 +30,7 @@ fn scene() -> &'static Scene {
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else { return };
-    let Ok(rays) = rt_core::ray_text::parse_rays(text) else { return };
+    let Ok(rays) = rt_core::files::ray_text::parse_rays(text) else { return };
     for ray in rays.iter().take(256) {
         assert!(ray.origin.is_finite() && ray.dir.is_finite() && ray.dir.length_squared() >= 0.0);
         if let Some(hit) = scene().cast(ray) {

@@ -53,7 +53,7 @@ fn dot(a: V, b: V) -> f64 {
 
 /// Icosahedron on the unit sphere, each triangle split into four `levels` times.
 fn icosphere(levels: u32) -> (Vec<V>, Vec<Vec<usize>>) {
-    let (corners, faces) = rt_core::mesh::icosahedron();
+    let (corners, faces) = rt_core::geometry::mesh::icosahedron();
     let mut verts: Vec<V> = corners.into_iter().map(normalize).collect();
     let mut faces: Vec<[usize; 3]> = faces.iter().map(|f| f.map(|i| i as usize)).collect();
     for _ in 0..levels {

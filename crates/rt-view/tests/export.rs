@@ -31,7 +31,7 @@ fn colour(v: &Value) -> [f32; 3] {
 
 /// A vector of rt-view's geometry (`Real`) as the `f64`s the export writes.
 fn wide(v: rt_core::Vec3) -> [f64; 3] {
-    let d = rt_core::real::widen(v);
+    let d = rt_core::math::real::widen(v);
     [d.x, d.y, d.z]
 }
 
@@ -119,7 +119,7 @@ fn export_writes_every_object_material_and_light_with_defaults_resolved() {
         let triangles = obj_triangles(&dir.path().join(o["file"].as_str().unwrap()));
         assert_eq!(triangles.len() as u64, o["triangles"].as_u64().unwrap());
         let obj = dir.path().join(o["file"].as_str().unwrap());
-        let mesh = rt_core::mesh::Mesh::load_obj(&obj, 1.0, rt_core::Vec3::ZERO).unwrap();
+        let mesh = rt_core::geometry::mesh::Mesh::load_obj(&obj, 1.0, rt_core::Vec3::ZERO).unwrap();
         assert_eq!(mesh.triangle_count(), triangles.len());
         if let rt_core::Primitive::Mesh(m) = &object.primitive {
             assert_eq!(m.triangle_count(), triangles.len());
@@ -153,7 +153,7 @@ fn exported_triangles_keep_the_normals_rt_view_uses() {
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     assert_eq!(json["global_illumination"]["max_bounces"], 3);
     let obj = dir.path().join(json["objects"][0]["file"].as_str().unwrap());
-    let mesh = rt_core::mesh::Mesh::load_obj(&obj, 1.0, rt_core::Vec3::ZERO).unwrap();
+    let mesh = rt_core::geometry::mesh::Mesh::load_obj(&obj, 1.0, rt_core::Vec3::ZERO).unwrap();
     assert_eq!(mesh.triangle_count(), 12);
     for i in 0..12 {
         let [a, b, c] = mesh.triangle(i);
@@ -264,7 +264,7 @@ fn every_light_is_exported_with_its_kind_place_power_and_shadow_flag() {
 
 #[test]
 fn the_lights_of_the_every_effect_scene_are_exported_as_rt_view_loads_them() {
-    use rt_core::light::LightKind;
+    use rt_core::lights::light::LightKind;
     let dir = tempfile::tempdir().unwrap();
     let scene = scenes_dir().join("effects.ron");
     let json = export(&scene, dir.path(), "effects");

@@ -30,7 +30,7 @@ use std::path::{Path, PathBuf};
 
 use common::{read_png, rt_view, scenes_dir, stderr};
 use image::RgbImage;
-use rt_core::color::ColorSpace;
+use rt_core::math::color::ColorSpace;
 
 const CHANNEL_TOLERANCE: i32 = 2;
 const MAX_DIFFERING_FRACTION: f64 = 0.005;

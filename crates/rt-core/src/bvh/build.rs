@@ -15,8 +15,8 @@
 use rayon::prelude::*;
 
 use super::item::Item;
-use crate::aabb::Aabb;
-use crate::real::{Real, Vec3};
+use crate::geometry::aabb::Aabb;
+use crate::math::real::{Real, Vec3};
 
 /// Leaves hold at most this many primitives.
 pub(super) const MAX_LEAF: usize = super::leaf::LANES * super::leaf::BLOCKS;

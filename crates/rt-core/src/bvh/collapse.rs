@@ -5,7 +5,7 @@
 
 use super::build::BuildNode;
 use super::node::{Child, Node, WIDTH};
-use crate::real::to_f64;
+use crate::math::real::to_f64;
 
 /// What collapsing a subtree produced: its child entry, the 8-wide nodes on
 /// its longest path down, its traversal stack bound (see

@@ -2,8 +2,8 @@
 //! object) with its box. The build (`bvh/build.rs`) sorts items into
 //! leaves, and each leaf (`bvh/leaf.rs`) is filled from its items.
 
-use crate::aabb::Aabb;
-use crate::real::{Real, Vec3};
+use crate::geometry::aabb::Aabb;
+use crate::math::real::{Real, Vec3};
 
 /// A primitive during the build: triangle `index` of the mesh `object`, or
 /// the whole object `object` (`whole`, with `index` 0).

@@ -15,10 +15,10 @@
 //! 4-wide nodes; docs/performance.md has the timings).
 //!
 //! Both tests perform exactly the scalar test's operations
-//! ([`crate::triangle::intersect_watertight_prepared`]), lane by lane and
+//! ([`crate::geometry::triangle::intersect_watertight_prepared`]), lane by lane and
 //! in the same order, with no fused multiply-adds, so each lane's `t` has
 //! the same bits as the scalar test's (tested); a lane whose edge functions
-//! need the exact re-evaluation ([`crate::triangle::edge_functions`]) is
+//! need the exact re-evaluation ([`crate::geometry::triangle::edge_functions`]) is
 //! handed to the scalar test. Elsewhere (other CPUs, `f64` geometry, the
 //! other triangle methods) the scalar test runs lane by lane.
 //!
@@ -27,12 +27,12 @@
 //! looked up in the scene and tested whole.
 
 use super::item::Item;
-use crate::method::TriangleMethod;
-use crate::object::Object;
-use crate::primitive::Primitive;
-use crate::ray::Interval;
-use crate::real::{Real, Vec3};
-use crate::triangle::{TriangleRay, geometric_normal, intersect_by};
+use crate::geometry::method::TriangleMethod;
+use crate::geometry::object::Object;
+use crate::geometry::primitive::Primitive;
+use crate::geometry::triangle::{TriangleRay, geometric_normal, intersect_by};
+use crate::math::ray::Interval;
+use crate::math::real::{Real, Vec3};
 
 /// Primitives per block.
 pub(crate) const LANES: usize = 4;
@@ -151,7 +151,7 @@ impl Leaf {
 
     /// The unit geometric normal of the triangle in `lane`: from the same
     /// corners by the same function, so the same bits as its mesh's
-    /// [`crate::mesh::Mesh::normal`].
+    /// [`crate::geometry::mesh::Mesh::normal`].
     pub fn normal(&self, lane: usize) -> Vec3 {
         let [a, b, c] = self.corners(lane);
         geometric_normal(a, b, c).unwrap_or(Vec3::ZERO)
@@ -331,7 +331,7 @@ impl Leaf {
     }
 
     /// The watertight test on four lanes with SSE2. Every line is the
-    /// scalar test's line ([`crate::triangle::intersect_watertight_prepared`])
+    /// scalar test's line ([`crate::geometry::triangle::intersect_watertight_prepared`])
     /// on four lanes at once.
     #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
     #[inline(always)]
@@ -421,8 +421,8 @@ pub(super) fn lanes_of(mut mask: u32) -> impl Iterator<Item = usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::Mesh;
-    use crate::ray::Ray;
+    use crate::geometry::mesh::Mesh;
+    use crate::math::ray::Ray;
     use proptest::prelude::*;
 
     /// A leaf of four triangles with corners `corners`.
@@ -433,7 +433,11 @@ mod tests {
         let objects = vec![Object { primitive: Primitive::Mesh(mesh), material: 0 }];
         let items: Vec<Item> = (0..corners.len() as u32)
             .map(|i| {
-                Item::new(crate::aabb::Aabb::from_points(corners[i as usize].map(Vec3::from)).unwrap(), 0, i)
+                Item::new(
+                    crate::geometry::aabb::Aabb::from_points(corners[i as usize].map(Vec3::from)).unwrap(),
+                    0,
+                    i,
+                )
             })
             .collect();
         let (leaf, lanes) = Leaf::new(&items, &objects);

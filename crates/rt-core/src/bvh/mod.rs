@@ -39,14 +39,14 @@ use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
-use crate::aabb::Aabb;
-use crate::hit::Hit;
-use crate::method::Methods;
-use crate::object::Object;
-use crate::primitive::Primitive;
-use crate::ray::{Interval, Ray};
-use crate::real::{Real, Vec3, gamma, to_f64};
-use crate::triangle::TriangleRay;
+use crate::geometry::aabb::Aabb;
+use crate::geometry::hit::Hit;
+use crate::geometry::method::Methods;
+use crate::geometry::object::Object;
+use crate::geometry::primitive::Primitive;
+use crate::geometry::triangle::TriangleRay;
+use crate::math::ray::{Interval, Ray};
+use crate::math::real::{Real, Vec3, gamma, to_f64};
 use item::Item;
 use leaf::{Lanes, Leaf, lanes_of};
 use node::{Child, Node, WIDTH};
@@ -575,7 +575,7 @@ impl Slabs {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_support::{
+    use crate::testing::test_support::{
         grid_mesh, primitives_of, random_parts, random_primitive as primitive, scene_of as scene, v,
     };
     use proptest::prelude::*;

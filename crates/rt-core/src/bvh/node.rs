@@ -2,8 +2,8 @@
 //! side, so that one slab test covers them all, and what each child is.
 
 use super::leaf::Lanes;
-use crate::aabb::Aabb;
-use crate::real::Real;
+use crate::geometry::aabb::Aabb;
+use crate::math::real::Real;
 
 /// Children per node.
 pub(super) const WIDTH: usize = 8;

@@ -27,11 +27,11 @@ use super::leaf::lanes_of;
 use super::node::{Child, Node, WIDTH};
 use super::query::Query;
 use super::{Bvh, INLINE_STACK, PACKET_RAYS};
-use crate::hit::Hit;
-use crate::method::Methods;
-use crate::object::Object;
-use crate::ray::{Interval, Ray};
-use crate::real::{Real, Vec3, divide, gamma};
+use crate::geometry::hit::Hit;
+use crate::geometry::method::Methods;
+use crate::geometry::object::Object;
+use crate::math::ray::{Interval, Ray};
+use crate::math::real::{Real, Vec3, divide, gamma};
 
 /// Bounds on a packet's rays, per axis: origins in `[origin_lo, origin_hi]`,
 /// inverse directions in `[inv_lo, inv_hi]` (all of one sign, finite), and
@@ -542,9 +542,9 @@ impl Bvh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::primitive::Primitive;
-    use crate::real::Vec3;
-    use crate::test_support::{grid_mesh, primitives_of, random_parts, scene_of as scene, v};
+    use crate::geometry::primitive::Primitive;
+    use crate::math::real::Vec3;
+    use crate::testing::test_support::{grid_mesh, primitives_of, random_parts, scene_of as scene, v};
     use proptest::prelude::*;
 
     /// A hit as comparable bits: object, primitive, `t`.
@@ -622,8 +622,8 @@ mod tests {
     #[test]
     fn mixed_direction_signs_and_zero_components_fall_back_to_single_rays() {
         let s = scene(vec![
-            Primitive::Sphere(crate::sphere::Sphere::new(Vec3::new(0.0, 0.0, 5.0), 1.0).unwrap()),
-            Primitive::Sphere(crate::sphere::Sphere::new(Vec3::new(0.0, 0.0, -5.0), 1.0).unwrap()),
+            Primitive::Sphere(crate::geometry::sphere::Sphere::new(Vec3::new(0.0, 0.0, 5.0), 1.0).unwrap()),
+            Primitive::Sphere(crate::geometry::sphere::Sphere::new(Vec3::new(0.0, 0.0, -5.0), 1.0).unwrap()),
         ]);
         let rays = [
             Ray::new(Vec3::ZERO, Vec3::Z),

@@ -3,13 +3,13 @@
 //! do at a leaf.
 
 use super::leaf::{LANES, Lanes, Leaf, lanes_of};
-use crate::hit::Hit;
-use crate::method::Methods;
-use crate::object::Object;
-use crate::primitive::Primitive;
-use crate::ray::{Interval, Ray};
-use crate::real::{Real, Vec3};
-use crate::triangle::TriangleRay;
+use crate::geometry::hit::Hit;
+use crate::geometry::method::Methods;
+use crate::geometry::object::Object;
+use crate::geometry::primitive::Primitive;
+use crate::geometry::triangle::TriangleRay;
+use crate::math::ray::{Interval, Ray};
+use crate::math::real::{Real, Vec3};
 
 /// What a leaf test did to the best hit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -7,7 +7,7 @@
 //!   against the default methods' image. Error is the RMSE and the largest
 //!   difference of the 8-bit pixel values (as in the PNG), scaled to [0, 1].
 //! - **geometry**: every intersection method on the fixed ray sets of
-//!   [`rt_core::hard_cases`]: nanoseconds per ray, wrong hits or misses, and
+//!   [`rt_core::accuracy::hard_cases`]: nanoseconds per ray, wrong hits or misses, and
 //!   the largest error of `t`.
 //!
 //! Times are medians of `--runs` runs. With `--with-f64 BIN` the geometry part
@@ -23,8 +23,8 @@ use std::time::Duration;
 use anyhow::{Context, bail};
 use clap::Args;
 use plotters::prelude::*;
-use rt_core::hard_cases::{CaseKind, all_cases};
-use rt_core::method::{BoxMethod, Methods, SphereMethod, TriangleMethod};
+use rt_core::accuracy::hard_cases::{CaseKind, all_cases};
+use rt_core::geometry::method::{BoxMethod, Methods, SphereMethod, TriangleMethod};
 use rt_core::{Camera, RenderSettings, Renderer, SamplesPerPixel, Scene, load_scene};
 
 use crate::timing::median_time;
@@ -293,7 +293,7 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         experiment,
         scene,
         settings: depths.iter().map(|&n| Setting::Depth(n)).collect(),
-        reference: Setting::Depth(rt_core::effects::MAX_DEPTH),
+        reference: Setting::Depth(rt_core::scene::effects::MAX_DEPTH),
         spp: None,
     };
     // Global illumination on the Cornell box: noise against samples; bias
@@ -323,7 +323,7 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         experiment: "subsurface (walk cap)",
         scene: "subsurface.ron",
         settings: [1, 4, 16, 64, 256, 1024, 4096].iter().map(|&n| Setting::WalkSteps(n)).collect(),
-        reference: Setting::WalkSteps(rt_core::effects::MAX_WALK_STEPS),
+        reference: Setting::WalkSteps(rt_core::scene::effects::MAX_WALK_STEPS),
         spp: Some(gi_spp),
     };
     let d = Methods::default();

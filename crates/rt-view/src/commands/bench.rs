@@ -17,9 +17,9 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use clap::Args;
 use rayon::prelude::*;
-use rt_core::mesh::Mesh;
-use rt_core::real::to_f32;
-use rt_core::sampler::{SampleRng, cosine_hemisphere};
+use rt_core::geometry::mesh::Mesh;
+use rt_core::math::real::to_f32;
+use rt_core::sampling::sampler::{SampleRng, cosine_hemisphere};
 use rt_core::{
     Camera, Color, ImageSize, Interval, Material, Primitive, Projection, Ray, Real, RenderSettings, Renderer,
     Scene, SceneBuilder, Vec3,

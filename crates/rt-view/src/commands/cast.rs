@@ -12,7 +12,7 @@ use clap::Args;
 use rayon::prelude::*;
 use rt_core::{Ray, Scene};
 
-pub use rt_core::ray_text::{LineError, parse_ray_line, parse_rays};
+pub use rt_core::files::ray_text::{LineError, parse_ray_line, parse_rays};
 
 /// `rt-view cast`.
 #[derive(Debug, Args)]

@@ -18,8 +18,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Args;
-use rt_core::emitter::Emitter;
-use rt_core::light::LightKind;
+use rt_core::lights::emitter::Emitter;
+use rt_core::lights::light::LightKind;
 use rt_core::{Color, Primitive, Vec3};
 use serde::Serialize;
 
@@ -132,7 +132,7 @@ enum LightJson {
 }
 
 fn v3(v: Vec3) -> [f64; 3] {
-    let d = rt_core::real::widen(v);
+    let d = rt_core::math::real::widen(v);
     [d.x, d.y, d.z]
 }
 
@@ -223,11 +223,11 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
         height: settings.image.height(),
         samples_per_pixel: settings.samples.get(),
         background: c3(match scene.environment() {
-            rt_core::environment::Environment::Constant(c) => *c,
+            rt_core::lights::environment::Environment::Constant(c) => *c,
         }),
         color_space: match settings.color_space {
-            rt_core::color::ColorSpace::Linear => "Linear",
-            rt_core::color::ColorSpace::Srgb => "Srgb",
+            rt_core::math::color::ColorSpace::Linear => "Linear",
+            rt_core::math::color::ColorSpace::Srgb => "Srgb",
         },
         ambient: c3(scene.ambient()),
         max_depth: settings.effects.max_depth,

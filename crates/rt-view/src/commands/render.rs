@@ -9,7 +9,7 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rt_core::Renderer;
-use rt_core::effects::{EffectPlan, RayCounts};
+use rt_core::scene::effects::{EffectPlan, RayCounts};
 
 use crate::image_out::PendingImage;
 
@@ -130,7 +130,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
 /// normals and vertex attributes) per triangle, and the textures; `None`
 /// when the scene has no mesh.
 pub fn describe_geometry(scene: &rt_core::Scene) -> Option<String> {
-    let meshes: Vec<&rt_core::mesh::Mesh> = scene
+    let meshes: Vec<&rt_core::geometry::mesh::Mesh> = scene
         .objects()
         .iter()
         .filter_map(|o| match &o.primitive {

@@ -4,8 +4,8 @@
 use std::ops::RangeInclusive;
 
 use rt_core::LoadedScene;
-use rt_core::effects::{EffectPlan, EffectToggles};
-use rt_core::view_plane::MAX_IMAGE_SIDE;
+use rt_core::camera::view_plane::MAX_IMAGE_SIDE;
+use rt_core::scene::effects::{EffectPlan, EffectToggles};
 
 use super::interaction::Interaction;
 

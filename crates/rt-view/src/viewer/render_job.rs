@@ -28,9 +28,9 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use egui::Color32;
-use rt_core::color::Color;
-use rt_core::effects::{EffectToggles, RayCounts};
+use rt_core::math::color::Color;
 use rt_core::render::{BAND_ROWS, RenderError};
+use rt_core::scene::effects::{EffectToggles, RayCounts};
 use rt_core::{Camera, LoadedScene, RenderSettings, Renderer, SettingsError};
 
 /// The sample ranges of the progressive passes for `spp` samples per pixel:

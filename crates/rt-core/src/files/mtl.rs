@@ -1,0 +1,182 @@
+//! OBJ materials (MTL files) as rt-view materials.
+//!
+//! An MTL material describes a Phong-era surface: a diffuse colour `Kd`, a
+//! specular colour `Ks` with exponent `Ns`, an index of refraction `Ni`, a
+//! dissolve `d` (or its complement `Tr`), an emission `Ke`, an illumination
+//! model `illum`, and texture maps. [`from_mtl`] maps them onto the one
+//! radiometric model of [`crate::materials::bsdf`], field by field:
+//!
+//! | MTL | rt-view | rule |
+//! |---|---|---|
+//! | `Kd` | `color` | each component clamped to [0, 1] (default 0.8, Blender's) |
+//! | `map_Kd` | `texture` | sRGB image, multiplies `Kd` ([`crate::materials::texture`]) |
+//! | `Ks` | `specular` (or `reflectivity` with `illum` 3, 5, 7) and `specular_color` | its largest component, clamped to [0, 1], is the weight; `Ks` over it the tint |
+//! | `Ns` | `shininess` | clamped to [0, 10 000] (default 32) |
+//! | `Ni` | `ior` | must be above 0 and at most 100 (default 1.5) |
+//! | `d`, `Tr` | `transparency` | `1 − d` (or `Tr`), clamped to [0, 1]: a dissolved surface becomes clear glass of index `Ni` |
+//! | `Ke` | `emission` | components must be ≥ 0 |
+//! | `illum` 3, 5, 7 | mirror | `Ks` becomes the mirror weight instead of the glossy one |
+//!
+//! Weights are then scaled so that `reflectivity + transparency ≤ 1`, which
+//! keeps every material energy conserving. Everything else (`Ka`, `map_Ks`,
+//! `map_Bump`, `map_d`, `norm`, …) is not used and named in the part's
+//! warnings, never dropped silently.
+
+use std::path::{Path, PathBuf};
+
+use crate::materials::material::Material;
+use crate::math::color::Color;
+
+/// An MTL material mapped onto a [`Material`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct MtlMaterial {
+    /// The material (its `texture` is left `None`: the scene numbers textures).
+    pub material: Material,
+    /// The `map_Kd` image, resolved against the OBJ file's folder.
+    pub texture: Option<PathBuf>,
+    /// MTL statements read but not used, in a sentence each.
+    pub ignored: Vec<String>,
+}
+
+/// Maps tobj's reading of an MTL material, from an OBJ file in `dir`.
+/// Errors name the field and its value.
+pub fn from_mtl(m: &tobj::Material, dir: &Path) -> Result<MtlMaterial, String> {
+    let rgb = |v: [f32; 3], name: &str| -> Result<Color, String> {
+        if v.iter().all(|c| c.is_finite() && *c >= 0.0) {
+            Ok(Color::from_array(v))
+        } else {
+            Err(format!("{name} must be finite and not negative, got {} {} {}", v[0], v[1], v[2]))
+        }
+    };
+    let number = |v: f32, name: &str| -> Result<f32, String> {
+        if v.is_finite() { Ok(v) } else { Err(format!("{name} must be a finite number, got {v}")) }
+    };
+    let mut material = Material::flat(Color::splat(0.8));
+    if let Some(kd) = m.diffuse {
+        material.color = rgb(kd, "Kd")?.min(Color::ONE);
+    }
+    let ks = match m.specular {
+        Some(ks) => {
+            let ks = rgb(ks, "Ks")?;
+            let weight = ks.max_element();
+            if weight > 0.0 {
+                material.specular_color = ks / weight;
+            }
+            weight.min(1.0)
+        }
+        None => 0.0,
+    };
+    let mirror = matches!(m.illumination_model, Some(3 | 5 | 7));
+    if mirror {
+        material.reflectivity = ks;
+    } else {
+        material.specular = ks;
+    }
+    if let Some(ns) = m.shininess {
+        material.shininess = number(ns, "Ns")?.clamp(0.0, 1e4);
+    }
+    if let Some(ni) = m.optical_density {
+        let ni = number(ni, "Ni")?;
+        if !(ni > 0.0 && ni <= 100.0) {
+            return Err(format!("Ni (index of refraction) must be above 0 and at most 100, got {ni}"));
+        }
+        material.ior = ni;
+    }
+    let tr = match (m.dissolve, m.unknown_param.get("Tr")) {
+        (Some(d), _) => Some(1.0 - number(d, "d")?),
+        (None, Some(tr)) => {
+            Some(number(tr.trim().parse().map_err(|_| format!("Tr must be a number, got {tr}"))?, "Tr")?)
+        }
+        (None, None) => None,
+    };
+    if let Some(tr) = tr {
+        material.transparency = tr.clamp(0.0, 1.0);
+    }
+    let sum = material.reflectivity + material.transparency;
+    if sum > 1.0 {
+        material.reflectivity /= sum;
+        material.transparency /= sum;
+    }
+    if let Some(ke) = m.emissive {
+        material.emission = rgb(ke, "Ke")?;
+    }
+    let texture = m.diffuse_texture.as_ref().map(|t| dir.join(texture_file(t)));
+    let mut ignored = Vec::new();
+    for (name, value) in [
+        ("Ka", m.ambient.is_some()),
+        ("map_Ka", m.ambient_texture.is_some()),
+        ("map_Ks", m.specular_texture.is_some()),
+        ("map_Ns", m.shininess_texture.is_some()),
+        ("map_Bump/norm", m.normal_texture.is_some()),
+        ("map_d", m.dissolve_texture.is_some()),
+    ] {
+        if value {
+            ignored.push(name.to_owned());
+        }
+    }
+    let mut unknown: Vec<&String> = m.unknown_param.keys().filter(|k| k.as_str() != "Tr").collect();
+    unknown.sort();
+    ignored.extend(unknown.into_iter().cloned());
+    Ok(MtlMaterial { material, texture, ignored })
+}
+
+/// The file name of a texture statement's value: MTL allows options before
+/// it (`map_Kd -s 1 1 1 wood.png`); the name is the last word.
+fn texture_file(value: &str) -> &str {
+    value.split_whitespace().last().unwrap_or(value)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> tobj::Material {
+        let (mut materials, _) = tobj::load_mtl_buf(&mut text.as_bytes()).unwrap();
+        materials.remove(0)
+    }
+
+    #[test]
+    fn every_mapped_field_lands_where_the_table_says() {
+        let m = parse(
+            "newmtl a\nKd 0.5 0.25 2\nKs 0.3 0.3 0.3\nNs 100\nNi 1.33\nd 0.4\nKe 1 2 3\nmap_Kd -s 1 1 1 tex/wood.png\n",
+        );
+        let got = from_mtl(&m, Path::new("models")).unwrap();
+        let mat = got.material;
+        assert_eq!(mat.color, Color::new(0.5, 0.25, 1.0));
+        assert!((mat.specular - 0.3).abs() < 1e-6 && mat.reflectivity == 0.0);
+        assert_eq!((mat.shininess, mat.ior), (100.0, 1.33));
+        assert!((mat.transparency - 0.6).abs() < 1e-6);
+        assert_eq!(mat.emission, Color::new(1.0, 2.0, 3.0));
+        assert_eq!(got.texture, Some(PathBuf::from("models/tex/wood.png")));
+        assert!(got.ignored.is_empty(), "{:?}", got.ignored);
+    }
+
+    #[test]
+    fn mirror_illumination_models_turn_ks_into_a_mirror_and_weights_stay_energy_conserving() {
+        let m = parse("newmtl a\nKs 1 0.8 0.4\nillum 3\nTr 0.5\n");
+        let mat = from_mtl(&m, Path::new(".")).unwrap().material;
+        assert_eq!(mat.specular_color, Color::new(1.0, 0.8, 0.4));
+        assert_eq!(mat.specular, 0.0);
+        assert!((mat.reflectivity + mat.transparency - 1.0).abs() < 1e-6, "{mat:?}");
+        assert!((mat.reflectivity - 2.0 / 3.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn defaults_without_fields_are_a_grey_diffuse_surface() {
+        let mat = from_mtl(&parse("newmtl a\n"), Path::new(".")).unwrap().material;
+        assert_eq!(mat, Material::flat(Color::splat(0.8)));
+    }
+
+    #[test]
+    fn unused_statements_are_named_and_bad_values_are_errors_naming_the_field() {
+        let m = parse("newmtl a\nKa 1 1 1\nmap_Bump n.png\nPr 0.5\n");
+        let got = from_mtl(&m, Path::new(".")).unwrap();
+        assert_eq!(got.ignored, ["Ka", "map_Bump/norm", "Pr"]);
+        for (text, field) in
+            [("Kd -1 0 0", "Kd"), ("Ke 0 -2 0", "Ke"), ("Ni 0", "Ni"), ("Ni 500", "Ni"), ("Tr x", "Tr")]
+        {
+            let e = from_mtl(&parse(&format!("newmtl a\n{text}\n")), Path::new(".")).unwrap_err();
+            assert!(e.starts_with(field), "{text}: {e}");
+        }
+    }
+}

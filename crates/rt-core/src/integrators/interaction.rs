@@ -1,0 +1,181 @@
+//! What a ray found at a surface: the one place a hit becomes shading data.
+//!
+//! A [`crate::geometry::hit::Hit`] says which object and primitive a ray met and at
+//! what `t`. A [`SurfaceInteraction`] made from it holds what every
+//! integrator needs next (pbrt-v4's `SurfaceInteraction`, Mitsuba 3's
+//! `SurfaceInteraction3f`): the point moved onto the surface with its error
+//! bound and geometric normal ([`crate::geometry::surface`]), the direction back along
+//! the ray, the shading normal, the material there (textured), and from
+//! these the BSDF, the emitted radiance and the spawning of the next ray.
+//! Texture coordinates and the tangent frame `∂p/∂u`, `∂p/∂v` are computed
+//! when asked for, so a hit that needs neither pays nothing for them.
+
+use std::borrow::Cow;
+
+use crate::geometry::hit::Hit;
+use crate::geometry::object::Object;
+use crate::geometry::surface::SurfacePoint;
+use crate::materials::bsdf::Bsdf;
+use crate::materials::material::Material;
+use crate::math::color::Color;
+use crate::math::ray::Ray;
+use crate::math::real::{Real, Vec3, normalize_robust};
+use crate::scene::Scene;
+
+/// A ray's hit, ready to shade.
+#[derive(Clone, Debug)]
+pub struct SurfaceInteraction<'s> {
+    /// Index of the object hit in [`Scene::objects`].
+    pub object: usize,
+    /// The primitive within it (a mesh's triangle; else 0).
+    pub primitive: usize,
+    /// The point on the surface, its error bound, and the unit geometric
+    /// normal in the primitive's own orientation.
+    pub point: SurfacePoint,
+    /// Unit direction from the point back along the ray (ω_o).
+    pub wo: Vec3,
+    /// The unit shading normal (a mesh's interpolated vertex normals), or
+    /// `None` where it is the geometric normal.
+    pub shading_normal: Option<Vec3>,
+    /// The object's material at the point, its texture applied.
+    pub material: Cow<'s, Material>,
+    /// The object hit.
+    shape: &'s Object,
+}
+
+impl<'s> SurfaceInteraction<'s> {
+    /// The interaction where `ray` met the scene at `hit`; `None` for a ray
+    /// with no direction.
+    pub fn new(scene: &'s Scene, ray: &Ray, hit: &Hit) -> Option<Self> {
+        let d = normalize_robust(ray.dir)?;
+        let shape = &scene.objects()[hit.object];
+        let point = shape.primitive.surface_point(hit.primitive, hit.normal, ray.at(hit.t));
+        let material = scene.material_at(hit.object, hit.primitive, point.p);
+        let shading_normal = shape.primitive.shading_normal(hit.primitive, point.p);
+        Some(Self {
+            object: hit.object,
+            primitive: hit.primitive,
+            point,
+            wo: -d,
+            shading_normal,
+            material,
+            shape,
+        })
+    }
+
+    /// Whether the ray arrived on the side the geometric normal points to
+    /// (the outside of a closed object, the front of a flat one).
+    pub fn front(&self) -> bool {
+        self.wo.dot(self.point.normal) > 0.0
+    }
+
+    /// The geometric normal turned to the side the ray arrived on.
+    pub fn facing_normal(&self) -> Vec3 {
+        if self.front() { self.point.normal } else { -self.point.normal }
+    }
+
+    /// The radiance the surface gives off towards ω_o: the material's
+    /// emission on the front side, nothing from the back.
+    pub fn emitted(&self) -> Color {
+        if self.front() { self.material.emission } else { Color::ZERO }
+    }
+
+    /// The BSDF of the material here, about the shading normal where there
+    /// is one ([`Bsdf::shaded`]).
+    pub fn bsdf(&self) -> Bsdf {
+        self.bsdf_of(&self.material, self.shading_normal)
+    }
+
+    /// The BSDF of `material` here, about `shading` (or the geometric
+    /// normal): the boundary of a translucent object is flat and clear.
+    pub fn bsdf_of(&self, material: &Material, shading: Option<Vec3>) -> Bsdf {
+        let n = self.point.normal;
+        Bsdf::shaded(material, n, shading.unwrap_or(n), self.wo)
+    }
+
+    /// A ray leaving the surface along `dir`, from the point pushed off the
+    /// surface to the side `dir` points to ([`SurfacePoint::spawn_origin`]).
+    pub fn spawn_ray(&self, dir: Vec3) -> Ray {
+        Ray::new(self.point.spawn_origin(dir), dir)
+    }
+
+    /// The texture coordinates here ([`crate::geometry::primitive::Primitive::uv`]);
+    /// `None` for primitives without them.
+    pub fn uv(&self) -> Option<(Real, Real)> {
+        self.shape.primitive.uv(self.primitive, self.point.p)
+    }
+
+    /// The tangent frame `(∂p/∂u, ∂p/∂v)`
+    /// ([`crate::geometry::primitive::Primitive::tangents`]): along the texture
+    /// coordinates where the surface has them, else any two unit vectors
+    /// completing the geometric normal to an orthonormal frame.
+    pub fn tangents(&self) -> (Vec3, Vec3) {
+        self.shape.primitive.tangents(self.primitive, self.point.normal)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::ray::Interval;
+
+    /// A glowing, textured quad mesh at z = 0 facing −z, u along +x and the
+    /// file's v along +y, in front of a sphere.
+    fn scene() -> crate::LoadedScene {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("quad.obj"),
+            "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+             vn 0 0 -1\nvn 0 0 -1\nvn 0 0 -1\nvn 0 0 -1\nf 1/1/1 4/4/4 3/3/3\nf 1/1/1 3/3/3 2/2/2\n",
+        )
+        .unwrap();
+        let text = r#"(
+            camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1),
+            image: (width: 8, height: 8),
+            materials: { "glow": (color: (0.5, 0.5, 0.5), emission: (1, 2, 3)), "grey": (color: (0.5, 0.5, 0.5)) },
+            objects: [
+                Mesh(file: "quad.obj", material: "glow"),
+                Sphere(center: (0, 0, 3), radius: 1, material: "grey"),
+            ],
+        )"#;
+        crate::parse_scene(text, "quad.ron", dir.path()).unwrap()
+    }
+
+    #[test]
+    fn a_hit_gives_its_point_direction_normals_emission_coordinates_and_frame() {
+        let loaded = scene();
+        let s = &loaded.scene;
+        let ray = Ray::new(Vec3::new(0.5, -0.25, -4.0), Vec3::new(0.0, 0.0, 2.0));
+        let hit = s.closest_hit(&ray, Interval::new(0.0, Real::INFINITY)).unwrap();
+        let si = SurfaceInteraction::new(s, &ray, &hit).unwrap();
+        assert_eq!((si.object, si.point.p), (0, Vec3::new(0.5, -0.25, 0.0)));
+        assert_eq!(si.wo, -Vec3::Z);
+        assert!(si.front() && si.facing_normal() == si.point.normal && si.point.normal == -Vec3::Z);
+        assert_eq!(si.emitted(), Color::new(1.0, 2.0, 3.0));
+        // The OBJ file's `vt` has v up; a mesh keeps it flipped, v down like
+        // an image's rows (`crate::geometry::mesh`): v runs along −y.
+        let (u, v) = si.uv().unwrap();
+        assert!((u - 0.75).abs() < 1e-6 && (v - 0.625).abs() < 1e-6, "({u}, {v})");
+        let (dpdu, dpdv) = si.tangents();
+        assert!((dpdu - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-5, "{dpdu}");
+        assert!((dpdv - Vec3::new(0.0, -2.0, 0.0)).length() < 1e-5, "{dpdv}");
+        // The next ray leaves towards the side it is spawned to.
+        let back = si.spawn_ray(-Vec3::Z);
+        assert!(back.origin.z < 0.0 && s.closest_hit(&back, Interval::new(0.0, Real::INFINITY)).is_none());
+
+        // From behind: no emission, the normal turned towards the ray; a
+        // sphere has no coordinates and an orthonormal frame about its normal.
+        let ray = Ray::new(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z);
+        let hit = s.closest_hit(&ray, Interval::new(0.0, Real::INFINITY)).unwrap();
+        let si = SurfaceInteraction::new(s, &ray, &hit).unwrap();
+        assert!(!si.front() && si.emitted() == Color::ZERO && si.facing_normal() == Vec3::Z);
+        let ray = Ray::new(Vec3::new(0.3, 0.2, 0.0), Vec3::Z);
+        let hit = s.closest_hit(&ray, Interval::new(0.0, Real::INFINITY)).unwrap();
+        let si = SurfaceInteraction::new(s, &ray, &hit).unwrap();
+        assert_eq!((si.object, si.uv()), (1, None));
+        let (t, b) = si.tangents();
+        let n = si.point.normal;
+        assert!(t.dot(n).abs() < 1e-6 && b.dot(n).abs() < 1e-6 && t.dot(b).abs() < 1e-6);
+        assert!((t.length() - 1.0).abs() < 1e-6 && (t.cross(b) - n).length() < 1e-5);
+    }
+}

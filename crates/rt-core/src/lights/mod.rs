@@ -1,0 +1,10 @@
+//! Where light comes from, all through one interface
+//! ([`light_source::LightSource`]): the scene file's point, directional and
+//! sphere [`light`]s, emissive objects ([`emitter`]), the [`environment`];
+//! and the choice of one to sample ([`light_sampler`]).
+
+pub mod emitter;
+pub mod environment;
+pub mod light;
+pub mod light_sampler;
+pub mod light_source;

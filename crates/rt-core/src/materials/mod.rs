@@ -1,0 +1,9 @@
+//! How surfaces and insides scatter light: a scene file's [`material`],
+//! the BSDF it makes ([`bsdf`], with the optics of [`shading`]), the
+//! medium of a translucent inside ([`medium`]) and image [`texture`]s.
+
+pub mod bsdf;
+pub mod material;
+pub mod medium;
+pub mod shading;
+pub mod texture;

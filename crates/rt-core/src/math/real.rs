@@ -1,0 +1,260 @@
+//! The geometry's floating-point type, and the numerical policies that depend on it.
+//!
+//! All geometry (points, directions, ray parameters) uses [`Real`] and [`Vec3`]:
+//! `f32`/`glam::Vec3` by default, `f64`/`glam::DVec3` with the `f64` cargo feature.
+//! Colours are always `f32` (see [`crate::math::color::Color`]).
+//!
+//! Every numerical tolerance of the crate is defined here, once, with the
+//! reasoning that fixes its value.
+
+#[cfg(not(feature = "f64"))]
+mod precision {
+    /// The scalar type of all geometry.
+    pub type Real = f32;
+    /// A 3-vector of [`Real`]: points, directions and normals in world units.
+    pub type Vec3 = glam::Vec3;
+}
+
+#[cfg(feature = "f64")]
+mod precision {
+    /// The scalar type of all geometry.
+    pub type Real = f64;
+    /// A 3-vector of [`Real`]: points, directions and normals in world units.
+    pub type Vec3 = glam::DVec3;
+}
+
+pub use precision::{Real, Vec3};
+
+/// Unit roundoff of [`Real`]: half the distance from 1 to the next number (2⁻²⁴ for f32).
+pub const UNIT_ROUNDOFF: Real = Real::EPSILON * 0.5;
+
+/// pbrt's γₙ = n·u / (1 − n·u): a bound on the relative error of n chained
+/// floating-point operations (Pharr, Jakob, Humphreys, *PBR* 4th ed., §6.8.1).
+pub const fn gamma(n: u32) -> Real {
+    let nu = n as Real * UNIT_ROUNDOFF;
+    nu / (1.0 - nu)
+}
+
+/// Largest absolute coordinate of `p`, but at least 1: the length scale that
+/// the `cast` self-intersection rule and geometric tolerances are relative to.
+pub fn magnitude_scale(p: Vec3) -> Real {
+    p.abs().max_element().max(1.0)
+}
+
+/// Self-intersection rule for rays whose history is unknown (`cast`, primary rays).
+///
+/// A hit counts only if its distance from the origin, `t·|d|`, is greater than
+/// `2⁻¹⁶ · s` with `s = max(1, largest |coordinate| of the origin)`.
+///
+/// The `cast` contract (`docs/conventions.md`) requires hits at distance
+/// ≤ 2⁻²⁰·s never to count and hits at distance ≥ 2⁻¹⁰·s always to count. 2⁻¹⁶ is 16× above the lower bound and
+/// 64× below the upper one, leaning towards keeping near hits. In f32 a point
+/// on a surface at magnitude s is off the surface by a few ulps, about 2⁻²³·s
+/// each, so 2⁻¹⁶·s leaves a margin of 2⁷ = 128 ulps.
+///
+/// For primary rays this acts like a near clipping distance of 2⁻¹⁶·s: for a
+/// camera 10⁵ units from the origin, 1.5 units (where f32 resolves 0.008).
+pub const CAST_MIN_DISTANCE_FACTOR: Real = 1.0 / 65536.0;
+
+/// The smallest ray parameter `t` that counts as a hit for a ray from `origin`
+/// along `dir`, by the rule of [`CAST_MIN_DISTANCE_FACTOR`]. Returns +∞ (nothing
+/// counts) for a zero or non-finite direction. `dir` should have been rescaled
+/// ([`crate::math::ray::Ray::rescaled`]) so that `|dir|` cannot overflow or underflow.
+pub fn cast_min_t(origin: Vec3, dir: Vec3) -> Real {
+    let len = dir.length();
+    if len > 0.0 && len.is_finite() {
+        CAST_MIN_DISTANCE_FACTOR * magnitude_scale(origin) / len
+    } else {
+        Real::INFINITY
+    }
+}
+
+/// The fraction of its length by which a shadow ray towards a sampled point
+/// on an emitter stops short, so that it does not find the emitter itself.
+///
+/// The sampled point lies on the emitter's surface only to rounding (a few
+/// ulps of its coordinates, relative 2⁻²² in f32), and the shadow ray's
+/// origin is pushed off the shading point's surface; an emitter hit within
+/// the last 10⁻⁴ of the way would be the emitter itself. 10⁻⁴ is about 800
+/// f32 ulps of relative distance, so rounding never reaches it, and 10⁻⁴ of
+/// the distance to a light is far below what an occluder between them can
+/// be noticed at. A principled alternative (pbrt-v4's `SpawnRayTo`, offsetting
+/// both ends by their error bounds) would change which rays are blocked and
+/// so the images' bits.
+pub const SHADOW_SHORTEN: Real = 1e-4;
+
+/// `v / |v|`, or `None` for a zero or non-finite `v`, for any finite `v`:
+/// `v` is first divided by its largest absolute component, so `|v|²` can
+/// neither overflow (components near 10³⁸ in f32) nor underflow (near 10⁻²⁰).
+pub fn normalize_robust(v: Vec3) -> Option<Vec3> {
+    let m = v.abs().max_element();
+    if !(m > 0.0 && m.is_finite()) {
+        return None;
+    }
+    (v / m).try_normalize()
+}
+
+/// A geometric scalar as the `f32` that colours are computed in.
+#[allow(clippy::unnecessary_cast)] // `Real` is f64 with the `f64` feature.
+#[inline]
+pub fn to_f32(x: Real) -> f32 {
+    x as f32
+}
+
+/// A geometric scalar widened to f64 (exactly).
+#[allow(clippy::unnecessary_cast)] // `Real` is f64 with the `f64` feature.
+#[inline]
+pub fn to_f64(x: Real) -> f64 {
+    x as f64
+}
+
+/// `n / d` component by component, each quotient correctly rounded (IEEE
+/// 754 division), exactly what three scalar divisions give; with `f32`
+/// geometry as one 4-lane SIMD division instead of three in a row.
+#[inline(always)]
+pub fn divide(n: Vec3, d: Vec3) -> Vec3 {
+    #[cfg(not(feature = "f64"))]
+    {
+        (glam::Vec3A::from(n) / glam::Vec3A::from(d)).into()
+    }
+    #[cfg(feature = "f64")]
+    {
+        n / d
+    }
+}
+
+/// A geometric vector widened to f64 (exactly).
+pub fn widen(v: Vec3) -> glam::DVec3 {
+    glam::DVec3::new(to_f64(v.x), to_f64(v.y), to_f64(v.z))
+}
+
+/// An f64 vector rounded to the nearest [`Vec3`].
+#[allow(clippy::unnecessary_cast)] // `Real` is f64 with the `f64` feature.
+pub fn narrow(v: glam::DVec3) -> Vec3 {
+    Vec3::new(v.x as Real, v.y as Real, v.z as Real)
+}
+
+/// `2ⁿ` for |n| ≤ 75 (f32) or ≤ 540 (f64), exactly: a normal number built
+/// from its exponent bits.
+fn pow2_small(n: i32) -> Real {
+    let biased = n + Real::MAX_EXP - 1;
+    debug_assert!(biased > 0 && biased < 2 * Real::MAX_EXP - 1, "2^{n} is not a normal number");
+    #[cfg(not(feature = "f64"))]
+    {
+        f32::from_bits((biased as u32) << (f32::MANTISSA_DIGITS - 1))
+    }
+    #[cfg(feature = "f64")]
+    {
+        f64::from_bits((biased as u64) << (f64::MANTISSA_DIGITS - 1))
+    }
+}
+
+/// `x · 2ⁿ`, exact unless the result overflows or underflows; `n` may be
+/// as large as a subnormal's exponent (applied in two exact halves).
+pub fn scale_pow2(x: Real, n: i32) -> Real {
+    let half = n / 2;
+    x * pow2_small(half) * pow2_small(n - half)
+}
+
+/// The exponent `n` with `2ⁿ ≤ m < 2ⁿ⁺¹`: read from the bits of a normal
+/// `m`; for a subnormal one, from its logarithm (possibly one off, which is
+/// harmless: callers only need some nearby power of two). `m` > 0, finite.
+pub fn exponent_of(m: Real) -> i32 {
+    if m < Real::MIN_POSITIVE {
+        return m.log2().floor() as i32;
+    }
+    #[cfg(not(feature = "f64"))]
+    let biased = (m.to_bits() >> (f32::MANTISSA_DIGITS - 1)) as i32;
+    #[cfg(feature = "f64")]
+    let biased = (m.to_bits() >> (f64::MANTISSA_DIGITS - 1)) as i32;
+    biased - (Real::MAX_EXP - 1)
+}
+/// The sign-exact 2D edge function `a·b − c·d`, as used by the watertight
+/// ray/triangle test.
+///
+/// With f32 geometry the products are formed in f64, where they are exact
+/// (24 + 24 bits < 53), so the sign of the result is always right. With f64
+/// geometry it is Kahan's difference of products with a fused multiply-add,
+/// whose error is within 1.5 ulp of the result, so again the sign is right.
+#[inline]
+pub fn difference_of_products(a: Real, b: Real, c: Real, d: Real) -> Real {
+    #[cfg(not(feature = "f64"))]
+    {
+        (a as f64 * b as f64 - c as f64 * d as f64) as Real
+    }
+    #[cfg(feature = "f64")]
+    {
+        let cd = c * d;
+        let err = (-c).mul_add(d, cd);
+        a.mul_add(b, -cd) + err
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cast_rule_sits_inside_the_window_spec_requires() {
+        for origin in [Vec3::ZERO, Vec3::new(1e4, -3.0, 2.0), Vec3::splat(-7e6)] {
+            for dir_len in [1e-3 as Real, 1.0, 250.0] {
+                let dir = Vec3::new(0.0, 0.0, dir_len);
+                let s = magnitude_scale(origin);
+                let distance = cast_min_t(origin, dir) * dir_len;
+                assert!(distance > s / (1 << 20) as Real);
+                assert!(distance < s / (1 << 10) as Real);
+            }
+        }
+    }
+
+    #[test]
+    fn cast_rule_refuses_everything_for_a_zero_direction() {
+        assert_eq!(cast_min_t(Vec3::ONE, Vec3::ZERO), Real::INFINITY);
+    }
+
+    #[test]
+    fn difference_of_products_has_the_exact_sign_when_products_nearly_cancel() {
+        // a·b and c·d differ in the last bit only: the naive f32 form gives 0.
+        let a: Real = 1.0 + Real::EPSILON;
+        let b: Real = 1.0 - Real::EPSILON / 2.0;
+        let (c, d): (Real, Real) = (1.0, 1.0);
+        assert!(difference_of_products(a, b, c, d) > 0.0);
+        assert!(difference_of_products(c, d, a, b) < 0.0);
+    }
+
+    #[test]
+    fn normalize_robust_works_across_the_whole_exponent_range() {
+        for scale in [1e-30 as Real, 1e-20, 1.0, 1e20, 1e30, Real::MAX / 4.0] {
+            let n = normalize_robust(Vec3::new(3.0, 0.0, 4.0) * scale).unwrap();
+            assert!((n - Vec3::new(0.6, 0.0, 0.8)).length() < 1e-6, "{scale}: {n}");
+        }
+        assert_eq!(normalize_robust(Vec3::ZERO), None);
+        assert_eq!(normalize_robust(Vec3::new(Real::NAN, 0.0, 1.0)), None);
+    }
+
+    #[test]
+    fn scaling_by_powers_of_two_is_exact_even_for_extreme_exponents() {
+        let x: Real = 1.2345678;
+        for n in [-140, -75, -1, 0, 1, 75, 120] {
+            let y = scale_pow2(x, n);
+            if y != 0.0 && y.is_finite() && y.is_normal() {
+                assert_eq!(scale_pow2(y, -n), x, "n = {n}");
+            }
+        }
+        assert_eq!(exponent_of(Real::MAX), Real::MAX_EXP - 1);
+        assert_eq!(exponent_of(Real::MIN_POSITIVE), Real::MIN_EXP - 1);
+        assert_eq!(exponent_of(Real::MIN_POSITIVE / 2.0), Real::MIN_EXP - 2);
+        for m in [1e-30 as Real, 3e-7, 0.999, 1.5, 7.0, 8.0, 3e12] {
+            let n = exponent_of(m);
+            assert!(scale_pow2(1.0, n) <= m && m < scale_pow2(2.0, n), "{m}: {n}");
+        }
+        assert_eq!(exponent_of(1.0), 0);
+        assert_eq!(exponent_of(0.75), -1);
+        assert_eq!(exponent_of(1024.5), 10);
+    }
+
+    #[test]
+    fn gamma_bounds_grow_with_the_operation_count() {
+        assert!(gamma(1) > UNIT_ROUNDOFF && gamma(3) > gamma(2));
+    }
+}

@@ -1,0 +1,179 @@
+//! How to render a scene: everything a render needs besides the world
+//! ([`crate::scene::Scene`]) and the camera. A scene file gives the first
+//! settings ([`crate::files::scene_file::LoadedScene`]); the command line and the
+//! viewer override them, each value checked once, by the constructor of its
+//! type, with one error type ([`SettingsError`]).
+
+use thiserror::Error;
+
+use crate::camera::view_plane::{MAX_IMAGE_SIDE, MAX_PIXELS, check_image_size};
+use crate::math::color::ColorSpace;
+use crate::sampling::sampler::MAX_SAMPLES_PER_PIXEL;
+use crate::scene::effects::{EffectToggles, Effects};
+
+/// Why a render setting is out of range.
+#[derive(Clone, Debug, Error, PartialEq, Eq)]
+pub enum SettingsError {
+    /// Width or height is zero or above [`MAX_IMAGE_SIDE`], or W·H is above [`MAX_PIXELS`].
+    #[error(
+        "image size {width}x{height} is out of range: each side must be 1 to {MAX_IMAGE_SIDE} \
+         and the image at most {MAX_PIXELS} pixels"
+    )]
+    ImageSize {
+        /// Width in pixels.
+        width: u32,
+        /// Height in pixels.
+        height: u32,
+    },
+    /// Samples per pixel out of range.
+    #[error("samples per pixel must be 1 to {MAX_SAMPLES_PER_PIXEL}, got {0}")]
+    SamplesPerPixel(u32),
+}
+
+/// An image size in pixels: each side 1 to [`MAX_IMAGE_SIDE`], at most
+/// [`MAX_PIXELS`] in all. Valid by construction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ImageSize {
+    width: u32,
+    height: u32,
+}
+
+impl ImageSize {
+    /// `width`×`height`, or why not.
+    pub fn new(width: u32, height: u32) -> Result<Self, SettingsError> {
+        check_image_size(width, height).map_err(|_| SettingsError::ImageSize { width, height })?;
+        Ok(Self { width, height })
+    }
+
+    /// Width in pixels.
+    pub fn width(self) -> u32 {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(self) -> u32 {
+        self.height
+    }
+}
+
+impl Default for ImageSize {
+    /// 640×480.
+    fn default() -> Self {
+        Self { width: 640, height: 480 }
+    }
+}
+
+/// Samples per pixel, 1 to [`MAX_SAMPLES_PER_PIXEL`]; 1 means one ray
+/// through each pixel centre. Valid by construction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub struct SamplesPerPixel(u32);
+
+impl SamplesPerPixel {
+    /// One sample, through the pixel's centre.
+    pub const ONE: Self = Self(1);
+
+    /// `n` samples, or why not.
+    pub fn new(n: u32) -> Result<Self, SettingsError> {
+        if (1..=MAX_SAMPLES_PER_PIXEL).contains(&n) {
+            Ok(Self(n))
+        } else {
+            Err(SettingsError::SamplesPerPixel(n))
+        }
+    }
+
+    /// The count.
+    pub fn get(self) -> u32 {
+        self.0
+    }
+}
+
+impl Default for SamplesPerPixel {
+    fn default() -> Self {
+        Self::ONE
+    }
+}
+
+/// Everything about a render that is not the world or the camera.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RenderSettings {
+    /// The image size.
+    pub image: ImageSize,
+    /// Samples per pixel.
+    pub samples: SamplesPerPixel,
+    /// Seed of the random numbers: renders with different seeds are
+    /// independent estimates of the same image ([`crate::sampling::sampler::SampleRng::seeded`]); 0 by default.
+    pub seed: u64,
+    /// How rendered colours are encoded into 8-bit pixels.
+    pub color_space: ColorSpace,
+    /// The light transport asked for: recursion depth, ambient occlusion,
+    /// global illumination (which chooses the path tracer).
+    pub effects: Effects,
+    /// Effects switched off by the user (the viewer's toggles); a render
+    /// never simulates what neither the scene nor `effects` asks for.
+    pub toggles: EffectToggles,
+}
+
+impl RenderSettings {
+    /// These settings at another image size.
+    pub fn with_image(self, image: ImageSize) -> Self {
+        Self { image, ..self }
+    }
+
+    /// These settings with another sample count.
+    pub fn with_samples(self, samples: SamplesPerPixel) -> Self {
+        Self { samples, ..self }
+    }
+
+    /// These settings with the image width, height and sample count
+    /// replaced where given (a command line's `--width`, `--height`,
+    /// `--spp`), each checked as its type's constructor checks it.
+    pub fn overridden(
+        self,
+        width: Option<u32>,
+        height: Option<u32>,
+        samples: Option<u32>,
+    ) -> Result<Self, SettingsError> {
+        let image = ImageSize::new(width.unwrap_or(self.image.width), height.unwrap_or(self.image.height))?;
+        let samples = samples.map_or(Ok(self.samples), SamplesPerPixel::new)?;
+        Ok(Self { image, samples, ..self })
+    }
+
+    /// These settings with another seed.
+    pub fn with_seed(self, seed: u64) -> Self {
+        Self { seed, ..self }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_and_sample_counts_out_of_range_are_refused_with_the_value() {
+        assert_eq!(ImageSize::new(0, 240), Err(SettingsError::ImageSize { width: 0, height: 240 }));
+        assert_eq!(
+            ImageSize::new(MAX_IMAGE_SIDE + 1, 1).map(|_| ()),
+            Err(SettingsError::ImageSize { width: MAX_IMAGE_SIDE + 1, height: 1 })
+        );
+        assert_eq!(ImageSize::new(320, 240).map(|s| (s.width(), s.height())), Ok((320, 240)));
+        assert_eq!(SamplesPerPixel::new(0), Err(SettingsError::SamplesPerPixel(0)));
+        assert_eq!(
+            SamplesPerPixel::new(MAX_SAMPLES_PER_PIXEL + 1),
+            Err(SettingsError::SamplesPerPixel(MAX_SAMPLES_PER_PIXEL + 1))
+        );
+        assert_eq!(
+            SamplesPerPixel::new(MAX_SAMPLES_PER_PIXEL).map(SamplesPerPixel::get),
+            Ok(MAX_SAMPLES_PER_PIXEL)
+        );
+        let file = RenderSettings::default();
+        let wider = file.overridden(Some(1000), None, Some(9)).unwrap();
+        assert_eq!((wider.image.width(), wider.image.height(), wider.samples.get()), (1000, 480, 9));
+        assert_eq!(
+            file.overridden(None, Some(0), None),
+            Err(SettingsError::ImageSize { width: 640, height: 0 })
+        );
+        assert_eq!(file.overridden(None, None, Some(0)), Err(SettingsError::SamplesPerPixel(0)));
+        let e = SamplesPerPixel::new(0).unwrap_err().to_string();
+        assert!(e.starts_with("samples per pixel must be 1 to"), "{e}");
+    }
+}

@@ -1,0 +1,489 @@
+//! Where samples go: in the pixel, on area lights, over the hemisphere.
+//!
+//! Every random number comes from a stream seeded by (pixel, sample) alone
+//! ([`SampleRng`]), never by thread or row, so an image is the same bit for
+//! bit whatever the thread count or the order rows finish in.
+//!
+//! The sub-pixel offset (sx, sy) ∈ [0,1)² of the view plane's pixel formula
+//! (`docs/conventions.md`): one sample per pixel is the
+//! pixel centre (0.5, 0.5). For n > 1 samples the pixel is split into a grid
+//! of n cells of equal area (an m × m grid when n = m²), sample k goes to
+//! cell k, and is jittered inside its cell: stratified jitter
+//! ([`stratified`]). Area-light and ambient-occlusion samples are
+//! stratified the same way.
+
+use crate::math::real::{Real, Vec3};
+
+/// Largest accepted samples-per-pixel count, 2¹⁶.
+pub const MAX_SAMPLES_PER_PIXEL: u32 = 1 << 16;
+
+/// The sub-pixel offset of sample `sample` of `spp` at pixel (`x`, `y`), in
+/// the image of seed `seed` ([`SampleRng::seeded`]).
+#[inline]
+pub fn subpixel_offset(x: u32, y: u32, sample: u32, spp: u32, seed: u64) -> (Real, Real) {
+    Strata::new(spp).subpixel_offset(x, y, sample, seed)
+}
+
+/// Point `k` of `n` stratified over [0,1)²: the square is cut into `n`
+/// cells of equal area, one per point, and the point is placed at `jitter`
+/// ∈ [0,1)² inside its cell ([`Strata`]).
+#[inline]
+pub fn stratified(k: u32, n: u32, jitter: (Real, Real)) -> (Real, Real) {
+    Strata::new(n).point(k, jitter)
+}
+
+/// The cells of `n` stratified points over [0,1)²: cut into `n` cells of
+/// equal area, one per point.
+///
+/// The cells lie in `rows = ⌊√n⌋` rows; the first `n mod rows` rows hold
+/// `⌊n/rows⌋ + 1` cells, the others `⌊n/rows⌋`, and each row's height is its
+/// number of cells over n, so every cell has area exactly 1/n and a uniform
+/// `jitter` gives a uniform point (a grid with empty cells would not). For
+/// n = m² this is the m × m grid, cell (k mod m, k div m). Made once per
+/// sample count (a renderer keeps its pixels'), so the square root and
+/// divisions that lay out the rows are not paid per sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Strata {
+    n: u32,
+    /// Cells per row in the first `extra` rows is `base + 1`, then `base`.
+    base: u32,
+    extra: u32,
+    /// Cells in the first `extra` rows: `extra · (base + 1)`.
+    wide: u32,
+    /// Where every row has `base` cells and both `base` and `n` are powers
+    /// of two (n = 1, 2, 4, 8, 16, 64, 256, …): log₂ `base`, and `1/base`
+    /// and `1/n`, which are exact, so multiplying by them gives the
+    /// quotients' very bits without a division.
+    powers_of_two: Option<(u32, Real, Real)>,
+}
+
+impl Strata {
+    /// The cells of `n` points (`n` = 0 counts as 1).
+    pub fn new(n: u32) -> Self {
+        let n = n.max(1);
+        let rows = (n as f64).sqrt().floor().max(1.0) as u32;
+        let (base, extra) = (n / rows, n % rows);
+        let powers_of_two = (extra == 0 && base.is_power_of_two() && n.is_power_of_two())
+            .then(|| (base.trailing_zeros(), 1.0 / base as Real, 1.0 / n as Real));
+        Self { n, base, extra, wide: extra * (base + 1), powers_of_two }
+    }
+
+    /// Point `k` placed at `jitter` ∈ [0,1)² inside its cell.
+    #[inline]
+    pub fn point(&self, k: u32, jitter: (Real, Real)) -> (Real, Real) {
+        let Strata { n, base, extra, wide, powers_of_two } = *self;
+        let k = k.min(n - 1);
+        // `(c + j) / n < 1` for j < 1 in exact arithmetic; `min` keeps it so after rounding.
+        let below_one = 1.0 - Real::EPSILON / 2.0;
+        if let Some((shift, inv_base, inv_n)) = powers_of_two {
+            // The general case's arithmetic below with shifts for the
+            // integer divisions and exact reciprocals for the float ones.
+            let (row, col) = (k >> shift, k & (base - 1));
+            return (
+                ((col as Real + jitter.0) * inv_base).min(below_one),
+                (((row * base) as Real + jitter.1 * base as Real) * inv_n).min(below_one),
+            );
+        }
+        // Cells before row `row`, the row, the cell in it and the row's width.
+        let (row, col, count) = if k < wide {
+            (k / (base + 1), k % (base + 1), base + 1)
+        } else {
+            (extra + (k - wide) / base, (k - wide) % base, base)
+        };
+        let before = if row < extra { row * (base + 1) } else { wide + (row - extra) * base };
+        (
+            ((col as Real + jitter.0) / count as Real).min(below_one),
+            ((before as Real + jitter.1 * count as Real) / n as Real).min(below_one),
+        )
+    }
+
+    /// The sub-pixel offset of sample `sample` of these cells at pixel
+    /// (`x`, `y`), in the image of seed `seed`: the pixel centre for one
+    /// sample, else the sample's cell jittered by the pixel's random stream.
+    #[inline]
+    pub fn subpixel_offset(&self, x: u32, y: u32, sample: u32, seed: u64) -> (Real, Real) {
+        if self.n <= 1 {
+            return (0.5, 0.5);
+        }
+        let h = hash(x, y, sample) ^ seed_bits(seed);
+        self.point(sample, (unit_float(h as u32), unit_float((h >> 32) as u32)))
+    }
+}
+
+/// Shirley and Chiu's concentric map ("A Low Distortion Map Between Disk and
+/// Square", 1997) from [0,1)² to the unit disk: strata stay compact, so
+/// stratified square samples are stratified on the disk.
+pub fn concentric_disk((u, v): (Real, Real)) -> (Real, Real) {
+    let (a, b) = (2.0 * u - 1.0, 2.0 * v - 1.0);
+    if a == 0.0 && b == 0.0 {
+        return (0.0, 0.0);
+    }
+    let quarter = std::f64::consts::FRAC_PI_4 as Real;
+    let (r, phi) =
+        if a.abs() > b.abs() { (a, quarter * (b / a)) } else { (b, 2.0 * quarter - quarter * (a / b)) };
+    (r * phi.cos(), r * phi.sin())
+}
+
+/// A direction about the unit normal `n` with density cos θ / π (Malley's
+/// method: a concentric disk point lifted onto the hemisphere).
+pub fn cosine_hemisphere(n: Vec3, square: (Real, Real)) -> Vec3 {
+    let (x, y) = concentric_disk(square);
+    let z = (1.0 - x * x - y * y).max(0.0).sqrt();
+    let (u, v) = n.any_orthonormal_pair();
+    (x * u + y * v + z * n).normalize_or(n)
+}
+
+/// A direction uniform over the unit sphere for (u, v) ∈ [0,1)²: z = 1 − 2u,
+/// φ = 2πv (pbrt-v4 §A.5.2, `SampleUniformSphere`).
+pub fn uniform_sphere((u, v): (Real, Real)) -> Vec3 {
+    let z = 1.0 - 2.0 * u;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * std::f64::consts::PI as Real * v;
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// The density of [`uniform_sphere`] over solid angle, `1/(4π)`.
+pub fn uniform_sphere_pdf() -> Real {
+    1.0 / (4.0 * std::f64::consts::PI as Real)
+}
+
+/// Where a render's samples come from: for sample k of pixel (x, y) of the
+/// image of seed `seed`, a film position in the pixel and, in the order a
+/// path asks for them, its 1D and 2D values, one dimension after another
+/// (pbrt-v4's `Sampler`: `StartPixelSample`, `GetPixel2D`, `Get1D`, `Get2D`).
+/// Values depend only on (pixel, sample, seed, dimension), never on the
+/// thread or the order pixels are rendered in.
+///
+/// This first implementation is stratified jitter for the film position
+/// ([`Strata::subpixel_offset`]; the pixel centre at one sample per pixel)
+/// and, for the path, the [`SampleRng`] stream of the sample, which draws
+/// values in pairs: a 1D value is the first of a pair whose second is not
+/// used. That keeps the images of earlier versions bit for bit; a
+/// low-discrepancy sampler gives every dimension its own value instead.
+#[derive(Clone, Copy, Debug)]
+pub struct Sampler {
+    strata: Strata,
+    spp: u32,
+    seed: u64,
+    stream: SampleRng,
+}
+
+impl Sampler {
+    /// A sampler for `spp` samples per pixel (≥ 1) in the image of seed `seed`.
+    pub fn new(spp: u32, seed: u64) -> Self {
+        Self { strata: Strata::new(spp), spp, seed, stream: SampleRng::seeded(0, 0, 0, seed) }
+    }
+
+    /// Starts sample `k` of pixel (`x`, `y`): the values handed out next are that sample's.
+    #[inline]
+    pub fn start_pixel_sample(&mut self, x: u32, y: u32, k: u32) {
+        self.stream = SampleRng::seeded(x, y, k, self.seed);
+    }
+
+    /// The film position of sample `k` of pixel (`x`, `y`) inside the
+    /// pixel, in [0,1)² (`(0.5, 0.5)`, the centre, at one sample per pixel).
+    /// It uses up no dimension of the path, so primary rays can be made
+    /// before their samples' paths start (packets of camera rays).
+    #[inline(always)]
+    pub fn film_position(&self, x: u32, y: u32, k: u32) -> (Real, Real) {
+        if self.spp == 1 { (0.5, 0.5) } else { self.strata.subpixel_offset(x, y, k, self.seed) }
+    }
+
+    /// The lens position of sample `k` of pixel (`x`, `y`), in [0,1)²: the
+    /// lens centre, as long as no camera has a lens
+    /// ([`crate::camera::view_plane::ViewPlane::has_lens`]).
+    #[inline(always)]
+    pub fn lens_position(&self, _x: u32, _y: u32, _k: u32) -> (Real, Real) {
+        (0.5, 0.5)
+    }
+
+    /// The next dimension's value in [0, 1).
+    #[inline]
+    pub fn get_1d(&mut self) -> Real {
+        self.stream.next_pair().0
+    }
+
+    /// The next dimension's pair of values in [0, 1)².
+    #[inline]
+    pub fn get_2d(&mut self) -> (Real, Real) {
+        self.stream.next_pair()
+    }
+}
+
+/// The random numbers of one sample of one pixel: a SplitMix64 stream seeded
+/// by (x, y, sample). Draw order within a sample is fixed by the tracer.
+#[derive(Clone, Copy, Debug)]
+pub struct SampleRng(u64);
+
+impl SampleRng {
+    /// The stream of sample `sample` of pixel (`x`, `y`).
+    pub fn new(x: u32, y: u32, sample: u32) -> Self {
+        Self::seeded(x, y, sample, 0)
+    }
+
+    /// The stream of sample `sample` of pixel (`x`, `y`) in the image of seed
+    /// `seed`: images with different seeds are independent estimates (their
+    /// noise can be measured by comparing them); seed 0 is the default image.
+    pub fn seeded(x: u32, y: u32, sample: u32, seed: u64) -> Self {
+        Self(hash(x, y, sample) ^ 0x5851_F42D_4C95_7F2D ^ seed_bits(seed))
+    }
+
+    /// The next pair of numbers in [0, 1).
+    pub fn next_pair(&mut self) -> (Real, Real) {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let h = mix(self.0);
+        (unit_float(h as u32), unit_float((h >> 32) as u32))
+    }
+}
+
+/// A float in [0, 1) from the top 24 bits of `bits`.
+fn unit_float(bits: u32) -> Real {
+    (bits >> 8) as Real * (1.0 / (1u32 << 24) as Real)
+}
+
+/// SplitMix64 finaliser of the packed (x, y, sample): a well-mixed 64-bit hash
+/// (Steele, Lea, Flood, "Fast Splittable Pseudorandom Number Generators", 2014).
+fn hash(x: u32, y: u32, sample: u32) -> u64 {
+    let z = (x as u64) ^ ((y as u64) << 21) ^ ((sample as u64) << 42);
+    mix(z.wrapping_add(0x9E37_79B9_7F4A_7C15))
+}
+
+/// What a seed changes in every hash: 0 for seed 0 (SplitMix64's output
+/// function maps 0 to 0), well mixed bits otherwise.
+fn seed_bits(seed: u64) -> u64 {
+    mix(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15))
+}
+
+/// SplitMix64's output function.
+fn mix(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::real::{to_f64, widen};
+    use crate::testing::chi_square::{self, Draw, Interval, Rectangle, SphereGrid};
+
+    #[test]
+    fn a_samples_values_depend_on_its_pixel_index_and_seed_alone() {
+        // Started twice, a sample hands out the same dimensions; another
+        // pixel, index or seed gives others. A 1D value is the first of the
+        // stream's pair; the film position is the pixel centre at one
+        // sample per pixel and the stratified offset otherwise, and uses up
+        // no dimension.
+        let draw = |sampler: &mut Sampler, x, y, k| {
+            sampler.start_pixel_sample(x, y, k);
+            (sampler.get_1d(), sampler.get_2d(), sampler.get_1d())
+        };
+        let mut a = Sampler::new(4, 3);
+        let first = draw(&mut a, 5, 6, 2);
+        let _ = draw(&mut a, 9, 9, 0);
+        assert_eq!(draw(&mut a, 5, 6, 2), first);
+        let mut stream = SampleRng::seeded(5, 6, 2, 3);
+        assert_eq!(first, (stream.next_pair().0, stream.next_pair(), stream.next_pair().0));
+        for other in [draw(&mut a, 5, 6, 3), draw(&mut a, 6, 5, 2), draw(&mut Sampler::new(4, 4), 5, 6, 2)] {
+            assert_ne!(other, first);
+        }
+        assert_eq!(Sampler::new(1, 3).film_position(5, 6, 0), (0.5, 0.5));
+        assert_eq!(a.film_position(5, 6, 2), subpixel_offset(5, 6, 2, 4, 3));
+        a.start_pixel_sample(5, 6, 2);
+        let _ = a.film_position(5, 6, 2);
+        assert_eq!(a.get_1d(), first.0);
+    }
+
+    #[test]
+    fn power_of_two_counts_place_points_with_the_general_arithmetic_bits() {
+        let mut rng = SampleRng::seeded(3, 0, 0, 0);
+        for n in [1, 2, 4, 8, 16, 64, 256, 1024] {
+            let fast = Strata::new(n);
+            assert!(fast.powers_of_two.is_some(), "{n}");
+            let general = Strata { powers_of_two: None, ..fast };
+            for k in 0..n {
+                let jitters = [(0.0, 0.0), (1.0 - Real::EPSILON / 2.0, 1.0 - Real::EPSILON / 2.0)];
+                let random = (0..8).map(|_| rng.next_pair());
+                for jitter in jitters.into_iter().chain(random) {
+                    let (a, b) = (fast.point(k, jitter), general.point(k, jitter));
+                    assert_eq!((a.0.to_bits(), a.1.to_bits()), (b.0.to_bits(), b.1.to_bits()), "{n} {k}");
+                }
+            }
+        }
+        assert!(Strata::new(32).powers_of_two.is_none() && Strata::new(9).powers_of_two.is_none());
+    }
+
+    #[test]
+    fn one_sample_is_the_pixel_centre() {
+        assert_eq!(subpixel_offset(7, 3, 0, 1, 0), (0.5, 0.5));
+    }
+
+    #[test]
+    fn four_samples_fall_one_in_each_quadrant() {
+        let mut quadrants: Vec<(bool, bool)> =
+            (0..4).map(|k| subpixel_offset(5, 9, k, 4, 0)).map(|(x, y)| (x >= 0.5, y >= 0.5)).collect();
+        quadrants.sort();
+        assert_eq!(quadrants, vec![(false, false), (false, true), (true, false), (true, true)]);
+    }
+
+    #[test]
+    fn every_stratum_has_the_same_area_for_any_count() {
+        // Uniform jitter must give a uniform point: the strata of n points
+        // tile the square with cells of area 1/n, for square and other n.
+        for n in [1, 2, 3, 5, 8, 9, 12, 16, 17, 32, 1000] {
+            let mut area = 0.0;
+            let mut cells = Vec::new();
+            for k in 0..n {
+                let lo = stratified(k, n, (0.0, 0.0));
+                let hi = stratified(k, n, (1.0, 1.0));
+                let cell = (hi.0 - lo.0) * (hi.1 - lo.1);
+                assert!((cell - 1.0 / n as Real).abs() < 1e-5, "n = {n}, cell {k}: {cell}");
+                area += cell;
+                cells.push((lo, hi));
+            }
+            assert!((area - 1.0).abs() < 1e-4, "n = {n}: {area}");
+            // No two cells overlap, even in part (a shifted row would overlap
+            // its neighbour and leave a gap elsewhere, with every cell's area
+            // still 1/n).
+            let slack = 1e-5;
+            for (i, (lo, hi)) in cells.iter().enumerate() {
+                for (j, (l, h)) in cells.iter().enumerate().skip(i + 1) {
+                    let apart = hi.0 <= l.0 + slack
+                        || h.0 <= lo.0 + slack
+                        || hi.1 <= l.1 + slack
+                        || h.1 <= lo.1 + slack;
+                    assert!(apart, "n = {n}: cells {i} {:?} and {j} {:?} overlap", (lo, hi), (l, h));
+                }
+            }
+            // A point in one is in no other.
+            for (i, (lo, hi)) in cells.iter().enumerate() {
+                let mid = ((lo.0 + hi.0) / 2.0, (lo.1 + hi.1) / 2.0);
+                let inside = |(l, h): &((Real, Real), (Real, Real))| {
+                    mid.0 >= l.0 && mid.0 < h.0 && mid.1 >= l.1 && mid.1 < h.1
+                };
+                assert_eq!(cells.iter().filter(|c| inside(c)).count(), 1, "n = {n}, cell {i}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_streams_of_pixels_and_samples_use_every_bit_of_their_state() {
+        // Over 4096 streams, each of the 64 state bits is set in some and
+        // clear in others (a hash losing bits would leave some fixed).
+        let (mut any, mut all) = (0u64, u64::MAX);
+        for k in 0..4096u32 {
+            let state = SampleRng::seeded(k % 64, k / 64, k % 7, 0).0;
+            (any, all) = (any | state, all & state);
+        }
+        assert_eq!((any, all), (u64::MAX, 0));
+    }
+
+    #[test]
+    fn the_largest_jitter_stays_below_one_and_an_index_past_the_count_stays_in_the_last_cell() {
+        // Jitter just below 1 in the last cell gives the largest number below
+        // 1 (not 1, not less); k ≥ n is sample n − 1.
+        let top = 1.0 - Real::EPSILON / 2.0;
+        for n in [1, 5, 16, 17] {
+            let strata = Strata::new(n);
+            assert_eq!(strata.point(n - 1, (top, top)), (top, top), "n = {n}");
+            assert_eq!(strata.point(n + 3, (0.25, 0.75)), strata.point(n - 1, (0.25, 0.75)), "n = {n}");
+        }
+    }
+
+    #[test]
+    fn offsets_stay_in_the_half_open_unit_square_and_are_reproducible() {
+        for spp in [2, 3, 5, 16, 17] {
+            for k in 0..spp {
+                let (sx, sy) = subpixel_offset(1234, 567, k, spp, 7);
+                assert!((0.0..1.0).contains(&sx) && (0.0..1.0).contains(&sy));
+                assert_eq!((sx, sy), subpixel_offset(1234, 567, k, spp, 7));
+            }
+        }
+    }
+
+    #[test]
+    fn the_concentric_map_stays_in_the_disk_and_keeps_quadrants() {
+        for (u, v) in [(0.0, 0.0), (0.99, 0.5), (0.5, 0.5), (0.25, 0.9), (0.999, 0.999)] {
+            let (x, y) = concentric_disk((u, v));
+            assert!(x * x + y * y <= 1.0 + 1e-6, "({u}, {v})");
+            assert!((x >= 0.0) == (u >= 0.5) || x.abs() < 1e-6, "({u}, {v}) → ({x}, {y})");
+        }
+    }
+
+    #[test]
+    fn cosine_directions_stay_above_the_surface() {
+        let n = Vec3::new(0.0, 0.6, 0.8);
+        let mut rng = SampleRng::new(3, 4, 5);
+        for k in 0..64 {
+            let d = cosine_hemisphere(n, stratified(k, 64, rng.next_pair()));
+            assert!(d.dot(n) >= 0.0 && (d.length() - 1.0).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn neighbouring_pixels_get_different_jitter() {
+        assert_ne!(subpixel_offset(0, 0, 0, 4, 0), subpixel_offset(1, 0, 0, 4, 0));
+        assert_ne!(subpixel_offset(0, 0, 0, 4, 0), subpixel_offset(0, 1, 0, 4, 0));
+    }
+
+    #[test]
+    fn seed_zero_is_the_default_stream_and_other_seeds_differ() {
+        assert_eq!(SampleRng::seeded(3, 4, 5, 0).next_pair(), SampleRng::new(3, 4, 5).next_pair());
+        assert_ne!(SampleRng::seeded(3, 4, 5, 1).next_pair(), SampleRng::new(3, 4, 5).next_pair());
+        assert_ne!(subpixel_offset(3, 4, 5, 16, 1), subpixel_offset(3, 4, 5, 16, 0));
+    }
+
+    #[test]
+    fn cosine_directions_follow_the_density_cos_over_pi() {
+        // χ² of 2·10⁵ directions about a tilted normal on a 20 × 40
+        // equal-area grid of the sphere about it, against cos θ/π above and
+        // 0 below (α ≈ 10⁻⁴, see `chi_square`).
+        let n = Vec3::new(0.3, -0.5, 0.8).normalize();
+        let draw = |rng: &mut SampleRng| Draw::At(widen(cosine_hemisphere(n, rng.next_pair())));
+        let axis = widen(n);
+        let grid = SphereGrid::sphere(axis, 20, 40);
+        chi_square::directions("cosine hemisphere", &grid, 200_000, draw, &|d| {
+            d.dot(axis).max(0.0) * std::f64::consts::FRAC_1_PI
+        });
+    }
+
+    #[test]
+    fn the_concentric_map_is_uniform_on_the_disk() {
+        // χ² of 2·10⁵ points on a 20 × 20 grid of [−1, 1]², against 1/π
+        // inside the unit disk and 0 outside (α ≈ 10⁻⁴).
+        let draw = |rng: &mut SampleRng| {
+            let (x, y) = concentric_disk(rng.next_pair());
+            Draw::At((to_f64(x), to_f64(y)))
+        };
+        let side = Interval { lo: -1.0, hi: 1.0, n: 20 };
+        let grid = Rectangle { s: side, t: side };
+        chi_square::plane("concentric disk", grid, 200_000, draw, &|x, y| {
+            if x * x + y * y < 1.0 { std::f64::consts::FRAC_1_PI } else { 0.0 }
+        });
+    }
+
+    #[test]
+    fn stratified_points_are_uniform_on_the_square_for_any_count() {
+        // Point k of n, for k running through 0..n over and over with a
+        // uniform jitter: χ² of 2·10⁵ points on a 16 × 16 grid against the
+        // density 1 (α ≈ 10⁻⁴). Stratification only makes the counts less
+        // variable than independent draws, so the bound stays valid.
+        for n in [5, 16, 17, 1000] {
+            let strata = Strata::new(n);
+            let mut k = 0;
+            let draw = |rng: &mut SampleRng| {
+                k = (k + 1) % n;
+                let (x, y) = strata.point(k, rng.next_pair());
+                Draw::At((to_f64(x), to_f64(y)))
+            };
+            let side = Interval { lo: 0.0, hi: 1.0, n: 16 };
+            chi_square::plane(
+                &format!("{n} strata"),
+                Rectangle { s: side, t: side },
+                200_000,
+                draw,
+                &|_, _| 1.0,
+            );
+        }
+    }
+}

@@ -1,0 +1,626 @@
+//! The world: objects and their materials and textures, lights, the
+//! environment, the BVH over the objects, and the ray queries over all of
+//! them. How it is seen (the camera) and rendered ([`crate::render::settings`]) are
+//! values of their own.
+//!
+//! A scene is made once, by [`crate::files::scene_file`] from a RON file or by a
+//! [`SceneBuilder`] in code, and is read-only afterwards: its BVH and the
+//! light sampler are built when it is made, from parts that cannot change.
+
+pub mod effects;
+
+use std::borrow::Cow;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use thiserror::Error;
+
+use crate::bvh::{Bvh, BvhStats, PACKET_RAYS};
+use crate::geometry::hit::Hit;
+use crate::geometry::method::Methods;
+use crate::geometry::object::Object;
+use crate::geometry::primitive::Primitive;
+use crate::lights::emitter::{Emitter, EmitterError};
+use crate::lights::environment::Environment;
+use crate::lights::light::Light;
+use crate::lights::light_sampler::{LightSampler, Source};
+use crate::lights::light_source::LightSource;
+use crate::materials::material::Material;
+use crate::materials::texture::Texture;
+use crate::math::color::Color;
+use crate::math::ray::{Interval, Ray, rescale_t};
+use crate::math::real::{Real, Vec3, cast_min_t, scale_pow2};
+use crate::scene::effects::{EffectPlan, Effects};
+
+/// A world ready to render, validated and read-only: every part is read
+/// through a method.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    environment: Environment,
+    lights: Vec<Light>,
+    ambient: Color,
+    methods: Methods,
+    materials: Vec<Material>,
+    material_names: Vec<String>,
+    textures: Vec<Arc<Texture>>,
+    objects: Vec<Object>,
+    bvh: Bvh,
+    /// The emissive objects, as lights for global illumination.
+    emitters: Vec<Emitter>,
+    /// Index into `emitters` of each object's emitter.
+    emitter_of: Vec<Option<u32>>,
+    light_sampler: LightSampler,
+    source_files: Vec<PathBuf>,
+    warnings: Vec<String>,
+}
+
+/// Why a [`SceneBuilder`] cannot make a scene.
+#[derive(Clone, Debug, Error, PartialEq)]
+pub enum SceneBuildError {
+    /// Two materials share a name.
+    #[error("material \"{0}\" is defined twice")]
+    DuplicateMaterial(String),
+    /// A material names a texture that was not added.
+    #[error("material \"{material}\": texture {texture} does not exist ({count} added)")]
+    UnknownTexture {
+        /// The material's name.
+        material: String,
+        /// The texture index it names.
+        texture: u32,
+        /// How many textures were added.
+        count: usize,
+    },
+    /// An object names a material that was not added.
+    #[error("objects[{index}] ({kind}): unknown material \"{name}\" (defined: {defined})")]
+    UnknownMaterial {
+        /// 0-based object index.
+        index: usize,
+        /// The object's variant ([`Primitive::kind`]).
+        kind: &'static str,
+        /// The missing name.
+        name: String,
+        /// The names that exist, comma-separated.
+        defined: String,
+    },
+    /// An object with a subsurface material has no inside.
+    #[error("objects[{index}] ({kind}): material \"{material}\" has a subsurface medium, {reason}")]
+    Subsurface {
+        /// 0-based object index.
+        index: usize,
+        /// The object's variant ([`Primitive::kind`]).
+        kind: &'static str,
+        /// The material's name.
+        material: String,
+        /// Why it cannot have one.
+        reason: String,
+    },
+    /// An emissive object cannot be a light.
+    #[error("objects[{index}] ({kind}): {reason}")]
+    Emitter {
+        /// 0-based object index.
+        index: usize,
+        /// The object's variant ([`Primitive::kind`]).
+        kind: &'static str,
+        /// Why.
+        reason: EmitterError,
+    },
+}
+
+impl SceneBuildError {
+    /// The error with its object index mapped by `map` (from the built
+    /// scene's objects to, say, the entries of the file they came from).
+    pub fn with_object_index(self, map: impl Fn(usize) -> usize) -> Self {
+        match self {
+            Self::UnknownMaterial { index, kind, name, defined } => {
+                Self::UnknownMaterial { index: map(index), kind, name, defined }
+            }
+            Self::Subsurface { index, kind, material, reason } => {
+                Self::Subsurface { index: map(index), kind, material, reason }
+            }
+            Self::Emitter { index, kind, reason } => Self::Emitter { index: map(index), kind, reason },
+            other => other,
+        }
+    }
+}
+
+/// Builds a [`Scene`] step by step: any of the background, lights and
+/// intersection methods, materials by name and objects that name them, then
+/// [`SceneBuilder::build`].
+///
+/// ```
+/// use rt_core::{Material, Primitive, SceneBuilder, Vec3};
+/// use rt_core::geometry::sphere::Sphere;
+///
+/// let scene = SceneBuilder::new()
+///     .material("red", Material::flat(glam::Vec3::new(1.0, 0.0, 0.0)))
+///     .object(Primitive::Sphere(Sphere::new(Vec3::ZERO, 1.0).unwrap()), "red")
+///     .build()
+///     .unwrap();
+/// assert_eq!(scene.objects().len(), 1);
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct SceneBuilder {
+    environment: Environment,
+    lights: Vec<Light>,
+    ambient: Color,
+    methods: Methods,
+    materials: Vec<(String, Material)>,
+    textures: Vec<Arc<Texture>>,
+    objects: Vec<(Primitive, String)>,
+    source_files: Vec<PathBuf>,
+    warnings: Vec<String>,
+}
+
+impl SceneBuilder {
+    /// An empty world: a black environment, no materials, objects or lights,
+    /// and the default intersection methods until set otherwise.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The colour of rays that hit nothing: a constant environment
+    /// ([`Environment::Constant`]).
+    pub fn background(self, background: Color) -> Self {
+        self.environment(Environment::Constant(background))
+    }
+
+    /// The light arriving along rays that leave the scene.
+    pub fn environment(self, environment: Environment) -> Self {
+        Self { environment, ..self }
+    }
+
+    /// Adds a light (point, directional or sphere).
+    pub fn light(mut self, light: Light) -> Self {
+        self.lights.push(light);
+        self
+    }
+
+    /// Light reaching every point from everywhere, times the diffuse albedo
+    /// (the direct-lighting tracer's ambient term).
+    pub fn ambient(self, ambient: Color) -> Self {
+        Self { ambient, ..self }
+    }
+
+    /// The intersection routines.
+    pub fn methods(self, methods: Methods) -> Self {
+        Self { methods, ..self }
+    }
+
+    /// Adds a material called `name`; materials keep the order they are added in.
+    pub fn material(mut self, name: impl Into<String>, material: Material) -> Self {
+        self.materials.push((name.into(), material));
+        self
+    }
+
+    /// Adds an object drawn with the material called `material`; objects
+    /// keep the order they are added in (a hit's `object` index).
+    pub fn object(mut self, primitive: Primitive, material: impl Into<String>) -> Self {
+        self.objects.push((primitive, material.into()));
+        self
+    }
+
+    /// Records a file the scene was read from besides the scene file (an
+    /// OBJ mesh), for whoever watches the scene for changes.
+    pub fn source_file(mut self, path: impl Into<PathBuf>) -> Self {
+        self.source_files.push(path.into());
+        self
+    }
+
+    /// Adds a texture; the first is texture 0 ([`Material::texture`]).
+    pub fn texture(mut self, texture: Arc<Texture>) -> Self {
+        self.textures.push(texture);
+        self
+    }
+
+    /// How many textures have been added: the index the next one gets.
+    pub fn texture_count(&self) -> usize {
+        self.textures.len()
+    }
+
+    /// Records something the scene's sources hold that the scene does not
+    /// use, to be shown to whoever loads it ([`Scene::warnings`]).
+    pub fn warning(mut self, warning: impl Into<String>) -> Self {
+        self.warnings.push(warning.into());
+        self
+    }
+
+    /// Checks the parts and builds the scene's BVH.
+    pub fn build(self) -> Result<Scene, SceneBuildError> {
+        let (material_names, materials): (Vec<String>, Vec<Material>) = self.materials.into_iter().unzip();
+        for (i, name) in material_names.iter().enumerate() {
+            if material_names[..i].contains(name) {
+                return Err(SceneBuildError::DuplicateMaterial(name.clone()));
+            }
+            if let Some(texture) = materials[i].texture
+                && texture as usize >= self.textures.len()
+            {
+                let count = self.textures.len();
+                return Err(SceneBuildError::UnknownTexture { material: name.clone(), texture, count });
+            }
+        }
+        let objects = self
+            .objects
+            .into_iter()
+            .enumerate()
+            .map(|(index, (primitive, name))| match material_names.iter().position(|n| *n == name) {
+                Some(material) => Ok(Object { primitive, material }),
+                None => Err(SceneBuildError::UnknownMaterial {
+                    index,
+                    kind: primitive.kind(),
+                    name,
+                    defined: material_names.join(", "),
+                }),
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        for (index, o) in objects.iter().enumerate() {
+            if materials[o.material].subsurface.is_none() {
+                continue;
+            }
+            let reason = match &o.primitive {
+                Primitive::Sphere(_) | Primitive::Aabb(_) => None,
+                Primitive::Mesh(mesh) => {
+                    mesh.closed().err().map(|why| format!("but the mesh is not closed: {why}"))
+                }
+                other => Some(format!(
+                    "but a {} has no inside (only spheres, boxes and closed meshes do)",
+                    other.kind()
+                )),
+            };
+            if let Some(reason) = reason {
+                let material = material_names[o.material].clone();
+                return Err(SceneBuildError::Subsurface {
+                    index,
+                    kind: o.primitive.kind(),
+                    material,
+                    reason,
+                });
+            }
+        }
+        let mut emitters = Vec::new();
+        let mut emitter_of = vec![None; objects.len()];
+        for (index, o) in objects.iter().enumerate() {
+            let m = &materials[o.material];
+            if m.is_emissive() {
+                let e = Emitter::new(index, &o.primitive, m.emission)
+                    .map_err(|reason| SceneBuildError::Emitter { index, kind: o.primitive.kind(), reason })?;
+                emitter_of[index] = Some(emitters.len() as u32);
+                emitters.push(e);
+            }
+        }
+        let bvh = Bvh::build(&objects);
+        let radius = bvh.bounds().map_or(1.0, |b| (0.5 * b.size().length()).max(1.0));
+        let light_sampler = LightSampler::new(&self.lights, &emitters, &self.environment, radius);
+        Ok(Scene {
+            environment: self.environment,
+            lights: self.lights,
+            ambient: self.ambient,
+            methods: self.methods,
+            materials,
+            material_names,
+            textures: self.textures,
+            objects,
+            bvh,
+            emitters,
+            emitter_of,
+            light_sampler,
+            source_files: self.source_files,
+            warnings: self.warnings,
+        })
+    }
+}
+
+impl Scene {
+    /// Objects in file order: a hit's `object` indexes this list.
+    pub fn objects(&self) -> &[Object] {
+        &self.objects
+    }
+
+    /// The hierarchy over the objects.
+    #[cfg(test)]
+    pub(crate) fn bvh(&self) -> &Bvh {
+        &self.bvh
+    }
+
+    /// The intersection routines the scene is traced with.
+    pub fn methods(&self) -> Methods {
+        self.methods
+    }
+
+    /// The same world traced with other intersection routines (nothing is
+    /// rebuilt: the BVH does not depend on them).
+    pub fn with_methods(self, methods: Methods) -> Self {
+        Self { methods, ..self }
+    }
+
+    /// The light arriving along rays that leave the scene.
+    pub fn environment(&self) -> &Environment {
+        &self.environment
+    }
+
+    /// The point, directional and sphere lights.
+    pub fn lights(&self) -> &[Light] {
+        &self.lights
+    }
+
+    /// Light reaching every point from everywhere, times the diffuse albedo.
+    pub fn ambient(&self) -> Color {
+        self.ambient
+    }
+
+    /// What building the BVH took and produced.
+    pub fn bvh_stats(&self) -> BvhStats {
+        self.bvh.stats()
+    }
+
+    /// The nearest hit over all objects with `t` in `range`; ties keep the
+    /// object listed first (and the lower triangle within a mesh). A ray with
+    /// a zero or non-finite direction, or a non-finite origin, hits nothing.
+    /// The direction may have any magnitude: it is rescaled by a power of two
+    /// first ([`Ray::rescaled`]).
+    pub fn closest_hit(&self, ray: &Ray, range: Interval) -> Option<Hit> {
+        let (unit, range, k) = rescaled_query(ray, range)?;
+        self.closest_hit_rescaled(&unit, range, k)
+    }
+
+    /// The BVH query on a ray already rescaled by `2ᵏ`, with `t` mapped back.
+    fn closest_hit_rescaled(&self, unit: &Ray, range: Interval, k: i32) -> Option<Hit> {
+        let mut hit = self.bvh.closest_hit(&self.objects, unit, range, self.methods)?;
+        hit.t = rescale_t(hit.t, k)?;
+        Some(hit)
+    }
+
+    /// The same query by testing every object in order: the reference the
+    /// BVH is tested against.
+    #[cfg(test)]
+    pub(crate) fn closest_hit_brute_force(&self, ray: &Ray, range: Interval) -> Option<Hit> {
+        let (unit, mut range, k) = rescaled_query(ray, range)?;
+        let mut closest = None;
+        for (index, object) in self.objects.iter().enumerate() {
+            if let Some(hit) = object.primitive.intersect_with(&unit, range, self.methods) {
+                range.max = hit.t;
+                closest = Some(Hit::new(index, hit));
+            }
+        }
+        let mut hit: Hit = closest?;
+        hit.t = rescale_t(hit.t, k)?;
+        Some(hit)
+    }
+
+    /// Whether anything is hit with `t` in `range` (for shadow rays).
+    pub fn any_hit(&self, ray: &Ray, range: Interval) -> bool {
+        rescaled_query(ray, range)
+            .is_some_and(|(unit, range, _)| self.bvh.any_hit(&self.objects, &unit, range, self.methods))
+    }
+
+    /// The nearest hit of a ray whose history is unknown (a `cast` query or a
+    /// primary ray): hits within `2⁻¹⁶·max(1, |origin|∞)` of the origin do not
+    /// count ([`crate::math::real::CAST_MIN_DISTANCE_FACTOR`]).
+    pub fn cast(&self, ray: &Ray) -> Option<Hit> {
+        // Rescale once: the rule's minimum t is computed on the rescaled ray.
+        let (unit, k) = ray.rescaled()?;
+        self.closest_hit_rescaled(&unit, Interval::new(cast_min_t(unit.origin, unit.dir), Real::INFINITY), k)
+    }
+
+    /// [`Scene::cast`] for each of `rays`, into `hits`, with the same
+    /// results bit for bit, traced as packets ([`Bvh::closest_hits`]): rays
+    /// next to each other in the slice should be close in space and direction,
+    /// as a pixel's samples or a run of a row's pixels are.
+    pub fn cast_all(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len(), "one hit per ray");
+        let mut units = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET_RAYS];
+        let mut ranges = [Interval::new(0.0, 0.0); PACKET_RAYS];
+        let mut scales = [None; PACKET_RAYS];
+        let mut found = [None; PACKET_RAYS];
+        for (rays, hits) in rays.chunks(PACKET_RAYS).zip(hits.chunks_mut(PACKET_RAYS)) {
+            // Rays that can hit nothing stay out of the packet.
+            let mut n = 0;
+            for (ray, scale) in rays.iter().zip(&mut scales) {
+                *scale = ray.rescaled().map(|(unit, k)| {
+                    units[n] = unit;
+                    ranges[n] = Interval::new(cast_min_t(unit.origin, unit.dir), Real::INFINITY);
+                    n += 1;
+                    k
+                });
+            }
+            self.bvh.closest_hits(&self.objects, &units[..n], &ranges[..n], self.methods, &mut found[..n]);
+            let mut next = 0;
+            for (hit, scale) in hits.iter_mut().zip(&scales) {
+                *hit = scale.and_then(|k| {
+                    next += 1;
+                    let mut h = found[next - 1]?;
+                    h.t = rescale_t(h.t, k)?;
+                    Some(h)
+                });
+            }
+        }
+    }
+
+    /// The range of `t` the cast rule accepts for `ray`: `(min_t, ∞)`.
+    pub fn cast_range(&self, ray: &Ray) -> Interval {
+        match ray.rescaled() {
+            Some((unit, k)) => {
+                Interval::new(scale_pow2(cast_min_t(unit.origin, unit.dir), k), Real::INFINITY)
+            }
+            None => Interval::new(Real::INFINITY, Real::INFINITY),
+        }
+    }
+
+    /// The colour `hit` (found along `ray`) shows without lights: its
+    /// material's colour, textured where the surface has texture coordinates.
+    pub fn hit_color(&self, hit: &Hit, ray: &Ray) -> Color {
+        let m = self.object_material(hit.object);
+        if m.texture.is_none() {
+            m.color
+        } else {
+            self.material_at(hit.object, hit.primitive, ray.at(hit.t)).color
+        }
+    }
+
+    /// The material of `object` at the point `p` of its `primitive`: the
+    /// object's material, with its texture's colour multiplying `color`
+    /// where the surface has texture coordinates ([`crate::materials::texture`]).
+    /// Borrowed when there is nothing to change, so an untextured scene
+    /// pays nothing for textures.
+    pub fn material_at(&self, object: usize, primitive: usize, p: Vec3) -> Cow<'_, Material> {
+        let o = &self.objects[object];
+        let m = &self.materials[o.material];
+        match (m.texture, m.texture.and_then(|_| o.primitive.uv(primitive, p))) {
+            (Some(t), Some((u, v))) => {
+                Cow::Owned(Material { color: m.color * self.textures[t as usize].sample(u, v), ..*m })
+            }
+            _ => Cow::Borrowed(m),
+        }
+    }
+
+    /// How many textures the scene holds, and their bytes.
+    pub fn texture_stats(&self) -> (usize, usize) {
+        (self.textures.len(), self.textures.iter().map(|t| t.memory_bytes()).sum())
+    }
+
+    /// Texture `index` ([`Material::texture`]).
+    pub fn texture(&self, index: usize) -> &Texture {
+        &self.textures[index]
+    }
+
+    /// What the scene's sources hold that it does not use (MTL statements
+    /// it ignores, missing textures), in a sentence each.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// Material `index` ([`Object::material`]).
+    pub fn material(&self, index: usize) -> &Material {
+        &self.materials[index]
+    }
+
+    /// The material of object `object`.
+    pub fn object_material(&self, object: usize) -> &Material {
+        &self.materials[self.objects[object].material]
+    }
+
+    /// All materials, in the order they were defined (a scene file's: sorted by name).
+    pub fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
+    /// The materials' names, parallel to [`Scene::materials`].
+    pub fn material_names(&self) -> &[String] {
+        &self.material_names
+    }
+
+    /// The files besides the scene file that the scene was read from (OBJ
+    /// meshes), as given to [`SceneBuilder::source_file`].
+    pub fn source_files(&self) -> &[PathBuf] {
+        &self.source_files
+    }
+
+    /// The emissive objects, as lights for global illumination.
+    pub fn emitters(&self) -> &[Emitter] {
+        &self.emitters
+    }
+
+    /// The index in [`Scene::emitters`] of object `object`'s emitter, if it is emissive.
+    pub fn emitter_index(&self, object: usize) -> Option<usize> {
+        self.emitter_of.get(object).copied().flatten().map(|i| i as usize)
+    }
+
+    /// The light `source` names, through the interface every light shares.
+    pub fn light_source(&self, source: Source) -> LightSource<'_> {
+        match source {
+            Source::Light(i) => LightSource::Light(&self.lights[i]),
+            Source::Emitter(i) => LightSource::Emitter(&self.emitters[i]),
+            Source::Environment => LightSource::Environment(&self.environment),
+        }
+    }
+
+    /// How global illumination chooses among the scene's lights.
+    pub fn light_sampler(&self) -> &LightSampler {
+        &self.light_sampler
+    }
+
+    /// The rays a render with `effects` casts in this scene: what
+    /// `effects` asks for that its lights and the materials its objects use
+    /// give something to find ([`EffectPlan::new`]).
+    pub fn effect_plan(&self, effects: &Effects) -> EffectPlan {
+        EffectPlan::new(
+            &self.lights,
+            self.ambient,
+            effects,
+            self.objects.iter().map(|o| &self.materials[o.material]),
+        )
+    }
+}
+
+/// The ray rescaled by `2ᵏ` ([`Ray::rescaled`]), the range of `t` mapped to
+/// it, and `k`; `None` for a ray that can hit nothing.
+fn rescaled_query(ray: &Ray, range: Interval) -> Option<(Ray, Interval, i32)> {
+    let (unit, k) = ray.rescaled()?;
+    Some((unit, Interval::new(scale_pow2(range.min, -k), scale_pow2(range.max, -k)), k))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::sphere::Sphere;
+    use crate::math::real::Vec3;
+    use crate::testing::test_support::{primitives_of, random_parts, scene_of, v};
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Random scenes and rays (including axis-parallel ones with ±0
+        /// components): a hit always has a finite t beyond the origin rule, a
+        /// unit normal, and a valid object index. No NaN reaches a `cast` row.
+        #[test]
+        fn random_scenes_never_give_nan_or_broken_hits(
+            parts in random_parts(50.0, 8),
+            origin in prop::array::uniform3(-60f32..60.0),
+            dir in prop::array::uniform3(-1f32..1.0),
+            zero_mask in 0u8..8,
+            negative_zero in any::<bool>(),
+        ) {
+            let s = scene_of(primitives_of(parts));
+            let mut d = v(dir);
+            for axis in 0..3 {
+                if zero_mask & (1 << axis) != 0 {
+                    d[axis] = if negative_zero { -0.0 } else { 0.0 };
+                }
+            }
+            let ray = Ray::new(v(origin), d);
+            if let Some(hit) = s.cast(&ray) {
+                prop_assert!(hit.t.is_finite() && hit.t > cast_min_t(ray.origin, ray.dir));
+                prop_assert!((hit.normal.length() - 1.0).abs() < 1e-5, "normal {}", hit.normal);
+                prop_assert!(hit.object < s.objects().len());
+                prop_assert!(ray.at(hit.t).is_finite());
+            }
+        }
+    }
+
+    #[test]
+    fn the_first_listed_object_wins_an_exact_tie() {
+        let sphere = Primitive::Sphere(Sphere::new(Vec3::new(0.0, 0.0, 5.0), 1.0).unwrap());
+        let s = scene_of(vec![sphere.clone(), sphere]);
+        assert_eq!(s.cast(&Ray::new(Vec3::ZERO, Vec3::Z)).unwrap().object, 0);
+    }
+
+    #[test]
+    fn direction_magnitude_changes_t_but_not_the_hit() {
+        // Unit sphere at z = 5: from the origin along +z the hit is at distance 4.
+        let sphere = Primitive::Sphere(Sphere::new(Vec3::new(0.0, 0.0, 5.0), 1.0).unwrap());
+        let s = scene_of(vec![sphere]);
+        for scale in [1e-30 as Real, 1e-20, 1e-3, 1.0, 7.0, 1e15, 1e20, 1e30] {
+            let hit = s.cast(&Ray::new(Vec3::ZERO, Vec3::new(0.0, 0.0, scale)));
+            let hit = hit.unwrap_or_else(|| panic!("direction {scale}: miss"));
+            assert!((hit.t * scale - 4.0).abs() <= 4.0 * 4.0 * Real::EPSILON, "{scale}: t = {}", hit.t);
+            assert_eq!(hit.normal, -Vec3::Z);
+        }
+    }
+
+    #[test]
+    fn zero_and_non_finite_rays_hit_nothing() {
+        let sphere = Primitive::Sphere(Sphere::new(Vec3::ZERO, 100.0).unwrap());
+        let s = scene_of(vec![sphere]);
+        assert_eq!(s.cast(&Ray::new(Vec3::ZERO, Vec3::ZERO)), None);
+        assert_eq!(s.cast(&Ray::new(Vec3::ZERO, Vec3::new(Real::NAN, 0.0, 1.0))), None);
+        assert_eq!(s.cast(&Ray::new(Vec3::splat(Real::INFINITY), Vec3::Z)), None);
+    }
+}
