@@ -298,6 +298,25 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn tiny_and_huge_polygons_have_normals_and_are_cut() {
+        // Corners whose offsets' products would underflow or overflow
+        // unless scaled first (Newell's sums divide by the largest offset).
+        let tiny = Real::MIN_POSITIVE.sqrt() / 8.0;
+        let huge = Real::MAX.sqrt() * 8.0;
+        for s in [tiny, huge] {
+            let corners = vec![
+                Vec3::ZERO,
+                Vec3::new(2.0 * s, 0.0, 0.0),
+                Vec3::new(2.0 * s, s, 0.0),
+                Vec3::new(0.0, 2.0 * s, 0.0),
+            ];
+            let polygon = Polygon::new(corners).unwrap_or_else(|e| panic!("scale {s}: {e}"));
+            assert_eq!(polygon.normal(), Vec3::Z, "scale {s}");
+            assert_eq!(polygon.triangulate().map(|t| t.len()), Some(2), "scale {s}");
+        }
+    }
+
+    #[test]
     fn bad_polygons_are_refused_with_the_reason() {
         assert_eq!(Polygon::new(vec![Vec3::ZERO, Vec3::X]), Err(GeometryError::PolygonTooFewPoints(2)));
         let collinear = vec![Vec3::ZERO, Vec3::X, 2.0 * Vec3::X, 3.0 * Vec3::X];
@@ -411,50 +430,86 @@ pub(crate) mod tests {
         }
     }
 
+    /// Checks that `polygon`, whose corners are `flat` in the 2D frame
+    /// (`origin`, `x`, `y`) of its plane, is cut into n − 2 triangles, each
+    /// wound like the polygon, whose areas sum to the shoelace area, and
+    /// that 100 random points of the polygon's box lie in exactly one
+    /// triangle when inside the polygon and in none outside (so no two
+    /// triangles overlap and none pokes out).
+    fn assert_cut_into_tiles(polygon: &Polygon, flat: &[(f64, f64)], [origin, x, y]: [Vec3; 3], what: &str) {
+        use crate::math::real::to_f64;
+        let triangles = polygon.triangulate().unwrap_or_else(|| panic!("{what}: not cut"));
+        assert_eq!(triangles.len(), flat.len() - 2, "{what}");
+        let n = flat.len();
+        let shoelace =
+            (0..n).map(|i| flat[i].0 * flat[(i + 1) % n].1 - flat[(i + 1) % n].0 * flat[i].1).sum::<f64>();
+        let areas: Real = triangles.iter().map(|[a, b, c]| 0.5 * (*b - *a).cross(*c - *a).length()).sum();
+        assert!((to_f64(areas) - shoelace.abs() / 2.0).abs() < 1e-4, "{what}: {areas} against {shoelace}");
+        let local = |p: Vec3| {
+            let q = p - origin;
+            (to_f64(q.dot(x)), to_f64(q.dot(y)))
+        };
+        for t in &triangles {
+            let normal = (t[1] - t[0]).cross(t[2] - t[0]);
+            assert!(normal.dot(polygon.normal()) > 0.0, "{what}: a triangle wound the other way");
+        }
+        let (lo, hi) = flat.iter().fold(((f64::MAX, f64::MAX), (f64::MIN, f64::MIN)), |(lo, hi), &(a, b)| {
+            ((lo.0.min(a), lo.1.min(b)), (hi.0.max(a), hi.1.max(b)))
+        });
+        for k in 0..100u32 {
+            let (a, b) = crate::sampling::sampler::SampleRng::new(k, 31, n as u32).next_pair();
+            let p = (
+                lo.0 + (hi.0 - lo.0) * (1.2 * to_f64(a) - 0.1),
+                lo.1 + (hi.1 - lo.1) * (1.2 * to_f64(b) - 0.1),
+            );
+            if edge_distance(flat, p) < 1e-3 {
+                continue;
+            }
+            let covering = triangles
+                .iter()
+                .filter(|t| {
+                    let [a, b, c] = t.map(local);
+                    let on_edge =
+                        [(a, b), (b, c), (c, a)].iter().any(|&(e, f)| edge_distance(&[e, f], p) < 1e-6);
+                    !on_edge && winding_number(&[a, b, c], p) != 0
+                })
+                .count();
+            let inside = winding_number(flat, p) != 0;
+            assert_eq!(covering, usize::from(inside), "{what}, point {p:?}");
+        }
+    }
+
     #[test]
     fn random_star_polygons_are_cut_into_n_minus_2_triangles_that_tile_them() {
-        // Each triangle is wound like the polygon; the triangles' areas sum
-        // to the shoelace area; and random points of the polygon's box lie
-        // in exactly one triangle when inside the polygon, in none outside
-        // (so no two triangles overlap and none pokes out).
         for seed in 0..200u32 {
-            let (polygon, flat, [x, y, _]) = star(seed, Vec3::new(3.0, -2.0, 1.0), seed % 2 == 0);
-            let triangles = polygon.triangulate().unwrap_or_else(|| panic!("polygon {seed} not cut"));
-            assert_eq!(triangles.len(), flat.len() - 2, "polygon {seed}");
-            let n = flat.len();
-            let shoelace = (0..n)
-                .map(|i| flat[i].0 * flat[(i + 1) % n].1 - flat[(i + 1) % n].0 * flat[i].1)
-                .sum::<f64>();
-            let areas: Real = triangles.iter().map(|[a, b, c]| 0.5 * (*b - *a).cross(*c - *a).length()).sum();
-            assert!(
-                (crate::math::real::to_f64(areas) - shoelace.abs() / 2.0).abs() < 1e-4,
-                "polygon {seed}: {areas} against {shoelace}"
-            );
-            let local = |p: Vec3| {
-                let q = p - Vec3::new(3.0, -2.0, 1.0);
-                (crate::math::real::to_f64(q.dot(x)), crate::math::real::to_f64(q.dot(y)))
-            };
-            for t in &triangles {
-                let normal = (t[1] - t[0]).cross(t[2] - t[0]);
-                assert!(normal.dot(polygon.normal()) > 0.0, "polygon {seed}: a triangle wound the other way");
-            }
-            for k in 0..100u32 {
-                let (a, b) = crate::sampling::sampler::SampleRng::new(k, 31, seed).next_pair();
-                let p = (crate::math::real::to_f64(a) * 2.8 - 1.4, crate::math::real::to_f64(b) * 2.8 - 1.4);
-                if edge_distance(&flat, p) < 1e-3 {
-                    continue;
+            let origin = Vec3::new(3.0, -2.0, 1.0);
+            let (polygon, flat, [x, y, _]) = star(seed, origin, seed % 2 == 0);
+            assert_cut_into_tiles(&polygon, &flat, [origin, x, y], &format!("polygon {seed}"));
+        }
+    }
+
+    #[test]
+    fn a_corner_on_the_diagonal_of_an_ear_still_gives_a_tiling() {
+        // (2, 0) lies exactly on the diagonal from (0, 0) to (4, 0) that
+        // would cut off the corner (2, −1): the ear counts a corner on its
+        // edge as inside and waits. From every starting corner, both windings.
+        let corners = [(0.0, 0.0), (2.0, -1.0), (4.0, 0.0), (4.0, 2.0), (2.0, 0.0), (0.0, 2.0)];
+        for start in 0..6 {
+            for reverse in [false, true] {
+                let mut flat: Vec<(f64, f64)> = (0..6).map(|i| corners[(start + i) % 6]).collect();
+                if reverse {
+                    flat.reverse();
                 }
-                let covering = triangles
-                    .iter()
-                    .filter(|t| {
-                        let [a, b, c] = t.map(local);
-                        let on_edge =
-                            [(a, b), (b, c), (c, a)].iter().any(|&(e, f)| edge_distance(&[e, f], p) < 1e-6);
-                        !on_edge && winding_number(&[a, b, c], p) != 0
-                    })
-                    .count();
-                let inside = winding_number(&flat, p) != 0;
-                assert_eq!(covering, usize::from(inside), "polygon {seed}, point {p:?}");
+                let polygon =
+                    Polygon::new(flat.iter().map(|&(a, b)| Vec3::new(a as Real, b as Real, 0.0)).collect())
+                        .unwrap();
+                let frame = [Vec3::ZERO, Vec3::X, Vec3::Y];
+                assert_cut_into_tiles(
+                    &polygon,
+                    &flat,
+                    frame,
+                    &format!("from corner {start}, reversed {reverse}"),
+                );
             }
         }
     }
@@ -477,6 +532,21 @@ pub(crate) mod tests {
         ])
         .unwrap();
         assert_eq!(touching.triangulate(), None);
+        // The same from every starting corner and wound both ways: the zero
+        // falls on each side of the edge test in turn.
+        for start in 0..7 {
+            for reverse in [false, true] {
+                let mut corners: Vec<Vec3> = (0..7).map(|i| touching.points()[(start + i) % 7]).collect();
+                if reverse {
+                    corners.reverse();
+                }
+                assert_eq!(
+                    Polygon::new(corners).unwrap().triangulate(),
+                    None,
+                    "from {start}, reversed {reverse}"
+                );
+            }
+        }
         // Moved off the edge by 10⁻³ it is simple, and cut into 5 triangles.
         let apart = Polygon::new(vec![
             z(0.0, 0.0),

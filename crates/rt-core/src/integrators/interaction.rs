@@ -46,48 +46,52 @@ pub struct SurfaceInteraction<'s> {
 impl<'s> SurfaceInteraction<'s> {
     /// The interaction where `ray` met the scene at `hit`; `None` for a ray
     /// with no direction.
+    #[inline]
     pub fn new(scene: &'s Scene, ray: &Ray, hit: &Hit) -> Option<Self> {
-        let d = normalize_robust(ray.dir)?;
+        Some(Self::along(scene, ray, normalize_robust(ray.dir)?, hit))
+    }
+
+    /// [`SurfaceInteraction::new`] for a ray whose unit direction `d` is
+    /// known already (an integrator's loop has it).
+    #[inline]
+    pub fn along(scene: &'s Scene, ray: &Ray, d: Vec3, hit: &Hit) -> Self {
         let shape = &scene.objects()[hit.object];
         let point = shape.primitive.surface_point(hit.primitive, hit.normal, ray.at(hit.t));
         let material = scene.material_at(hit.object, hit.primitive, point.p);
         let shading_normal = shape.primitive.shading_normal(hit.primitive, point.p);
-        Some(Self {
-            object: hit.object,
-            primitive: hit.primitive,
-            point,
-            wo: -d,
-            shading_normal,
-            material,
-            shape,
-        })
+        Self { object: hit.object, primitive: hit.primitive, point, wo: -d, shading_normal, material, shape }
     }
 
     /// Whether the ray arrived on the side the geometric normal points to
     /// (the outside of a closed object, the front of a flat one).
+    #[inline]
     pub fn front(&self) -> bool {
         self.wo.dot(self.point.normal) > 0.0
     }
 
     /// The geometric normal turned to the side the ray arrived on.
+    #[inline]
     pub fn facing_normal(&self) -> Vec3 {
         if self.front() { self.point.normal } else { -self.point.normal }
     }
 
     /// The radiance the surface gives off towards ω_o: the material's
     /// emission on the front side, nothing from the back.
+    #[inline]
     pub fn emitted(&self) -> Color {
         if self.front() { self.material.emission } else { Color::ZERO }
     }
 
     /// The BSDF of the material here, about the shading normal where there
     /// is one ([`Bsdf::shaded`]).
+    #[inline]
     pub fn bsdf(&self) -> Bsdf {
         self.bsdf_of(&self.material, self.shading_normal)
     }
 
     /// The BSDF of `material` here, about `shading` (or the geometric
     /// normal): the boundary of a translucent object is flat and clear.
+    #[inline]
     pub fn bsdf_of(&self, material: &Material, shading: Option<Vec3>) -> Bsdf {
         let n = self.point.normal;
         Bsdf::shaded(material, n, shading.unwrap_or(n), self.wo)
@@ -95,6 +99,7 @@ impl<'s> SurfaceInteraction<'s> {
 
     /// A ray leaving the surface along `dir`, from the point pushed off the
     /// surface to the side `dir` points to ([`SurfacePoint::spawn_origin`]).
+    #[inline]
     pub fn spawn_ray(&self, dir: Vec3) -> Ray {
         Ray::new(self.point.spawn_origin(dir), dir)
     }

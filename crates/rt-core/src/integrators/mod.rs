@@ -47,6 +47,7 @@ impl<'s> Integrator<'s> {
     /// The radiance arriving along the camera ray `ray`, whose hit was found
     /// already (`hit`, by [`Scene::cast`]); `sampler` hands out this pixel
     /// sample's random numbers.
+    #[inline]
     pub fn radiance(
         &self,
         ray: &Ray,

@@ -113,7 +113,7 @@ impl<'s> PathTracer<'s> {
                 radiance += beta * scene.environment().radiance(d) * to_f32(w);
                 break;
             };
-            let Some(si) = SurfaceInteraction::new(scene, &ray, &h) else { break };
+            let si = SurfaceInteraction::along(scene, &ray, d, &h);
             let (sp, wo) = (si.point, si.wo);
             // A translucent object's surface is its dielectric boundary; the
             // medium inside does the rest (step 6).

@@ -25,6 +25,7 @@ impl Default for Environment {
 
 impl Environment {
     /// The radiance arriving along a ray that leaves the scene in direction `_dir`.
+    #[inline]
     pub fn radiance(&self, _dir: Vec3) -> Color {
         match self {
             Self::Constant(c) => *c,
@@ -33,6 +34,7 @@ impl Environment {
 
     /// A direction for `u` ∈ [0,1)² and its density over solid angle: for
     /// a constant environment, uniform over the sphere ([`uniform_sphere`]).
+    #[inline]
     pub fn sample(&self, u: (Real, Real)) -> (Vec3, Real) {
         match self {
             Self::Constant(_) => (uniform_sphere(u), uniform_sphere_pdf()),
@@ -40,6 +42,7 @@ impl Environment {
     }
 
     /// The density over solid angle with which [`Environment::sample`] picks `_wi`.
+    #[inline]
     pub fn pdf(&self, _wi: Vec3) -> Real {
         match self {
             Self::Constant(_) => uniform_sphere_pdf(),

@@ -97,6 +97,7 @@ impl LightSampler {
     }
 
     /// The probability of choosing `source` (0 for one that gives off nothing).
+    #[inline]
     pub fn probability(&self, source: Source) -> Real {
         match source {
             Source::Light(i) => self.light_probability.get(i).copied().unwrap_or(0.0),

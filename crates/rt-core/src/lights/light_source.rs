@@ -57,6 +57,7 @@ impl LightSource<'_> {
     /// A direction towards the light from `p` for `u` ∈ [0,1)², or `None`
     /// if no light arrives at `p` from it this way (the back of an emitter,
     /// `p` inside a sphere emitter or at a point light).
+    #[inline]
     pub fn sample(&self, p: Vec3, u: (Real, Real)) -> Option<LightSample> {
         match self {
             Self::Light(light) => {
@@ -82,6 +83,7 @@ impl LightSource<'_> {
     /// picks `wi` from `p`, where a ray along it finds the light at
     /// `distance` with unit geometric normal `normal` (both unused for the
     /// environment); 0 for a light no ray can find.
+    #[inline]
     pub fn pdf(&self, p: Vec3, wi: Vec3, distance: Real, normal: Vec3) -> Real {
         match self {
             Self::Light(_) => 0.0,

@@ -157,6 +157,7 @@ pub struct Bsdf {
 impl Bsdf {
     /// The BSDF of `m` at a hit with unit geometric normal `normal` (the
     /// primitive's own orientation), seen from the unit direction `wo`.
+    #[inline]
     pub fn new(m: &Material, normal: Vec3, wo: Vec3) -> Self {
         let outside = wo.dot(normal) >= 0.0;
         let n = if outside { normal } else { -normal };
@@ -167,6 +168,7 @@ impl Bsdf {
     /// unit shading normal `shading`, seen from `wo` (see "Shading normals"
     /// above). The shading normal is first turned to the side the
     /// geometric one points to.
+    #[inline]
     pub fn shaded(m: &Material, geometric: Vec3, shading: Vec3, wo: Vec3) -> Self {
         if shading == geometric {
             return Self::new(m, geometric, wo);
@@ -180,6 +182,7 @@ impl Bsdf {
     }
 
     #[allow(clippy::unnecessary_cast)] // `Real` is f64 with the `f64` feature.
+    #[inline]
     fn with_normals(m: &Material, n: Vec3, ng: Vec3, outside: bool) -> Self {
         let rest = (1.0 - m.reflectivity - m.transparency).max(0.0);
         let diffuse = m.color * (rest * (1.0 - m.specular) * m.diffuse);
@@ -216,6 +219,7 @@ impl Bsdf {
     /// The Lambert lobe's albedo ρ (its value is ρ/π): what it reflects of
     /// light arriving equally from every direction (the direct-lighting
     /// tracer's ambient term).
+    #[inline]
     pub fn diffuse_albedo(&self) -> Color {
         self.diffuse
     }

@@ -333,16 +333,19 @@ impl Scene {
     }
 
     /// The light arriving along rays that leave the scene.
+    #[inline]
     pub fn environment(&self) -> &Environment {
         &self.environment
     }
 
     /// The point, directional and sphere lights.
+    #[inline]
     pub fn lights(&self) -> &[Light] {
         &self.lights
     }
 
     /// Light reaching every point from everywhere, times the diffuse albedo.
+    #[inline]
     pub fn ambient(&self) -> Color {
         self.ambient
     }
@@ -520,11 +523,13 @@ impl Scene {
     }
 
     /// The index in [`Scene::emitters`] of object `object`'s emitter, if it is emissive.
+    #[inline]
     pub fn emitter_index(&self, object: usize) -> Option<usize> {
         self.emitter_of.get(object).copied().flatten().map(|i| i as usize)
     }
 
     /// The light `source` names, through the interface every light shares.
+    #[inline]
     pub fn light_source(&self, source: Source) -> LightSource<'_> {
         match source {
             Source::Light(i) => LightSource::Light(&self.lights[i]),
@@ -534,6 +539,7 @@ impl Scene {
     }
 
     /// How global illumination chooses among the scene's lights.
+    #[inline]
     pub fn light_sampler(&self) -> &LightSampler {
         &self.light_sampler
     }
