@@ -25,7 +25,7 @@ const SCENE: &str = r#"(
 
 fn scene() -> &'static Scene {
     static SCENE_CELL: OnceLock<Scene> = OnceLock::new();
-    SCENE_CELL.get_or_init(|| rt_core::parse_scene(SCENE, "fuzz.ron", Path::new(".")).unwrap())
+    SCENE_CELL.get_or_init(|| rt_core::parse_scene(SCENE, "fuzz.ron", Path::new(".")).unwrap().scene)
 }
 
 fuzz_target!(|data: &[u8]| {
