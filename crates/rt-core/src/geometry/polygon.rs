@@ -91,13 +91,23 @@ impl Polygon {
     /// simple (its edges cross), where the even–odd rule's region is not the
     /// union of such triangles. Used to sample points on an emissive polygon
     /// by area.
+    ///
+    /// The projected corners are computed in f64 and scaled by the power of
+    /// two that brings the largest coordinate near 1: exact, so no sign the
+    /// tests see changes, and the products of the tests can neither underflow
+    /// (corners near 10⁻¹⁵⁰ with f64 geometry) nor overflow.
     pub fn triangulate(&self) -> Option<Vec<[Vec3; 3]>> {
         let [u, v] = self.axes;
-        let flat: Vec<(f64, f64)> = self
-            .points
-            .iter()
-            .map(|p| (crate::math::real::to_f64(p[u]), crate::math::real::to_f64(p[v])))
-            .collect();
+        let to_f64 = crate::math::real::to_f64;
+        let largest =
+            self.points.iter().map(|p| to_f64(p[u]).abs().max(to_f64(p[v]).abs())).fold(0.0, f64::max);
+        let unit = if largest > 0.0 && largest.is_finite() {
+            2f64.powi(-(largest.log2().floor() as i32))
+        } else {
+            1.0
+        };
+        let flat: Vec<(f64, f64)> =
+            self.points.iter().map(|p| (to_f64(p[u]) * unit, to_f64(p[v]) * unit)).collect();
         // Orientation of the projected winding: counter-clockwise (> 0) or not.
         let n = flat.len();
         let signed: f64 = (0..n).map(|i| cross2(flat[i], flat[(i + 1) % n], (0.0, 0.0))).sum();
