@@ -129,18 +129,21 @@ impl ImageView {
                 s.orbit((-delta.x * ORBIT_PER_POINT) as Real, (-delta.y * ORBIT_PER_POINT) as Real)
             });
         }
-        let scroll = if response.hovered() { ui.input(|i| i.smooth_scroll_delta.y) } else { 0.0 };
+        let hovered = response.hovered();
+        let scroll = if hovered { ui.input(|i| i.smooth_scroll_delta.y) } else { 0.0 };
+        // Ctrl+wheel (and a pinch) reach egui as a zoom factor, not as
+        // scrolling: it zooms the image, never the camera.
+        let mut factor = if hovered { ui.input(|i| i.zoom_delta()) } else { 1.0 };
         if scroll != 0.0 {
             if ctrl {
-                // Zoom the image about the cursor: the point under it stays.
-                let cursor = response.hover_pos().unwrap_or(available.center());
-                let new_scale = (scale * (scroll * 0.003).exp()).clamp(SCALE_RANGE.0, SCALE_RANGE.1);
-                let under = center + (cursor - available.center()) / scale;
-                let new_center = under - (cursor - available.center()) / new_scale;
-                self.zoom = Zoom::Scale { scale: new_scale, center: new_center };
+                factor *= (scroll * 0.003).exp();
             } else {
                 changed |= camera.edit(|s| s.zoom((-scroll * ZOOM_PER_POINT).exp() as Real));
             }
+        }
+        if factor != 1.0 {
+            let cursor = response.hover_pos().unwrap_or(available.center());
+            self.zoom = zoom_about(scale, center, cursor - available.center(), factor);
         }
         if response.clicked() {
             self.pinned = response.interact_pointer_pos().and_then(to_pixel);
@@ -175,6 +178,16 @@ impl ImageView {
     }
 }
 
+/// The image zoomed by `factor` about the cursor, `offset` from the view's
+/// centre: the image point under the cursor stays under it. The image is
+/// drawn at `scale` screen points per pixel with image point `center` at the
+/// view's centre; the new scale is kept within [`SCALE_RANGE`].
+fn zoom_about(scale: f32, center: Pos2, offset: Vec2, factor: f32) -> Zoom {
+    let new_scale = (scale * factor).clamp(SCALE_RANGE.0, SCALE_RANGE.1);
+    let under = center + offset / scale;
+    Zoom::Scale { scale: new_scale, center: under - offset / new_scale }
+}
+
 /// What a frame of mouse input did: a new render is due if the camera
 /// `changed`; a preview is wanted only while the pointer is `dragged` and
 /// actually `moving` (held still, the full render may start).
@@ -193,6 +206,80 @@ mod tests {
         assert_eq!(interaction(false, true, false), Interaction { changed: false, dragging: false });
         assert_eq!(interaction(true, true, true), Interaction { changed: true, dragging: true });
         assert_eq!(interaction(false, false, true), Interaction { changed: false, dragging: false });
+    }
+
+    #[test]
+    fn zooming_about_the_cursor_keeps_the_image_point_under_it() {
+        let offset = Vec2::new(120.0, -40.0);
+        let Zoom::Scale { scale, center } = zoom_about(0.5, pos2(320.0, 240.0), offset, 4.0) else {
+            panic!()
+        };
+        assert_eq!(scale, 2.0);
+        // The image point under the cursor, before and after.
+        assert_eq!(pos2(320.0, 240.0) + offset / 0.5, center + offset / scale);
+        let Zoom::Scale { scale, .. } = zoom_about(SCALE_RANGE.1, pos2(0.0, 0.0), offset, 10.0) else {
+            panic!()
+        };
+        assert_eq!(scale, SCALE_RANGE.1);
+    }
+
+    /// The image view's zoom and the camera's position after a few frames
+    /// of `events` (sent in the first, with `modifiers` held), the pointer
+    /// over the middle of a 640×480 view.
+    fn after_events(events: Vec<egui::Event>, modifiers: egui::Modifiers) -> (Zoom, rt_core::Vec3) {
+        let ctx = egui::Context::default();
+        let camera = rt_core::Camera::new(
+            rt_core::Vec3::new(0.0, 0.0, -5.0),
+            rt_core::Vec3::ZERO,
+            rt_core::Vec3::Y,
+            40.0,
+            1.0,
+            rt_core::Projection::Perspective,
+        )
+        .unwrap();
+        let mut panel = CameraPanel::new(&camera);
+        let mut view = ImageView::default();
+        let screen = Rect::from_min_size(pos2(0.0, 0.0), Vec2::new(640.0, 480.0));
+        let mut frame = |events: Vec<egui::Event>| {
+            let input = egui::RawInput { screen_rect: Some(screen), events, ..Default::default() };
+            let mut output = ctx.run_ui(input, |ui| {
+                view.ui(ui, None, (640, 480), &mut panel, |_| String::new());
+            });
+            output.textures_delta.clear();
+            ctx.tex_manager().write().take_delta().clear();
+        };
+        frame(vec![egui::Event::ModifiersChanged(modifiers), egui::Event::PointerMoved(pos2(320.0, 240.0))]);
+        frame(events);
+        // The wheel is smoothed over a few frames.
+        for _ in 0..30 {
+            frame(Vec::new());
+        }
+        (view.zoom(), panel.settings().position)
+    }
+
+    #[test]
+    fn ctrl_wheel_and_a_pinch_zoom_the_image_and_the_wheel_zooms_the_camera() {
+        let position = after_events(Vec::new(), egui::Modifiers::NONE).1;
+        let wheel = |modifiers| egui::Event::MouseWheel {
+            unit: egui::MouseWheelUnit::Point,
+            delta: Vec2::new(0.0, 60.0),
+            modifiers,
+            phase: egui::TouchPhase::Move,
+            source: egui::MouseWheelSource::Wheel,
+        };
+        // Ctrl+wheel: egui turns it into a zoom factor; the image is
+        // magnified, the camera stays.
+        let (zoom, moved) = after_events(vec![wheel(egui::Modifiers::COMMAND)], egui::Modifiers::COMMAND);
+        assert!(matches!(zoom, Zoom::Scale { scale, .. } if scale > 1.0), "{zoom:?}");
+        assert_eq!(moved, position);
+        // A pinch (a zoom event) does the same.
+        let (zoom, moved) = after_events(vec![egui::Event::Zoom(1.5)], egui::Modifiers::NONE);
+        assert!(matches!(zoom, Zoom::Scale { scale, .. } if scale > 1.0), "{zoom:?}");
+        assert_eq!(moved, position);
+        // The plain wheel moves the camera, not the image.
+        let (zoom, moved) = after_events(vec![wheel(egui::Modifiers::NONE)], egui::Modifiers::NONE);
+        assert_eq!(zoom, Zoom::Fit);
+        assert_ne!(moved, position);
     }
 
     #[test]
