@@ -493,9 +493,37 @@ mod tests {
         }
     }
 
+    #[test]
+    fn opening_a_scene_returns_at_once_and_the_old_one_stays_until_the_new_one_is_loaded() {
+        // The load runs on a thread of its own: `open` returns before the
+        // scene is read, the window keeps drawing frames with the old scene
+        // (mid-render here), and the new one arrives through `poll`. Loading
+        // on the window's thread would have replaced the scene inside `open`.
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("effects.ron")));
+        frame(&ctx, &mut v, egui::vec2(900.0, 600.0), Vec::new());
+        let before = v.source.scene().clone();
+        assert!(v.source.open(scenes().join("box.ron"), &ctx).is_none());
+        assert!(std::sync::Arc::ptr_eq(v.source.scene(), &before), "open waited for the load");
+        let deadline = Instant::now() + Duration::from_secs(60);
+        while std::sync::Arc::ptr_eq(v.source.scene(), &before) {
+            assert!(Instant::now() < deadline, "the new scene never arrived");
+            frame(&ctx, &mut v, egui::vec2(900.0, 600.0), Vec::new());
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        assert!(v.source.path().is_some_and(|p| p.ends_with("box.ron")));
+        // A file that cannot be loaded leaves the scene and says why, once loaded.
+        let shown = v.source.scene().clone();
+        v.source.open(scenes().join("no-such-scene.ron"), &ctx);
+        assert!(v.source.wait_for_load(&ctx).is_none());
+        assert!(std::sync::Arc::ptr_eq(v.source.scene(), &shown));
+        assert!(v.source.error().is_some_and(|e| e.contains("no-such-scene.ron")), "{:?}", v.source.error());
+    }
+
     /// What a file save does: reload, and render again if the scene changed.
     fn reload(viewer: &mut Viewer, ctx: &egui::Context) {
-        if let Some(change) = viewer.source.reload(ctx) {
+        viewer.source.reload(ctx);
+        if let Some(change) = viewer.source.wait_for_load(ctx) {
             viewer.scene_changed(ctx, change);
         }
     }
@@ -545,7 +573,8 @@ mod tests {
         frame(&ctx, &mut v, egui::vec2(1000.0, 700.0), vec![]);
         for name in ["box.ron", "orthographic.ron"] {
             let path = scenes().join(name);
-            let change = v.source.open(path.clone(), &ctx).unwrap();
+            v.source.open(path.clone(), &ctx);
+            let change = v.source.wait_for_load(&ctx).unwrap();
             v.scene_changed(&ctx, change);
             frame(&ctx, &mut v, egui::vec2(1000.0, 700.0), vec![]);
             let file = rt_core::load_scene(&path).unwrap().camera;
@@ -590,7 +619,8 @@ mod tests {
         v.save_path = "/no/such/dir/x.png".into();
         v.save();
         assert!(v.notice.as_ref().is_some_and(|n| n.text.starts_with("not saved")));
-        let change = v.source.open(scenes().join("box.ron"), &ctx).unwrap();
+        v.source.open(scenes().join("box.ron"), &ctx);
+        let change = v.source.wait_for_load(&ctx).unwrap();
         v.scene_changed(&ctx, change);
         assert!(v.notice.is_none(), "Open clears the notice");
         v.notify("not saved: something".into());
@@ -610,7 +640,8 @@ mod tests {
         let ctx = egui::Context::default();
         let mut v = viewer(&ctx, None);
         finish_render(&ctx, &mut v);
-        let change = v.source.open(scenes().join("sphere.ron"), &ctx).unwrap();
+        v.source.open(scenes().join("sphere.ron"), &ctx);
+        let change = v.source.wait_for_load(&ctx).unwrap();
         v.scene_changed(&ctx, change);
         // Before any row of the new scene, the image on screen is black.
         let canvas: &Canvas = v.scheduler.canvas().unwrap();

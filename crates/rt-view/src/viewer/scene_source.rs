@@ -6,9 +6,16 @@
 //!
 //! A failed load never replaces the scene: the last good one (and its image)
 //! stays, and the error is shown until a load succeeds.
+//!
+//! A scene is loaded on a thread of its own, so the window never waits for
+//! it: reading the files and building the BVH can take seconds, and the
+//! BVH build shares rayon's threads with the render still running. The
+//! window keeps showing the current scene, says what is loading, and takes
+//! the new scene on the first frame after it is ready ([`SceneSource::poll`]).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::time::{Duration, Instant};
 
 use egui::Color32;
@@ -58,6 +65,18 @@ pub(super) struct SceneSource {
     error: Option<String>,
     /// Why the files are not watched, if they are not.
     watch_problem: Option<String>,
+    /// The load under way, if one is.
+    loading: Option<Loading>,
+}
+
+/// A scene being loaded on a thread of its own.
+struct Loading {
+    /// The file (`None`: the built-in scene).
+    path: Option<PathBuf>,
+    /// Another file is being opened (not the same one reloaded).
+    opened: bool,
+    /// Where the loading thread sends its result.
+    result: Receiver<Result<LoadedScene, rt_core::SceneError>>,
 }
 
 impl SceneSource {
@@ -75,6 +94,7 @@ impl SceneSource {
             recent,
             error: None,
             watch_problem: None,
+            loading: None,
         };
         if let Some(p) = source.path.clone() {
             source.recent.add(&p);
@@ -104,9 +124,20 @@ impl SceneSource {
         self.error.as_deref()
     }
 
-    /// Acts on file events: once the files have been quiet for
-    /// [`RELOAD_DEBOUNCE`] after a change, reloads the scene.
+    /// The scene a finished load brought, if one did; then acts on file
+    /// events: once the files have been quiet for [`RELOAD_DEBOUNCE`] after
+    /// a change, reloads the scene.
     pub fn poll(&mut self, ctx: &egui::Context) -> Option<SceneChange> {
+        if let Some(loading) = &self.loading {
+            match loading.result.try_recv() {
+                Ok(result) => return self.finish(result, ctx),
+                Err(TryRecvError::Empty) => {}
+                Err(TryRecvError::Disconnected) => {
+                    self.loading = None;
+                    self.error = Some("the scene could not be loaded: its loading thread stopped".to_owned());
+                }
+            }
+        }
         if self.watcher.as_ref().is_some_and(SceneWatcher::changed) {
             self.reload_at = Some(Instant::now() + RELOAD_DEBOUNCE);
         }
@@ -120,11 +151,53 @@ impl SceneSource {
         self.reload(ctx)
     }
 
-    /// Loads the scene file again; on error the scene stays and the error is kept.
+    /// Starts loading the scene file again; on error the scene will stay
+    /// and the error be kept. The new scene comes from [`SceneSource::poll`].
     pub fn reload(&mut self, ctx: &egui::Context) -> Option<SceneChange> {
-        match load(self.path.as_deref()) {
+        self.start(self.path.clone(), false, ctx);
+        None
+    }
+
+    /// Starts opening the scene file at `path`, to be watched instead of
+    /// the current one; on error nothing will change but the error shown.
+    /// The new scene comes from [`SceneSource::poll`].
+    pub fn open(&mut self, path: PathBuf, ctx: &egui::Context) -> Option<SceneChange> {
+        self.start(Some(path), true, ctx);
+        None
+    }
+
+    /// Loads `path` on a thread of its own (a load under way is forgotten:
+    /// its thread finishes unheard); `ctx` is repainted when it is done.
+    fn start(&mut self, path: Option<PathBuf>, opened: bool, ctx: &egui::Context) {
+        let (send, result) = mpsc::channel();
+        let (file, repaint) = (path.clone(), ctx.clone());
+        let spawned = std::thread::Builder::new().name("scene-load".to_owned()).spawn(move || {
+            // The receiver may be gone (another load started): nothing to tell.
+            let _ = send.send(load(file.as_deref()));
+            repaint.request_repaint();
+        });
+        match spawned {
+            Ok(_) => self.loading = Some(Loading { path, opened, result }),
+            Err(e) => self.error = Some(format!("cannot start loading the scene: {e}")),
+        }
+    }
+
+    /// Takes a finished load's result: the new scene in place (and watched),
+    /// or its error shown.
+    fn finish(
+        &mut self,
+        result: Result<LoadedScene, rt_core::SceneError>,
+        ctx: &egui::Context,
+    ) -> Option<SceneChange> {
+        let Loading { path, opened, .. } = self.loading.take()?;
+        match result {
             Ok(scene) => {
-                let change = self.replace(scene, false);
+                if opened && let Some(p) = &path {
+                    self.open_path = p.display().to_string();
+                    self.recent.add(p);
+                }
+                self.path = path;
+                let change = self.replace(scene, opened);
                 self.watch(ctx); // The mesh files may have changed.
                 Some(change)
             }
@@ -135,23 +208,11 @@ impl SceneSource {
         }
     }
 
-    /// Opens the scene file at `path` and watches it instead of the current one;
-    /// on error nothing changes but the error shown.
-    pub fn open(&mut self, path: PathBuf, ctx: &egui::Context) -> Option<SceneChange> {
-        match load(Some(&path)) {
-            Ok(scene) => {
-                self.open_path = path.display().to_string();
-                self.recent.add(&path);
-                self.path = Some(path);
-                let change = self.replace(scene, true);
-                self.watch(ctx);
-                Some(change)
-            }
-            Err(e) => {
-                self.error = Some(e.to_string());
-                None
-            }
-        }
+    /// Waits for the load under way and takes its result (tests).
+    #[cfg(test)]
+    pub fn wait_for_load(&mut self, ctx: &egui::Context) -> Option<SceneChange> {
+        let result = self.loading.as_ref()?.result.recv().ok()?;
+        self.finish(result, ctx)
     }
 
     fn replace(&mut self, scene: LoadedScene, opened: bool) -> SceneChange {
@@ -240,6 +301,12 @@ impl SceneSource {
                 change = self.reload(&ctx);
             }
         });
+        if let Some(loading) = &self.loading {
+            let name =
+                loading.path.as_ref().map_or(DEFAULT_SCENE_NAME.to_owned(), |p| p.display().to_string());
+            ui.label(format!("loading {name} …"));
+            ctx.request_repaint_after(Duration::from_millis(100));
+        }
         for problem in [&self.error, &self.watch_problem].into_iter().flatten() {
             ui.colored_label(Color32::from_rgb(220, 60, 50), problem);
         }
