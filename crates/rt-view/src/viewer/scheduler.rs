@@ -10,7 +10,8 @@
 //! What is on screen never mixes two views: a preview renders off screen
 //! and replaces the image only when complete (a preview takes a frame or
 //! two); the full-resolution job of the same view then streams its rows
-//! over it; a new scene starts from black.
+//! over it (over the preview as far as it got, black below, if the full job
+//! starts before the preview finished); a new scene starts from black.
 
 use std::time::{Duration, Instant};
 
@@ -121,8 +122,13 @@ impl Scheduler {
         match kind {
             Kind::Preview => self.pending = Some(Canvas::new(generation, width, height, max_side)),
             Kind::Full => {
-                self.pending = None;
-                let canvas = Canvas::replacing(self.shown.as_ref(), generation, width, height, max_side);
+                // The full render streams over its own view's preview: the
+                // one still being rendered if it did not finish in time
+                // (its missing rows black), else the one on screen. Never
+                // over an image of another view.
+                let preview = self.pending.take();
+                let base = preview.as_ref().or(self.shown.as_ref());
+                let canvas = Canvas::replacing(base, generation, width, height, max_side);
                 self.show(ctx, canvas);
             }
             Kind::NewScene => {
@@ -358,6 +364,22 @@ mod tests {
         wait(&ctx, &mut s, Scheduler::frame_is_final, |_| {});
         assert_eq!(s.canvas().unwrap().size(), [160, 90]);
         assert_ne!(s.canvas().unwrap().pixels(), &old[..]);
+
+        // The view moves back, and the full render starts before its preview
+        // finished (a slow preview, or input still for REFINE_AFTER sooner):
+        // it streams over that unfinished preview, not over the image of the
+        // view before, so from its start no pixel of the old view is shown.
+        let shown_before = s.canvas().unwrap().display_image();
+        s.schedule(&ctx, Interaction { changed: true, dragging: false }, || Some(first.clone())).unwrap();
+        s.start(&ctx, || Some(first.clone()), Kind::Full).unwrap();
+        let start = s.canvas().unwrap().display_image();
+        assert!(
+            start.iter().all(|&p| p == egui::Color32::BLACK),
+            "the full render started over another view"
+        );
+        assert_ne!(start, shown_before);
+        wait(&ctx, &mut s, Scheduler::frame_is_final, |_| {});
+        assert_eq!(s.canvas().unwrap().pixels(), &old[..]);
         drop(s);
         ctx.tex_manager().write().take_delta().clear();
     }
