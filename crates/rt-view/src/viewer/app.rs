@@ -246,10 +246,8 @@ impl Viewer {
         if command(Key::O) {
             self.source.browse();
         }
-        if pressed(Key::F5)
-            && let Some(change) = self.source.reload(ctx)
-        {
-            self.scene_changed(ctx, change);
+        if pressed(Key::F5) {
+            self.source.reload(ctx);
         }
         if pressed(Key::R) {
             input.changed |= self.camera.reset();
@@ -278,10 +276,7 @@ impl Viewer {
     /// The side panel, top to bottom.
     fn side_panel(&mut self, ui: &mut egui::Ui) -> Interaction {
         let mut input = Interaction::default();
-        let ctx = ui.ctx().clone();
-        if let Some(change) = self.source.ui(ui) {
-            self.scene_changed(&ctx, change);
-        }
+        self.source.ui(ui);
         ui.separator();
         input = input | self.camera.ui(ui);
         ui.separator();
@@ -336,9 +331,7 @@ impl Viewer {
         if let Some(change) = self.source.poll(&ctx) {
             self.scene_changed(&ctx, change);
         }
-        if let Some(change) = self.source.take_dropped(&ctx) {
-            self.scene_changed(&ctx, change);
-        }
+        self.source.take_dropped(&ctx);
         let mut input = self.shortcuts(&ctx);
         if self.notice.as_ref().is_some_and(|n| n.at.elapsed() > NOTICE_FOR) {
             self.notice = None;
@@ -368,9 +361,7 @@ impl Viewer {
             })
             .inner;
         input = input | view_input;
-        if let Some(change) = self.source.browser_ui(&ctx) {
-            self.scene_changed(&ctx, change);
-        }
+        self.source.browser_ui(&ctx);
         self.help_ui(&ctx);
         if input.changed {
             self.notice = None;
@@ -503,7 +494,7 @@ mod tests {
         let mut v = viewer(&ctx, Some(scenes().join("effects.ron")));
         frame(&ctx, &mut v, egui::vec2(900.0, 600.0), Vec::new());
         let before = v.source.scene().clone();
-        assert!(v.source.open(scenes().join("box.ron"), &ctx).is_none());
+        v.source.open(scenes().join("box.ron"), &ctx);
         assert!(std::sync::Arc::ptr_eq(v.source.scene(), &before), "open waited for the load");
         let deadline = Instant::now() + Duration::from_secs(60);
         while std::sync::Arc::ptr_eq(v.source.scene(), &before) {

@@ -126,7 +126,8 @@ impl SceneSource {
 
     /// The scene a finished load brought, if one did; then acts on file
     /// events: once the files have been quiet for [`RELOAD_DEBOUNCE`] after
-    /// a change, reloads the scene.
+    /// a change, starts reloading the scene (a later call brings it). This
+    /// is the one place a new scene comes from.
     pub fn poll(&mut self, ctx: &egui::Context) -> Option<SceneChange> {
         if let Some(loading) = &self.loading {
             match loading.result.try_recv() {
@@ -148,22 +149,21 @@ impl SceneSource {
             return None;
         }
         self.reload_at = None;
-        self.reload(ctx)
+        self.reload(ctx);
+        None
     }
 
     /// Starts loading the scene file again; on error the scene will stay
     /// and the error be kept. The new scene comes from [`SceneSource::poll`].
-    pub fn reload(&mut self, ctx: &egui::Context) -> Option<SceneChange> {
+    pub fn reload(&mut self, ctx: &egui::Context) {
         self.start(self.path.clone(), false, ctx);
-        None
     }
 
     /// Starts opening the scene file at `path`, to be watched instead of
     /// the current one; on error nothing will change but the error shown.
     /// The new scene comes from [`SceneSource::poll`].
-    pub fn open(&mut self, path: PathBuf, ctx: &egui::Context) -> Option<SceneChange> {
+    pub fn open(&mut self, path: PathBuf, ctx: &egui::Context) {
         self.start(Some(path), true, ctx);
-        None
     }
 
     /// Loads `path` on a thread of its own (a load under way is forgotten:
@@ -242,29 +242,29 @@ impl SceneSource {
         self.browser.show(dir.as_deref());
     }
 
-    /// Opens a `.ron` file dropped on the window, if one was.
-    pub fn take_dropped(&mut self, ctx: &egui::Context) -> Option<SceneChange> {
+    /// Starts opening a `.ron` file dropped on the window, if one was.
+    pub fn take_dropped(&mut self, ctx: &egui::Context) {
         let dropped: Vec<PathBuf> =
             ctx.input(|i| i.raw.dropped_files.iter().map(|f| f.path().to_owned()).collect());
-        let path = dropped.into_iter().next()?;
+        let Some(path) = dropped.into_iter().next() else { return };
         let is_scene = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron"));
         if !is_scene {
             self.error = Some(format!("{}: not a scene file (.ron)", path.display()));
-            return None;
+            return;
         }
-        self.open(path, ctx)
+        self.open(path, ctx);
     }
 
-    /// The file browser's window, if shown.
-    pub fn browser_ui(&mut self, ctx: &egui::Context) -> Option<SceneChange> {
-        let path = self.browser.ui(ctx)?;
-        self.open(path, ctx)
+    /// The file browser's window, if shown; a file chosen starts opening.
+    pub fn browser_ui(&mut self, ctx: &egui::Context) {
+        if let Some(path) = self.browser.ui(ctx) {
+            self.open(path, ctx);
+        }
     }
 
     /// The scene's path (resolved), the path field (Enter opens it), Open
     /// (the file browser), Recent, Reload, and the last load error.
-    pub fn ui(&mut self, ui: &mut egui::Ui) -> Option<SceneChange> {
-        let mut change = None;
+    pub fn ui(&mut self, ui: &mut egui::Ui) {
         let ctx = ui.ctx().clone();
         ui.heading("Scene");
         let shown = match &self.path {
@@ -279,7 +279,7 @@ impl SceneSource {
                 .desired_width(f32::INFINITY),
         );
         if field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter)) {
-            change = self.open(PathBuf::from(self.open_path.trim()), &ctx);
+            self.open(PathBuf::from(self.open_path.trim()), &ctx);
         }
         ui.horizontal(|ui| {
             if ui.button("Open…").on_hover_text("Browse for a scene file (Ctrl+O)").clicked() {
@@ -290,7 +290,7 @@ impl SceneSource {
                 ui.menu_button("Recent", |ui| {
                     for p in recent {
                         if ui.button(p.display().to_string()).clicked() {
-                            change = self.open(p, &ctx);
+                            self.open(p, &ctx);
                             ui.close();
                         }
                     }
@@ -298,7 +298,7 @@ impl SceneSource {
             });
             if ui.add_enabled(self.path.is_some(), egui::Button::new("Reload")).on_hover_text("F5").clicked()
             {
-                change = self.reload(&ctx);
+                self.reload(&ctx);
             }
         });
         if let Some(loading) = &self.loading {
@@ -321,6 +321,5 @@ impl SceneSource {
                     }
                 });
         }
-        change
     }
 }
