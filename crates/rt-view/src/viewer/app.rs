@@ -81,6 +81,11 @@ const PANEL_WIDTH: f32 = 300.0;
 /// The keyboard shortcuts, as the help overlay and the docs list them.
 pub const SHORTCUTS: &[(&str, &str)] = &[
     ("R", "reset the camera to the scene file's"),
+    ("Ctrl+Z", "undo a camera change"),
+    ("Ctrl+Shift+Z or Ctrl+Y", "redo a camera change"),
+    ("V", "switch between orbit and fly navigation"),
+    ("W A S D, Q E", "fly: forward, left, back, right, down, up (Shift: faster)"),
+    (".", "frame the pinned object: it fills the view"),
     ("F", "fit the image to the window"),
     ("1", "show the image 1:1 (one image pixel per screen pixel)"),
     ("Ctrl+S", "save the finished image as PNG"),
@@ -214,13 +219,41 @@ impl Viewer {
         self.start(ctx, Kind::NewScene);
     }
 
+    /// The object under the pinned pixel, as the camera now sees it.
+    fn pinned_object(&self) -> Option<usize> {
+        let [x, y] = self.view.pinned()?;
+        let (w, h) = self.image.full_size(self.source.scene());
+        let view = ViewPlane::new(self.camera.settings().to_camera().ok()?, w, h).ok()?;
+        self.source.scene().scene.cast(&view.center_ray(x, y)).map(|hit| hit.object)
+    }
+
+    /// Frame: the camera moves so that the pinned object fills the view,
+    /// and the pin moves to the image's centre, on the object. Returns
+    /// whether the camera changed.
+    fn frame_pinned(&mut self) -> bool {
+        let Some(object) = self.pinned_object() else {
+            self.notify("nothing to frame: click a pixel of an object first".into());
+            return false;
+        };
+        let scene = self.source.scene().clone();
+        let Some(bounds) = scene.scene.objects()[object].primitive.bounds() else {
+            self.notify(format!("{} is unbounded: nothing to frame", describe_object(&scene.scene, object)));
+            return false;
+        };
+        let (w, h) = self.image.full_size(&scene);
+        let changed =
+            self.camera.frame_box(bounds.min(), bounds.max(), w as rt_core::Real / h as rt_core::Real);
+        self.view.pin([w / 2, h / 2]);
+        changed
+    }
+
     /// Writes the finished image to the Save path, atomically.
     fn save(&mut self) {
         let Some(canvas) = self.scheduler.canvas().filter(|_| self.scheduler.frame_is_final()) else {
             self.notify("not saved: the image is not finished yet".into());
             return;
         };
-        let path = PathBuf::from(self.save_path.trim());
+        let path = save_path_for(self.save_path.trim(), self.source.path());
         let [width, height] = canvas.size();
         let saved = PendingImage::png(&path)
             .and_then(|png| png.write_rgb8(width as u32, height as u32, &canvas.rgb8()));
@@ -252,6 +285,20 @@ impl Viewer {
         if pressed(Key::R) {
             input.changed |= self.camera.reset();
         }
+        // Ctrl+Shift+Z before Ctrl+Z, which would match it too.
+        let redo = KeyboardShortcut::new(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z);
+        if ctx.input_mut(|i| i.consume_shortcut(&redo)) || command(Key::Y) {
+            input.changed |= self.camera.redo();
+        }
+        if command(Key::Z) {
+            input.changed |= self.camera.undo();
+        }
+        if pressed(Key::V) {
+            self.camera.toggle_navigation();
+        }
+        if pressed(Key::Period) {
+            input.changed |= self.frame_pinned();
+        }
         if pressed(Key::F) {
             self.view.fit();
         }
@@ -278,7 +325,8 @@ impl Viewer {
         let mut input = Interaction::default();
         self.source.ui(ui);
         ui.separator();
-        input = input | self.camera.ui(ui);
+        let selected = self.pinned_object().map(|o| describe_object(&self.source.scene().scene, o));
+        input = input | self.camera.ui(ui, self.source.path(), selected.as_deref());
         ui.separator();
         input = input | self.image.ui(ui, &self.source.scene().clone());
         ui.horizontal(|ui| {
@@ -333,6 +381,7 @@ impl Viewer {
         }
         self.source.take_dropped(&ctx);
         let mut input = self.shortcuts(&ctx);
+        input = input | self.camera.fly_keys(&ctx, &self.source.scene().scene);
         if self.notice.as_ref().is_some_and(|n| n.at.elapsed() > NOTICE_FOR) {
             self.notice = None;
         }
@@ -361,6 +410,10 @@ impl Viewer {
             })
             .inner;
         input = input | view_input;
+        if self.camera.take_frame_request() {
+            input.changed |= self.frame_pinned();
+        }
+        self.camera.end_frame(&ctx);
         self.source.browser_ui(&ctx);
         self.help_ui(&ctx);
         if input.changed {
@@ -377,6 +430,22 @@ impl Viewer {
             screenshot.step(&ctx, self.scheduler.frame_is_final(), &self.outcome);
         }
     }
+}
+
+/// Where Save writes `typed`: a relative path is taken next to the scene
+/// file (the built-in scene, which has none, keeps the folder the viewer
+/// was started in); an absolute one as it is.
+fn save_path_for(typed: &str, scene_file: Option<&std::path::Path>) -> PathBuf {
+    let typed = PathBuf::from(typed);
+    match scene_file.and_then(|f| f.parent()) {
+        Some(dir) if typed.is_relative() => dir.join(typed),
+        _ => typed,
+    }
+}
+
+/// How the panel names object `index` of `scene`: "object 3 (sphere)".
+fn describe_object(scene: &rt_core::Scene, index: usize) -> String {
+    format!("object {index} ({})", scene.objects()[index].primitive.kind())
 }
 
 /// What pixel (x, y) of the `size` image of `scene` seen with `settings`

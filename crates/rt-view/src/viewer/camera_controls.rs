@@ -149,6 +149,43 @@ impl CameraSettings {
         self.accept(Self { fov_y, near, ..*self })
     }
 
+    /// The camera moved so that a sphere of `radius` about `center` fills
+    /// the view of an image `aspect` (width / height) wide, looking the same
+    /// way, the centre of interest on the sphere's centre. Perspective: the
+    /// eye backs off until the sphere touches the narrower of the vertical
+    /// and horizontal fields of view (distance `radius / sin(half angle)`).
+    /// Orthographic: the view is made as tall as the sphere (or as wide, on
+    /// a portrait image), the eye placed so that its view plane, where rays
+    /// start, is in front of the sphere. Refused (self unchanged) if no
+    /// valid camera does it.
+    pub fn framing(&self, center: Vec3, radius: Real, aspect: Real) -> Self {
+        let Some(direction) = (self.center_of_interest - self.position).try_normalize() else { return *self };
+        if !(radius > 0.0 && radius.is_finite() && aspect > 0.0 && aspect.is_finite()) {
+            return *self;
+        }
+        match self.projection {
+            Projection::Perspective => {
+                let half_y = 0.5 * self.fov_y.to_radians();
+                let half_x = (aspect * half_y.tan()).atan();
+                let distance = radius / half_y.min(half_x).sin();
+                self.accept(Self {
+                    position: center - distance * direction,
+                    center_of_interest: center,
+                    ..*self
+                })
+            }
+            Projection::Orthographic => {
+                let sized = self.with_view_height(2.0 * radius * Real::max(1.0, 1.0 / aspect));
+                let distance = sized.near + 1.01 * radius;
+                self.accept(Self {
+                    position: center - distance * direction,
+                    center_of_interest: center,
+                    ..sized
+                })
+            }
+        }
+    }
+
     /// The same view in another projection: what is in view at the centre
     /// of interest stays in view ([`CameraSettings::view_height`] is kept).
     pub fn with_projection(&self, projection: Projection) -> Self {
@@ -255,6 +292,30 @@ mod tests {
         assert_eq!(s.accept(down), s);
         // Zooming to distance zero.
         assert_eq!(s.zoom(0.0), s);
+    }
+
+    #[test]
+    fn framing_fits_the_sphere_to_the_narrower_field_of_view_and_keeps_the_view_direction() {
+        let s = settings();
+        let direction = (s.center_of_interest - s.position).normalize();
+        let center = Vec3::new(3.0, 1.0, 2.0);
+        let half_y = (0.5 * s.fov_y).to_radians();
+        for aspect in [2.0, 0.5] {
+            let f = s.framing(center, 1.5, aspect);
+            assert_eq!(f.center_of_interest, center);
+            let view = (f.center_of_interest - f.position).normalize();
+            assert!((view - direction).length() < 1e-5, "{aspect}: {view}");
+            // The sphere's edge is at the narrower half angle from the view direction.
+            let half = if aspect >= 1.0 { half_y } else { (aspect * half_y.tan()).atan() };
+            let distance = (f.position - center).length();
+            assert!((1.5 / distance - half.sin()).abs() < 1e-5, "{aspect}: {distance}");
+        }
+        let ortho = CameraSettings { projection: Projection::Orthographic, ..s };
+        let f = ortho.framing(center, 1.5, 0.5);
+        assert!((f.view_height() - 6.0).abs() < 1e-3, "{}", f.view_height());
+        // The view plane (where rays start) is in front of the sphere.
+        assert!((f.position - center).length() - f.near > 1.5);
+        assert_eq!(s.framing(center, 0.0, 1.0), s, "refused");
     }
 
     #[test]

@@ -6,7 +6,7 @@
 //!
 //! | input | does |
 //! |---|---|
-//! | drag | orbit the camera |
+//! | drag | orbit the camera (fly navigation: turn the view) |
 //! | shift-drag, right- or middle-drag | pan the camera |
 //! | wheel | zoom the camera |
 //! | ctrl + wheel | zoom the image about the cursor |
@@ -21,6 +21,7 @@ use egui::{Align2, Color32, FontId, PointerButton, Pos2, Rect, Sense, TextureHan
 use rt_core::Real;
 
 use super::camera_panel::CameraPanel;
+use super::fly;
 use super::interaction::Interaction;
 
 /// Radians of orbit per point of mouse movement.
@@ -68,6 +69,16 @@ impl ImageView {
     /// Forgets the pinned pixel.
     pub fn unpin(&mut self) {
         self.pinned = None;
+    }
+
+    /// The pinned pixel, if any.
+    pub fn pinned(&self) -> Option<[u32; 2]> {
+        self.pinned
+    }
+
+    /// Pins the inspection to `pixel`.
+    pub fn pin(&mut self, pixel: [u32; 2]) {
+        self.pinned = Some(pixel);
     }
 
     /// The zoom in force.
@@ -124,6 +135,10 @@ impl ImageView {
                 let k = s.world_per_pixel(rect.height() as Real) as f32;
                 s.pan((-delta.x * k) as Real, (delta.y * k) as Real)
             });
+        } else if response.dragged_by(PointerButton::Primary) && camera.flying() {
+            // Fly: the view turns the way the mouse moves.
+            let look = |d: f32| (d * fly::LOOK_PER_POINT) as Real;
+            changed |= camera.edit(|s| fly::look(&s, look(delta.x), look(-delta.y)));
         } else if response.dragged_by(PointerButton::Primary) {
             changed |= camera.edit(|s| {
                 s.orbit((-delta.x * ORBIT_PER_POINT) as Real, (-delta.y * ORBIT_PER_POINT) as Real)

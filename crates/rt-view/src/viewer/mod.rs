@@ -8,7 +8,9 @@
 //!   (path field, `file_browser`, drop, recent files), Reload, watching
 //!   its files ([`scene_watch`]) and load errors;
 //! - `camera_panel`: the camera controls, on top of the pure camera
-//!   functions of [`camera_controls`];
+//!   functions of [`camera_controls`]; fly navigation (`fly`), undo and
+//!   redo (`camera_history`), the camera saved into its scene file or
+//!   copied as RON (`camera_in_file`);
 //! - `image_settings`: resolution scale, samples per pixel, effect toggles;
 //! - `scheduler`: which render job runs (preview while dragging, full
 //!   resolution once still), and the image it streams into: each job
@@ -27,9 +29,12 @@
 
 mod app;
 pub mod camera_controls;
+mod camera_history;
+mod camera_in_file;
 mod camera_panel;
 pub mod canvas;
 mod file_browser;
+mod fly;
 mod image_settings;
 mod image_view;
 mod interaction;
