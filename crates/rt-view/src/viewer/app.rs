@@ -915,4 +915,174 @@ mod tests {
         assert_eq!(v.view.zoom(), super::super::image_view::Zoom::Fit);
         drop_textures(&ctx, v);
     }
+
+    /// A key pressed (`down`) or released with `modifiers` held.
+    fn key_with(key: Key, down: bool, modifiers: Modifiers) -> egui::Event {
+        egui::Event::Key { key, physical_key: None, pressed: down, repeat: false, modifiers }
+    }
+
+    #[test]
+    fn a_drag_on_the_image_is_one_undo_step_and_ctrl_z_and_ctrl_shift_z_undo_and_redo_it() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        let size = egui::vec2(1000.0, 700.0);
+        let original = *v.camera.settings();
+        let at = |x: f32| egui::pos2(600.0 + x, 300.0);
+        let button = |down| egui::Event::PointerButton {
+            pos: at(if down { 0.0 } else { 100.0 }),
+            button: egui::PointerButton::Primary,
+            pressed: down,
+            modifiers: Modifiers::NONE,
+        };
+        frame(&ctx, &mut v, size, vec![egui::Event::PointerMoved(at(0.0))]);
+        frame(&ctx, &mut v, size, vec![button(true)]);
+        // Ten frames of dragging: ten camera changes, one step.
+        for step in 1..=10 {
+            frame(&ctx, &mut v, size, vec![egui::Event::PointerMoved(at(10.0 * step as f32))]);
+        }
+        frame(&ctx, &mut v, size, vec![button(false)]);
+        frame(&ctx, &mut v, size, vec![]);
+        let dragged = *v.camera.settings();
+        assert_ne!(dragged, original, "the drag orbited");
+        let ctrl_z = key_with(Key::Z, true, Modifiers::COMMAND);
+        frame(&ctx, &mut v, size, vec![ctrl_z.clone()]);
+        assert_eq!(*v.camera.settings(), original, "one undo goes back to before the drag");
+        frame(&ctx, &mut v, size, vec![ctrl_z]);
+        assert_eq!(*v.camera.settings(), original, "nothing before it");
+        frame(&ctx, &mut v, size, vec![key_with(Key::Z, true, Modifiers::COMMAND | Modifiers::SHIFT)]);
+        assert_eq!(*v.camera.settings(), dragged, "Ctrl+Shift+Z redoes it");
+        frame(&ctx, &mut v, size, vec![key_with(Key::Z, true, Modifiers::COMMAND)]);
+        frame(&ctx, &mut v, size, vec![key_with(Key::Y, true, Modifiers::COMMAND)]);
+        assert_eq!(*v.camera.settings(), dragged, "and so does Ctrl+Y");
+        // Opening another scene starts a new history.
+        v.source.open(scenes().join("sphere.ron"), &ctx);
+        let change = v.source.wait_for_load(&ctx).unwrap();
+        v.scene_changed(&ctx, change);
+        let sphere = *v.camera.settings();
+        frame(&ctx, &mut v, size, vec![key_with(Key::Z, true, Modifiers::COMMAND)]);
+        assert_eq!(*v.camera.settings(), sphere);
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn held_fly_keys_move_the_camera_every_frame_and_stop_on_release() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        let size = egui::vec2(1000.0, 700.0);
+        let start = *v.camera.settings();
+        // In orbit mode W does nothing.
+        frame(&ctx, &mut v, size, vec![key_with(Key::W, true, Modifiers::NONE)]);
+        frame(&ctx, &mut v, size, vec![key_with(Key::W, false, Modifiers::NONE)]);
+        assert_eq!(*v.camera.settings(), start);
+        frame(&ctx, &mut v, size, vec![key(Key::V)]);
+        assert!(v.camera.flying());
+        frame(&ctx, &mut v, size, vec![key_with(Key::W, true, Modifiers::NONE)]);
+        let mut positions = vec![v.camera.settings().position];
+        for _ in 0..5 {
+            frame(&ctx, &mut v, size, vec![]);
+            positions.push(v.camera.settings().position);
+        }
+        let forward = (start.center_of_interest - start.position).normalize();
+        for pair in positions.windows(2) {
+            let step = pair[1] - pair[0];
+            assert!(step.length() > 0.0, "a held key moves the camera in every frame: {positions:?}");
+            assert!((step.normalize() - forward).length() < 1e-4, "along the view direction: {step}");
+        }
+        let moved = *v.camera.settings();
+        let offset = |s: &CameraSettings| s.center_of_interest - s.position;
+        assert!(
+            (offset(&moved) - offset(&start)).length() < 1e-4,
+            "the centre of interest moves with the eye"
+        );
+        frame(&ctx, &mut v, size, vec![key_with(Key::W, false, Modifiers::NONE)]);
+        let released = *v.camera.settings();
+        frame(&ctx, &mut v, size, vec![]);
+        assert_eq!(*v.camera.settings(), released, "released, the camera stays");
+        // The flight is one undo step.
+        frame(&ctx, &mut v, size, vec![key_with(Key::Z, true, Modifiers::COMMAND)]);
+        assert_eq!(*v.camera.settings(), start);
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn frame_fills_the_view_with_the_pinned_object_and_keeps_the_view_direction() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        let size = egui::vec2(1000.0, 700.0);
+        frame(&ctx, &mut v, size, vec![]);
+        // Pin the amber box: its object's pixel, found by casting.
+        let (w, h) = v.image.full_size(v.source.scene());
+        let view = ViewPlane::new(v.camera.settings().to_camera().unwrap(), w, h).unwrap();
+        let amber = (0..h)
+            .flat_map(|y| (0..w).map(move |x| [x, y]))
+            .find(|&[x, y]| {
+                v.source.scene().scene.cast(&view.center_ray(x, y)).is_some_and(|hit| hit.object == 1)
+            })
+            .expect("the amber box is in view");
+        v.view.pin(amber);
+        let before = *v.camera.settings();
+        frame(&ctx, &mut v, size, vec![key(Key::Period)]);
+        let after = *v.camera.settings();
+        let bounds = v.source.scene().scene.objects()[1].primitive.bounds().unwrap();
+        assert!((after.center_of_interest - bounds.center()).length() < 1e-4, "{after:?}");
+        let direction = |s: &CameraSettings| (s.center_of_interest - s.position).normalize();
+        assert!((direction(&after) - direction(&before)).length() < 1e-4);
+        assert_eq!(v.pinned_object(), Some(1), "the pin stays on the framed object");
+        // Nothing pinned: nothing to frame, and the window says so.
+        v.view.unpin();
+        frame(&ctx, &mut v, size, vec![key(Key::Period)]);
+        assert_eq!(*v.camera.settings(), after);
+        assert!(v.notice.as_ref().is_some_and(|n| n.text.starts_with("nothing to frame")));
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn the_camera_saved_into_the_scene_file_loads_again_and_its_reload_keeps_the_view() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("scene.ron");
+        let text = std::fs::read_to_string(scenes().join("sphere.ron")).unwrap();
+        std::fs::write(&path, &text).unwrap();
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(path.clone()));
+        v.camera.edit(|s| s.orbit(0.4, 0.2).zoom(0.7));
+        let edited = *v.camera.settings();
+        v.camera.save_to_file(&path);
+        assert_eq!(v.camera.message(), Some("saved the camera into scene.ron"));
+        assert_eq!(rt_core::load_scene(&path).unwrap().camera, edited.to_camera().unwrap());
+        // The view moves on before the reload that the write triggers arrives.
+        v.camera.edit(|s| s.orbit(0.1, 0.0));
+        let moved_on = *v.camera.settings();
+        reload(&mut v, &ctx);
+        assert_eq!(*v.camera.settings(), moved_on, "the reload kept the view");
+        assert_eq!(v.camera.file_settings(), edited, "Reset now goes to the saved camera");
+        // The comments are still there.
+        let saved = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(
+            saved.lines().filter(|l| l.contains("//")).count(),
+            text.lines().filter(|l| l.contains("//")).count()
+        );
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn save_writes_next_to_the_scene_file_and_the_built_in_scene_keeps_the_launch_folder() {
+        let scene = Path::new("/some/scenes/box.ron");
+        assert_eq!(save_path_for("render.png", Some(scene)), Path::new("/some/scenes/render.png"));
+        assert_eq!(save_path_for("out/x.png", Some(scene)), Path::new("/some/scenes/out/x.png"));
+        assert_eq!(save_path_for("/tmp/x.png", Some(scene)), Path::new("/tmp/x.png"));
+        assert_eq!(save_path_for("render.png", None), Path::new("render.png"));
+
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("scene.ron");
+        let text = std::fs::read_to_string(scenes().join("sphere.ron"))
+            .unwrap()
+            .replace("width: 320, height: 240", "width: 32, height: 24");
+        std::fs::write(&path, text).unwrap();
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(path));
+        finish_render(&ctx, &mut v);
+        v.save();
+        assert!(dir.path().join("render.png").is_file(), "{:?}", v.notice.as_ref().map(|n| &n.text));
+        drop_textures(&ctx, v);
+    }
 }
