@@ -129,14 +129,14 @@ impl CameraHistory {
 
 #[cfg(test)]
 mod tests {
-    use rt_core::{Projection, Vec3};
+    use rt_core::{Projection, Real, Vec3};
 
     use super::*;
 
     /// A camera at x = `x`.
-    fn at(x: f32) -> CameraSettings {
+    fn at(x: Real) -> CameraSettings {
         CameraSettings {
-            position: Vec3::new(x.into(), 0.0, -5.0),
+            position: Vec3::new(x, 0.0, -5.0),
             center_of_interest: Vec3::ZERO,
             up: Vec3::Y,
             fov_y: 40.0,
@@ -149,7 +149,7 @@ mod tests {
     fn a_drag_is_one_step_recorded_on_release() {
         let mut h = CameraHistory::new(at(0.0));
         for x in 1..=10 {
-            h.observe(at(x as f32), Some(Gesture::Pointer));
+            h.observe(at(x as Real), Some(Gesture::Pointer));
         }
         h.observe(at(10.0), None);
         assert_eq!(h.undo(at(10.0)), Some(at(0.0)));
@@ -207,9 +207,9 @@ mod tests {
     fn the_history_keeps_its_last_steps_only() {
         let mut h = CameraHistory::new(at(0.0));
         for x in 1..=(HISTORY_LENGTH + 20) {
-            h.observe(at(x as f32), None);
+            h.observe(at(x as Real), None);
         }
-        let mut camera = at((HISTORY_LENGTH + 20) as f32);
+        let mut camera = at((HISTORY_LENGTH + 20) as Real);
         let mut steps = 0;
         while let Some(c) = h.undo(camera) {
             camera = c;

@@ -286,11 +286,9 @@ fn tokens(text: &str) -> Result<Vec<Token>, CameraFileError> {
                 Kind::Str
             }
             _ => {
-                while i < b.len()
-                    && !b[i].is_ascii_whitespace()
-                    && !matches!(b[i], b'(' | b')' | b'[' | b']' | b'{' | b'}' | b':' | b',' | b'"')
-                    && !(b[i] == b'/' && matches!(b.get(i + 1), Some(b'/' | b'*')))
-                {
+                // The first byte is a word's (every other kind was matched above).
+                i += 1;
+                while !word_ends(b, i) {
                     i += 1;
                 }
                 Kind::Word
@@ -299,6 +297,15 @@ fn tokens(text: &str) -> Result<Vec<Token>, CameraFileError> {
         out.push(Token { kind, span: start..i });
     }
     Ok(out)
+}
+
+/// Whether a bare word (a name or a number) ends before byte `i`: at the
+/// end, whitespace, punctuation, a string or a comment.
+fn word_ends(b: &[u8], i: usize) -> bool {
+    let Some(&c) = b.get(i) else { return true };
+    c.is_ascii_whitespace()
+        || matches!(c, b'(' | b')' | b'[' | b']' | b'{' | b'}' | b':' | b',' | b'"')
+        || (c == b'/' && matches!(b.get(i + 1), Some(b'/' | b'*')))
 }
 
 /// One `name: value` of the camera block.

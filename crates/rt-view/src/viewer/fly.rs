@@ -39,8 +39,12 @@ pub struct FlyKeys {
 }
 
 impl FlyKeys {
-    /// The fly keys held in `input`.
+    /// The fly keys held in `input`; none while Ctrl (or Cmd) or Alt is
+    /// held, so that Ctrl+S saves rather than moves.
     pub fn held(input: &egui::InputState) -> Self {
+        if input.modifiers.command || input.modifiers.ctrl || input.modifiers.alt {
+            return Self::default();
+        }
         let axis = |plus, minus| {
             let down = |k| if input.key_down(k) { 1.0 } else { 0.0 };
             down(plus) - down(minus)
