@@ -965,6 +965,43 @@ mod tests {
     }
 
     #[test]
+    fn a_burst_of_wheel_turns_is_one_undo_step() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        let size = egui::vec2(1000.0, 700.0);
+        let over_image = egui::Event::PointerMoved(egui::pos2(600.0, 300.0));
+        let wheel = egui::Event::MouseWheel {
+            unit: egui::MouseWheelUnit::Point,
+            delta: egui::vec2(0.0, 40.0),
+            modifiers: Modifiers::NONE,
+            phase: egui::TouchPhase::Move,
+            source: egui::MouseWheelSource::Wheel,
+        };
+        let original = *v.camera.settings();
+        let mut burst = |v: &mut Viewer| {
+            // Three turns a few frames apart, then a second of stillness (egui's clock runs 1/60 s a frame).
+            for _ in 0..3 {
+                frame(&ctx, v, size, vec![over_image.clone(), wheel.clone()]);
+                for _ in 0..5 {
+                    frame(&ctx, v, size, vec![over_image.clone()]);
+                }
+            }
+            for _ in 0..60 {
+                frame(&ctx, v, size, vec![over_image.clone()]);
+            }
+            *v.camera.settings()
+        };
+        let first = burst(&mut v);
+        let second = burst(&mut v);
+        assert!(first != original && second != first, "the wheel zoomed");
+        frame(&ctx, &mut v, size, vec![key_with(Key::Z, true, Modifiers::COMMAND)]);
+        assert_eq!(*v.camera.settings(), first, "one undo takes back the whole second burst");
+        frame(&ctx, &mut v, size, vec![key_with(Key::Z, true, Modifiers::COMMAND)]);
+        assert_eq!(*v.camera.settings(), original);
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
     fn held_fly_keys_move_the_camera_every_frame_and_stop_on_release() {
         let ctx = egui::Context::default();
         let mut v = viewer(&ctx, Some(scenes().join("box.ron")));

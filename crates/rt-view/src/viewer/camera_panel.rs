@@ -235,6 +235,13 @@ impl CameraPanel {
         });
     }
 
+    /// Puts the camera on the clipboard as a scene file's `camera: ( … ),` line.
+    pub fn copy_as_ron(&mut self, ctx: &egui::Context) {
+        let text = camera_ron(&self.settings);
+        ctx.copy_text(text.clone());
+        self.message = Some(format!("copied {text}"));
+    }
+
     /// What Save to file or Copy did.
     #[cfg(test)]
     pub fn message(&self) -> Option<&str> {
@@ -368,9 +375,7 @@ impl CameraPanel {
                 self.save_to_file(path);
             }
             if ui.button("Copy as RON").on_hover_text("The camera block, for a scene file").clicked() {
-                let text = camera_ron(&self.settings);
-                ui.ctx().copy_text(text.clone());
-                self.message = Some(format!("copied {text}"));
+                self.copy_as_ron(ui.ctx());
             }
         });
         if let Some(message) = &self.message {
@@ -413,6 +418,26 @@ fn shown(value: f64, decimals: std::ops::RangeInclusive<usize>) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn copy_as_ron_puts_the_camera_block_on_the_clipboard() {
+        let ctx = egui::Context::default();
+        let mut panel = CameraPanel::new(&camera(Projection::Orthographic));
+        let mut output = ctx.run_ui(egui::RawInput::default(), |ui| panel.copy_as_ron(ui.ctx()));
+        output.textures_delta.clear();
+        let copied: Vec<_> = output
+            .platform_output
+            .commands
+            .iter()
+            .filter_map(|c| match c {
+                egui::OutputCommand::CopyText(text) => Some(text.as_str()),
+                _ => None,
+            })
+            .collect();
+        let expected = "camera: (position: (0, 1, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), \
+                        fov_y: 45, near: 1, projection: Orthographic),";
+        assert_eq!(copied, [expected]);
+    }
 
     #[test]
     fn a_value_that_rounds_to_zero_shows_no_minus_sign() {
