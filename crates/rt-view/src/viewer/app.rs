@@ -1002,6 +1002,35 @@ mod tests {
     }
 
     #[test]
+    fn the_keystrokes_typed_into_a_camera_field_are_one_undo_step() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        let size = egui::vec2(1000.0, 700.0);
+        let original = *v.camera.settings();
+        frame(&ctx, &mut v, size, vec![]);
+        // The position's x field (box.ron: -4), found on the panel as drawn.
+        let field = v.camera.field_rects()[0];
+        let click = |down| egui::Event::PointerButton {
+            pos: field.center(),
+            button: egui::PointerButton::Primary,
+            pressed: down,
+            modifiers: Modifiers::NONE,
+        };
+        frame(&ctx, &mut v, size, vec![egui::Event::PointerMoved(field.center()), click(true)]);
+        frame(&ctx, &mut v, size, vec![click(false)]);
+        frame(&ctx, &mut v, size, vec![key_with(Key::A, true, Modifiers::COMMAND)]);
+        for text in ["-", "2", ".", "5"] {
+            frame(&ctx, &mut v, size, vec![egui::Event::Text(text.into())]);
+        }
+        frame(&ctx, &mut v, size, vec![key(Key::Enter)]);
+        frame(&ctx, &mut v, size, vec![]);
+        assert_eq!(v.camera.settings().position.x, -2.5, "typed");
+        frame(&ctx, &mut v, size, vec![key_with(Key::Z, true, Modifiers::COMMAND)]);
+        assert_eq!(*v.camera.settings(), original, "one undo takes back the whole field");
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
     fn held_fly_keys_move_the_camera_every_frame_and_stop_on_release() {
         let ctx = egui::Context::default();
         let mut v = viewer(&ctx, Some(scenes().join("box.ron")));

@@ -54,6 +54,9 @@ pub(super) struct CameraPanel {
     frame_requested: bool,
     /// What Save to file or Copy did.
     message: Option<String>,
+    /// Where the position's fields were drawn (tests click them).
+    #[cfg(test)]
+    field_rects: [egui::Rect; 3],
 }
 
 impl CameraPanel {
@@ -69,6 +72,8 @@ impl CameraPanel {
             last_wheel: None,
             frame_requested: false,
             message: None,
+            #[cfg(test)]
+            field_rects: [egui::Rect::NOTHING; 3],
         }
     }
 
@@ -242,6 +247,12 @@ impl CameraPanel {
         self.message = Some(format!("copied {text}"));
     }
 
+    /// Where the position's x, y and z fields were last drawn.
+    #[cfg(test)]
+    pub fn field_rects(&self) -> [egui::Rect; 3] {
+        self.field_rects
+    }
+
     /// What Save to file or Copy did.
     #[cfg(test)]
     pub fn message(&self) -> Option<&str> {
@@ -321,10 +332,15 @@ impl CameraPanel {
             dragging |= r.dragged();
             ui.end_row();
             ui.label("position");
-            dragging |= vector_ui(ui, &mut s.position);
+            let (dragged, _rects) = vector_ui(ui, &mut s.position);
+            dragging |= dragged;
+            #[cfg(test)]
+            {
+                self.field_rects = _rects;
+            }
             ui.end_row();
             ui.label("look at");
-            dragging |= vector_ui(ui, &mut s.center_of_interest);
+            dragging |= vector_ui(ui, &mut s.center_of_interest).0;
             ui.end_row();
         });
         let mut projection = s.projection;
@@ -389,18 +405,21 @@ impl CameraPanel {
     }
 }
 
-/// Three drag values in a row; returns whether one is being dragged.
-fn vector_ui(ui: &mut egui::Ui, v: &mut Vec3) -> bool {
+/// Three drag values in a row; returns whether one is being dragged, and
+/// where the fields were drawn.
+fn vector_ui(ui: &mut egui::Ui, v: &mut Vec3) -> (bool, [egui::Rect; 3]) {
     ui.horizontal(|ui| {
         let speed = 0.01 * v.abs().max_element().max(1.0);
         let mut dragging = false;
-        for axis in 0..3 {
+        let mut rects = [egui::Rect::NOTHING; 3];
+        for (axis, rect) in rects.iter_mut().enumerate() {
             let value: &mut Real = &mut v[axis];
             let r = ui
                 .add(egui::DragValue::new(value).speed(speed).max_decimals(DECIMALS).custom_formatter(shown));
             dragging |= r.dragged();
+            *rect = r.rect;
         }
-        dragging
+        (dragging, rects)
     })
     .inner
 }
