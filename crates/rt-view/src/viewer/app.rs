@@ -978,7 +978,7 @@ mod tests {
             source: egui::MouseWheelSource::Wheel,
         };
         let original = *v.camera.settings();
-        let mut burst = |v: &mut Viewer| {
+        let burst = |v: &mut Viewer| {
             // Three turns a few frames apart, then a second of stillness (egui's clock runs 1/60 s a frame).
             for _ in 0..3 {
                 frame(&ctx, v, size, vec![over_image.clone(), wheel.clone()]);
