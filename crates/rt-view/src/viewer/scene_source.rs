@@ -118,6 +118,11 @@ impl SceneSource {
         &self.recent
     }
 
+    /// Whether a scene is being loaded.
+    pub fn is_loading(&self) -> bool {
+        self.loading.is_some()
+    }
+
     /// Why the last load failed, if it did.
     #[cfg(test)]
     pub fn error(&self) -> Option<&str> {
