@@ -185,7 +185,12 @@ fn runs(sources: &[u64]) -> Vec<[u64; 2]> {
 /// The zoom of the image drawn with `texture` on `layer` this frame, in
 /// percent: its width on screen in physical pixels per pixel of the
 /// `image_width` image, × 100 (`None` if it was not drawn).
-pub(super) fn drawn_zoom(ctx: &egui::Context, layer: LayerId, texture: TextureId, image_width: u32) -> Option<f32> {
+pub(super) fn drawn_zoom(
+    ctx: &egui::Context,
+    layer: LayerId,
+    texture: TextureId,
+    image_width: u32,
+) -> Option<f32> {
     let width = ctx.graphics(|g| {
         g.get(layer)?
             .all_entries()
