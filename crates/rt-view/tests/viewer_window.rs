@@ -215,7 +215,7 @@ impl<'a> Window<'a> {
                 "the window drew no frame for {:.1} s waiting for {what}",
                 frozen.as_secs_f64()
             );
-            assert!(start.elapsed().as_secs_f64() < seconds, "no {what} after {seconds} s");
+            assert!(start.elapsed().as_secs_f64() < seconds, "waited {seconds} s for {what}, in vain");
             std::thread::sleep(Duration::from_millis(20));
         }
     }
@@ -288,13 +288,13 @@ fn can_run() -> bool {
 }
 
 /// The first frame, if any, where a row of an older view is shown after a
-/// row of a newer view was: its index, the views it shows, and the newest
-/// view shown by then.
-fn first_mix(lines: &[Value]) -> Option<(usize, Vec<u64>, u64)> {
+/// row of a newer view was: its number, the views it shows (top to bottom,
+/// a view per run of rows), and the newest view shown by then.
+fn first_mix(lines: &[Value]) -> Option<(u64, Vec<u64>, u64)> {
     let view_of: std::collections::HashMap<u64, u64> =
         jobs(lines).iter().map(|j| (j.generation, j.view)).collect();
     let mut newest = 0;
-    for (i, frame) in frames(lines).enumerate() {
+    for frame in frames(lines) {
         let views: Vec<u64> = texture_runs(frame)
             .iter()
             .filter(|&&(g, _)| g != 0)
@@ -302,7 +302,7 @@ fn first_mix(lines: &[Value]) -> Option<(usize, Vec<u64>, u64)> {
             .collect();
         newest = views.iter().copied().fold(newest, u64::max);
         if views.iter().any(|&v| v < newest) {
-            return Some((i, views, newest));
+            return Some((frame["frame"].as_u64().unwrap(), views, newest));
         }
     }
     None
@@ -360,9 +360,9 @@ fn after_a_drag_or_the_wheel_no_row_of_an_older_view_is_shown_once_a_newer_one_i
     display.xdotool(&["click", "4", "sleep", "0.05", "click", "4", "sleep", "0.05", "click", "4"]);
     let lines = window.wait_for("the zoomed view's full render", 60.0, streaming(dragged));
 
-    if let Some((i, views, newest)) = first_mix(&lines) {
-        let frame = frames(&lines).nth(i).unwrap();
-        panic!("frame {i} shows rows of views {views:?} after view {newest} was shown: {frame}");
+    if let Some((n, views, newest)) = first_mix(&lines) {
+        let frame = frames(&lines).find(|f| f["frame"].as_u64() == Some(n)).unwrap();
+        panic!("frame {n} shows rows of views {views:?} after view {newest} was shown: {frame}");
     }
     let full_jobs: Vec<Job> = jobs(&lines).into_iter().filter(|j| j.full && j.generation > first).collect();
     assert!(full_jobs.len() >= 2, "a full render after the drag and after the wheel");
@@ -402,7 +402,7 @@ fn ctrl_and_the_wheel_magnify_the_image_past_100_percent() {
     }
     input.extend(["keyup", "ctrl"]);
     display.xdotool(&input);
-    let lines = window.wait_for("the image magnified past 100 %", 20.0, |lines| {
+    let lines = window.wait_for("the image magnified past 100 %", 10.0, |lines| {
         frames(lines).any(|f| f["zoom"].as_f64().is_some_and(|z| z > 100.0))
     });
     // The image zoomed, not the camera: no new render started.
@@ -475,7 +475,7 @@ fn loading_a_heavy_scene_mid_render_never_holds_up_a_frame() {
     };
     let (x, y) = window.image_centre();
     let hover = window.display.keep_moving_the_pointer(x, y);
-    let lines = window.wait_for("the heavy scene shown", 60.0, shown);
+    let lines = window.wait_for("the heavy scene shown", 30.0, shown);
     drop(hover);
     let new = jobs(&lines).into_iter().find(|j| j.size == [300, 200]).unwrap().generation;
     // The frames from the save to the first that shows the new scene's image.
