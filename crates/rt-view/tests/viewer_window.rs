@@ -308,14 +308,16 @@ fn first_mix(lines: &[Value]) -> Option<(u64, Vec<u64>, u64)> {
     None
 }
 
-/// Whether the full job `full` started over an unfinished image of its view
-/// (rows not yet drawn, or drawn by its preview, not by a finished image):
-/// the case where the old view's rows could stay below the new ones.
+/// Whether the full job `full` started before its view's preview was
+/// complete: its first frame shows rows not drawn yet, or rows of another
+/// view. That is the case where the old view's rows could stay below the
+/// new ones.
 fn started_over_an_unfinished_preview(lines: &[Value], full: &Job) -> bool {
-    frames(lines).find(|f| f["canvas"].as_u64() == Some(full.generation)).is_some_and(|f| {
-        let runs = texture_runs(f);
-        runs.iter().any(|&(g, _)| g == 0) || runs.iter().any(|&(g, _)| g != full.generation)
-    })
+    let view_of: std::collections::HashMap<u64, u64> =
+        jobs(lines).iter().map(|j| (j.generation, j.view)).collect();
+    frames(lines)
+        .find(|f| f["canvas"].as_u64() == Some(full.generation))
+        .is_some_and(|f| texture_runs(f).iter().any(|&(g, _)| g == 0 || view_of.get(&g) != Some(&full.view)))
 }
 
 #[test]
@@ -409,8 +411,9 @@ fn ctrl_and_the_wheel_magnify_the_image_past_100_percent() {
     assert_eq!(jobs(&lines).len(), 1, "the wheel with Ctrl moved the camera");
 }
 
-/// A scene that takes seconds to read and build its BVH: a 500 000-triangle
-/// grid in `dir/heavy.obj`; the scene's text, 300×200 pixels, 1 sample.
+/// A scene that takes a while to read and build its BVH (about a second
+/// alone on two debug-built cores, more beside a render): a 500 000-triangle
+/// grid in `dir/heavy.obj`. Returns the scene's text: 300×200 pixels, 1 sample.
 fn heavy_scene(dir: &Path) -> String {
     use std::fmt::Write;
     const N: u32 = 500;
