@@ -37,3 +37,30 @@ pub fn stdout(o: &Output) -> String {
 pub fn read_png(path: &Path) -> image::RgbImage {
     image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgb8()
 }
+
+/// Whether every program in `names` is installed (the window tests need
+/// an X server and more). When one is missing the test says so and skips,
+/// unless `RT_REQUIRE_XVFB` is set, as CI sets it: then it fails.
+pub fn have_programs(names: &[&str]) -> bool {
+    let missing: Vec<&str> = names
+        .iter()
+        .copied()
+        .filter(|name| {
+            let found = Command::new("sh").args(["-c", &format!("command -v {name}")]).output();
+            !found.is_ok_and(|o| o.status.success())
+        })
+        .collect();
+    if missing.is_empty() {
+        return true;
+    }
+    assert!(
+        std::env::var_os("RT_REQUIRE_XVFB").is_none(),
+        "RT_REQUIRE_XVFB is set but {} not installed",
+        missing.join(", ")
+    );
+    eprintln!(
+        "SKIPPED: {} not installed (apt-get install xvfb xdotool libgl1-mesa-dri ...)",
+        missing.join(", ")
+    );
+    false
+}

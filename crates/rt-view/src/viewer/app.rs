@@ -24,6 +24,7 @@ use super::render_job::{JobSpec, RenderJob};
 use super::scene_source::{SceneChange, SceneSource, load};
 use super::scheduler::{Kind, Scheduler};
 use super::screenshot::{Outcome, Screenshot};
+use super::trace::{self, Trace};
 use crate::image_out::PendingImage;
 
 /// How the viewer is started.
@@ -116,6 +117,8 @@ pub struct Viewer {
     show_help: bool,
     screenshot: Option<Screenshot>,
     outcome: Outcome,
+    /// The frame-by-frame trace `RT_VIEW_TRACE` asks for (tests of the window).
+    trace: Option<Trace>,
     /// Where Save PNG was last drawn (tests check that it can be reached).
     #[cfg(test)]
     save_button: Option<egui::Rect>,
@@ -155,6 +158,7 @@ impl Viewer {
             show_help: false,
             screenshot: screenshot.map(Screenshot::new),
             outcome,
+            trace: Trace::from_env(),
             #[cfg(test)]
             save_button: None,
         };
@@ -489,9 +493,39 @@ fn inspect(
     lines.join("\n")
 }
 
+impl Viewer {
+    /// Appends the frame that began at `began` and took `update` (and the
+    /// job it rendered, if new) to the trace; a trace that cannot be written
+    /// stops, with a warning.
+    fn trace_frame(&mut self, ui: &egui::Ui, began: Instant, update: Duration) {
+        let Some(trace) = &mut self.trace else { return };
+        let (width, _) = self.image.full_size(self.source.scene());
+        let texture = self.scheduler.texture().map(egui::TextureHandle::id);
+        let zoom = texture.and_then(|t| trace::drawn_zoom(ui.ctx(), ui.layer_id(), t, width));
+        let frame = trace::Frame {
+            scene: self.source.path(),
+            loading: self.source.is_loading(),
+            zoom,
+            canvas: self.scheduler.canvas(),
+        };
+        let written = match self.scheduler.job() {
+            Some((job, preview)) => trace.job(job, preview),
+            None => Ok(()),
+        };
+        if let Err(e) = written.and_then(|()| trace.frame(began, update, frame)) {
+            eprintln!("warning: {e}; tracing stops");
+            self.trace = None;
+        }
+    }
+}
+
 impl eframe::App for Viewer {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let began = Instant::now();
         self.frame(ui);
+        if self.trace.is_some() {
+            self.trace_frame(ui, began, began.elapsed());
+        }
     }
 
     /// Called when the window closes and every 30 s.

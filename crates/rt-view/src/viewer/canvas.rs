@@ -38,6 +38,10 @@ pub struct Canvas {
     display: Vec<Color32>,
     /// Display rows changed since the last upload, in arrival order.
     pending: Vec<u32>,
+    /// Per display row, the generation whose pixels it shows: this canvas's
+    /// own, an older one's carried over by [`Canvas::replacing`], or 0 for a
+    /// row no job has drawn yet (the window's trace reports it).
+    sources: Vec<u64>,
 }
 
 impl Canvas {
@@ -59,6 +63,7 @@ impl Canvas {
             factor,
             display: vec![Color32::BLACK; dw as usize * dh as usize],
             pending: Vec::new(),
+            sources: vec![0; dh as usize],
         }
     }
 
@@ -77,6 +82,7 @@ impl Canvas {
             let [pw, ph] = p.display_size();
             for y in 0..dh {
                 let sy = y * ph / dh;
+                canvas.sources[y] = p.sources[sy];
                 for x in 0..dw {
                     canvas.display[y * dw + x] = p.display[sy * pw + x * pw / dw];
                 }
@@ -110,6 +116,12 @@ impl Canvas {
     pub fn pixel(&self, x: u32, y: u32) -> Option<Color32> {
         (x < self.width && y < self.height)
             .then(|| self.pixels[y as usize * self.width as usize + x as usize])
+    }
+    /// Per display row, the job generation whose pixels it shows (this
+    /// canvas's, or an older one's carried over from the image it replaced);
+    /// 0 where no job has drawn yet.
+    pub fn display_sources(&self) -> &[u64] {
+        &self.sources
     }
     /// How many distinct rows have arrived.
     pub fn rows_done(&self) -> u32 {
@@ -147,6 +159,7 @@ impl Canvas {
                 }
             }
             self.pending.push(dy as u32);
+            self.sources[dy] = self.generation;
         }
         true
     }
@@ -215,6 +228,26 @@ mod tests {
         assert!(c.pixels().iter().all(|&p| p == Color32::TRANSPARENT));
         assert!(c.apply(&row(2, 0, 4, Color32::RED)));
         assert_eq!(c.rows_done(), 1);
+    }
+
+    #[test]
+    fn each_display_row_tells_which_generation_it_shows() {
+        let mut old = Canvas::new(1, 2, 2, 4096);
+        old.apply(&row(1, 0, 2, Color32::RED));
+        assert_eq!(old.display_sources(), [1, 0]);
+        // Twice the height: rows carried over keep the old generation, rows
+        // the old image had not drawn stay blank (0).
+        let mut new = Canvas::replacing(Some(&old), 2, 2, 4, 4096);
+        assert_eq!(new.display_sources(), [1, 1, 0, 0]);
+        new.apply(&row(2, 3, 2, Color32::BLUE));
+        new.apply(&row(2, 0, 2, Color32::BLUE));
+        assert!(!new.apply(&row(1, 2, 2, Color32::RED)));
+        assert_eq!(new.display_sources(), [2, 1, 0, 2]);
+        // A downsampled display: only the rows shown on it count.
+        let mut huge = Canvas::new(3, 8192, 4, 4096);
+        huge.apply(&row(3, 1, 8192, Color32::RED));
+        huge.apply(&row(3, 2, 8192, Color32::RED));
+        assert_eq!(huge.display_sources(), [0, 3]);
     }
 
     #[test]

@@ -19,6 +19,8 @@
 //! - `image_view`: the image on screen (fit, 1:1, zoom), orbit, pan and
 //!   zoom with the mouse, and pixel inspection;
 //! - `screenshot`: `--screenshot`, saving the window once the frame is done;
+//! - `trace`: with `RT_VIEW_TRACE=FILE`, a line per frame and per job of
+//!   what the window did and shows, for the tests that drive it;
 //! - `remembered`: what the viewer remembers between runs (recent files,
 //!   the panel, the resolution scale, the last scene and its camera), one
 //!   value saved through eframe's storage beside the window's size and place.
@@ -44,6 +46,7 @@ mod scene_source;
 pub mod scene_watch;
 mod scheduler;
 mod screenshot;
+mod trace;
 
 use std::sync::{Arc, Mutex};
 

@@ -9,7 +9,8 @@
 //!
 //! A scene is loaded on a thread of its own, so the window never waits for
 //! it: reading the files and building the BVH can take seconds, and the
-//! BVH build shares rayon's threads with the render still running. The
+//! BVH build runs beside the render still running, on rayon threads of its
+//! own ([`load_apart`]). The
 //! window keeps showing the current scene, says what is loading, and takes
 //! the new scene on the first frame after it is ready ([`SceneSource::poll`]).
 
@@ -35,6 +36,17 @@ pub fn load(path: Option<&Path>) -> Result<LoadedScene, rt_core::SceneError> {
     match path {
         Some(p) => rt_core::load_scene(p),
         None => rt_core::parse_scene(DEFAULT_SCENE, DEFAULT_SCENE_NAME, Path::new(".")),
+    }
+}
+
+/// [`load`] on a rayon pool of its own, not the global one: a render keeps
+/// every thread of the global pool busy until its last pass ends, and the
+/// BVH build would wait for all of it. On its own pool the build shares the
+/// cores with the render instead.
+fn load_apart(path: Option<&Path>) -> Result<LoadedScene, rt_core::SceneError> {
+    match rayon::ThreadPoolBuilder::new().thread_name(|i| format!("scene-load-{i}")).build() {
+        Ok(pool) => pool.install(|| load(path)),
+        Err(_) => load(path),
     }
 }
 
@@ -118,6 +130,11 @@ impl SceneSource {
         &self.recent
     }
 
+    /// Whether a scene is being loaded.
+    pub fn is_loading(&self) -> bool {
+        self.loading.is_some()
+    }
+
     /// Why the last load failed, if it did.
     #[cfg(test)]
     pub fn error(&self) -> Option<&str> {
@@ -173,7 +190,7 @@ impl SceneSource {
         let (file, repaint) = (path.clone(), ctx.clone());
         let spawned = std::thread::Builder::new().name("scene-load".to_owned()).spawn(move || {
             // The receiver may be gone (another load started): nothing to tell.
-            let _ = send.send(load(file.as_deref()));
+            let _ = send.send(load_apart(file.as_deref()));
             repaint.request_repaint();
         });
         match spawned {
@@ -321,5 +338,48 @@ impl SceneSource {
                     }
                 });
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    use super::*;
+
+    #[test]
+    fn a_scene_loads_while_a_render_keeps_every_rayon_thread_busy() {
+        // A render holds each thread of rayon's global pool until its last
+        // pass ends (render_job's broadcast). Before, the load's BVH build
+        // queued behind it: the new scene came only once the render ended.
+        let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+        let ctx = egui::Context::default();
+        let mut source = SceneSource::new(None, load(None).unwrap(), RecentFiles::default(), &ctx);
+        let busy = Arc::new(AtomicBool::new(true));
+        let hog = {
+            let busy = busy.clone();
+            std::thread::spawn(move || {
+                rayon::broadcast(|_| {
+                    while busy.load(Ordering::Relaxed) {
+                        std::thread::sleep(Duration::from_millis(1));
+                    }
+                })
+            })
+        };
+        source.open(scenes.join("mesh.ron"), &ctx);
+        let deadline = Instant::now() + Duration::from_secs(10);
+        let change = loop {
+            if let Some(change) = source.poll(&ctx) {
+                break Some(change);
+            }
+            if Instant::now() > deadline || source.error.is_some() {
+                break None;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        };
+        busy.store(false, Ordering::Relaxed);
+        hog.join().unwrap();
+        assert!(change.is_some(), "the scene did not load while the pool was busy: {:?}", source.error);
+        assert!(source.path().is_some_and(|p| p.ends_with("mesh.ron")));
     }
 }

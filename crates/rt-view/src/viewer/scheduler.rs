@@ -229,6 +229,11 @@ impl Scheduler {
         (self.shown.as_ref()?.generation() == job.generation()).then_some(job)
     }
 
+    /// The job in flight (or finished), and whether it is a preview.
+    pub fn job(&self) -> Option<(&RenderJob, bool)> {
+        Some((self.job.as_ref()?, self.job_is_preview))
+    }
+
     /// The texture the image is uploaded to.
     pub fn texture(&self) -> Option<&TextureHandle> {
         self.texture.as_ref()
