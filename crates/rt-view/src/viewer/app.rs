@@ -180,7 +180,8 @@ impl Viewer {
         let camera = self.camera.settings().to_camera().ok()?;
         let (width, height) = self.image.full_size(scene);
         let toggles = self.image.toggles();
-        Some(JobSpec { scene: scene.clone(), camera, width, height, spp: self.image.spp(), toggles })
+        let (spp, open_ended) = (self.image.spp(), self.image.no_limit());
+        Some(JobSpec { scene: scene.clone(), camera, width, height, spp, open_ended, region: None, toggles })
     }
 
     /// Starts a job of `kind` now.
@@ -208,8 +209,11 @@ impl Viewer {
     fn scene_changed(&mut self, ctx: &egui::Context, change: SceneChange) {
         let scene = self.source.scene().clone();
         self.camera.scene_loaded(&scene.camera, change.opened);
-        self.image.scene_loaded(&scene, &change.previous, change.opened);
+        let scale_note = self.image.scene_loaded(&scene, &change.previous, change.opened);
         self.notice = None;
+        if let Some(note) = scale_note {
+            self.notify(note);
+        }
         self.view.unpin();
         self.start(ctx, Kind::NewScene);
     }
@@ -349,7 +353,8 @@ impl Viewer {
                     })
                     .inner;
         }
-        egui::Panel::bottom("status").show(ui, |ui| self.scheduler.status_ui(ui));
+        let target = self.image.target_spp();
+        egui::Panel::bottom("status").show(ui, |ui| self.scheduler.status_ui(ui, target));
         let size = self.image.full_size(self.source.scene());
         let texture = self.scheduler.texture().cloned();
         let (view_input, magnified) = egui::CentralPanel::default()

@@ -12,6 +12,10 @@
 //! two); the full-resolution job of the same view then streams its rows
 //! over it (over the preview as far as it got, black below, if the full job
 //! starts before the preview finished); a new scene starts from black.
+//!
+//! A region render ([`Scheduler::start_region`]) renders a rectangle of the
+//! image on screen again: its rows go into the same canvas, the rest of the
+//! image stays as it was. Any other job ends it.
 
 use std::time::{Duration, Instant};
 
@@ -19,7 +23,8 @@ use egui::{TextureHandle, TextureOptions};
 
 use super::canvas::Canvas;
 use super::interaction::Interaction;
-use super::render_job::{JobSpec, RenderJob};
+use super::region::Region;
+use super::render_job::{JobSpec, RenderJob, Row};
 
 /// Preview jobs render at 1/PREVIEW_DIVISOR of the width and height.
 pub const PREVIEW_DIVISOR: u32 = 4;
@@ -62,6 +67,18 @@ pub(super) struct Scheduler {
     refine_pending: bool,
     last_change: Option<Instant>,
     last_full: Option<FrameStats>,
+}
+
+/// `seconds` as the status line shows it: "4.2 s", "3 min 05 s", "2 h 07 min".
+pub(super) fn duration_text(seconds: f64) -> String {
+    let s = seconds.max(0.0);
+    if s < 60.0 {
+        format!("{s:.1} s")
+    } else if s < 3600.0 {
+        format!("{} min {:02} s", (s / 60.0) as u64, (s % 60.0) as u64)
+    } else {
+        format!("{} h {:02} min", (s / 3600.0) as u64, (s % 3600.0 / 60.0) as u64)
+    }
 }
 
 impl Scheduler {
@@ -109,6 +126,8 @@ impl Scheduler {
         }
         if kind == Kind::NewScene {
             self.refine_pending = false;
+            // The figures were the old scene's.
+            self.last_full = None;
         }
         let (width, height) = (spec.width, spec.height);
         self.next_generation += 1;
@@ -137,6 +156,52 @@ impl Scheduler {
             }
         }
         Ok(())
+    }
+
+    /// Renders `region` of the full-resolution image on screen again with
+    /// `spec` (the current view's full job): the job in flight stops, its
+    /// rows go into the image on screen, and the rest of the image stays
+    /// as it was. Refused while no full-resolution image of the current
+    /// view is on screen (a preview, or a region that does not fit).
+    pub fn start_region(
+        &mut self,
+        ctx: &egui::Context,
+        mut spec: JobSpec,
+        region: Region,
+    ) -> Result<(), String> {
+        let Some(canvas) = &self.shown else { return Err("no image to render a region of".into()) };
+        // Every row of the full image once, so the rest stays as it is.
+        let on_screen = canvas.size() == [spec.width as usize, spec.height as usize] && canvas.is_complete();
+        if self.job_is_preview || self.pending.is_some() || self.refine_pending || !on_screen {
+            return Err("a region renders once the full image's first pass is on screen; try again".into());
+        }
+        spec.region = Some(region);
+        // The canvas's own generation: its rows are this image's.
+        let generation = canvas.generation();
+        let repaint = ctx.clone();
+        let job = RenderJob::start(spec, generation, move || repaint.request_repaint())
+            .map_err(|e| format!("cannot render the region: {e}"))?;
+        self.job = Some(job);
+        Ok(())
+    }
+
+    /// The region being rendered or rendered last, if the image on screen has one.
+    pub fn region(&self) -> Option<&Region> {
+        self.shown_job()?.spec().region.as_ref()
+    }
+
+    /// Ends the job in flight as it stands (a render with no sample limit
+    /// ends only so): what is on screen becomes the finished image once its
+    /// last rows arrive, if every row has arrived once.
+    pub fn stop(&mut self) {
+        if let Some(job) = &self.job {
+            job.stop();
+        }
+    }
+
+    /// Whether a job is in flight that [`Scheduler::stop`] would end.
+    pub fn can_stop(&self) -> bool {
+        self.job.as_ref().is_some_and(|j| j.elapsed().is_none() && !j.stopped() && j.failure().is_none())
     }
 
     /// Puts `canvas` on screen, in a new texture if the size changed.
@@ -180,7 +245,12 @@ impl Scheduler {
     /// a preview that is complete goes on screen.
     pub fn apply_rows(&mut self, ctx: &egui::Context) {
         let Some(job) = &self.job else { return };
+        let region_start = job.spec().region.as_ref().map(|r| r.columns.start as usize);
         for row in job.try_rows() {
+            if let (Some(x), Some(c)) = (region_start, &mut self.shown) {
+                c.apply(&whole_row(c, x, row));
+                continue;
+            }
             let applied = self.pending.as_mut().is_some_and(|c| c.apply(&row));
             if !applied && let Some(c) = &mut self.shown {
                 c.apply(&row);
@@ -197,11 +267,11 @@ impl Scheduler {
             && !self.job_is_preview
             && canvas.generation() == job_generation(&self.job)
             && let Some(job) = &self.job
+            && job.spec().region.is_none()
             && let Some(elapsed) = job.elapsed()
         {
             let rays = job.rays() as f64;
-            let spec = job.spec();
-            let samples = spec.width as f64 * spec.height as f64 * spec.spp as f64;
+            let samples = job.pixel_samples() as f64;
             let seconds = elapsed.as_secs_f64().max(1e-9);
             self.last_full = Some(FrameStats {
                 seconds,
@@ -243,19 +313,41 @@ impl Scheduler {
             && self.job.as_ref().is_some_and(|j| j.elapsed().is_some())
     }
 
-    /// The status line: progress of the job in flight (pass, rows, time,
-    /// the pass's remaining time, rays per second) and the last full frame.
-    pub fn status_ui(&self, ui: &mut egui::Ui) {
+    /// The status line: a Stop button while a job runs, its progress
+    /// (pass, samples per pixel so far, rows, time, the time to the pass's
+    /// end, to the last pass's and to `target` samples per pixel, rays per
+    /// second) and the last full frame.
+    pub fn status_ui(&mut self, ui: &mut egui::Ui, target: Option<u32>) {
+        ui.horizontal(|ui| {
+            if self.can_stop()
+                && ui.button("Stop").on_hover_text("Space: keep the image as it stands").clicked()
+            {
+                self.stop();
+            }
+            ui.label(self.status_text(target));
+        });
+    }
+
+    /// The text of the status line ([`Scheduler::status_ui`]).
+    pub fn status_text(&self, target: Option<u32>) -> String {
         let mut parts = Vec::new();
         if let Some(job) = &self.job {
             let spec = job.spec();
-            let kind = if self.job_is_preview { "preview" } else { "full" };
+            let kind = match (self.job_is_preview, &spec.region) {
+                (true, _) => "preview".to_owned(),
+                (false, None) => "full".to_owned(),
+                (false, Some(r)) => format!("region {}×{} of", r.width(), r.height()),
+            };
             let p = job.progress();
+            let limit = if p.open_ended { " no limit,".to_owned() } else { String::new() };
             if job.elapsed().is_some() {
-                parts.push(format!("{kind} {}×{} done, {} spp", spec.width, spec.height, spec.spp));
+                let how = if job.stopped() { "stopped" } else { "done" };
+                parts.push(format!("{kind} {}×{}{limit} {how}, {} spp", spec.width, spec.height, p.spp));
             } else {
-                let mut s = format!("{kind} {}×{}", spec.width, spec.height);
-                if p.passes > 1 {
+                let mut s = format!("{kind} {}×{}{limit} {} spp", spec.width, spec.height, p.spp);
+                if p.open_ended {
+                    s += &format!(", pass {} ({}–{} spp)", p.pass + 1, p.samples.start, p.samples.end);
+                } else if p.passes > 1 {
                     s += &format!(
                         ", pass {}/{} ({}–{} spp)",
                         p.pass + 1,
@@ -264,9 +356,19 @@ impl Scheduler {
                         p.samples.end
                     );
                 }
-                s += &format!(", rows {}/{}, {:.1} s", p.rows, p.height, p.elapsed.as_secs_f64());
-                if let Some(eta) = p.pass_eta {
-                    s += &format!(", pass ends in {:.1} s", eta.as_secs_f64());
+                s += &format!(", rows {}/{}, {}", p.rows, p.height, duration_text(p.elapsed.as_secs_f64()));
+                match p.pass_eta {
+                    Some(eta) => s += &format!(", pass ends in {}", duration_text(eta.as_secs_f64())),
+                    None if p.pass == 0 && !self.job_is_preview => s += ", estimating the time left",
+                    None => {}
+                }
+                if let Some(eta) = p.eta.filter(|_| p.passes > p.pass + 1) {
+                    s += &format!(", done in {}", duration_text(eta.as_secs_f64()));
+                }
+                if let Some(target) = target.filter(|&t| t > p.spp && !self.job_is_preview)
+                    && let Some(eta) = job.eta_to(target)
+                {
+                    s += &format!(", {target} spp in {}", duration_text(eta.as_secs_f64()));
                 }
                 s += &format!(", {:.2} Mrays/s", p.rays_per_second / 1e6);
                 parts.push(s);
@@ -279,8 +381,20 @@ impl Scheduler {
             )),
             None => parts.push("last full frame: —".into()),
         }
-        ui.label(parts.join("  ·  "));
+        parts.join("  ·  ")
     }
+}
+
+/// `row`, `x` columns in, as a whole row of `canvas` (its other pixels as
+/// they are on screen): a region job's rows applied to the image.
+fn whole_row(canvas: &Canvas, x: usize, row: Row) -> Row {
+    let [width, _] = canvas.size();
+    let y = row.y as usize;
+    let mut pixels = canvas.pixels().get(y * width..(y + 1) * width).unwrap_or_default().to_vec();
+    if let Some(span) = pixels.get_mut(x..x + row.pixels.len()) {
+        span.copy_from_slice(&row.pixels);
+    }
+    Row { pixels, ..row }
 }
 
 /// The generation of `job`, or 0 (no canvas has it) without one.
@@ -306,7 +420,16 @@ mod tests {
             c.projection(),
         )
         .unwrap();
-        JobSpec { scene, camera, width: 160, height: 90, spp: 1, toggles: Default::default() }
+        JobSpec {
+            scene,
+            camera,
+            width: 160,
+            height: 90,
+            spp: 1,
+            open_ended: false,
+            region: None,
+            toggles: Default::default(),
+        }
     }
 
     fn wait(
