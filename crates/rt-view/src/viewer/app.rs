@@ -19,6 +19,7 @@ use super::camera_panel::CameraPanel;
 use super::image_settings::ImageSettings;
 use super::image_view::ImageView;
 use super::interaction::Interaction;
+use super::region::Region;
 use super::remembered::{LastScene, Remembered, absolute};
 use super::render_job::{JobSpec, RenderJob};
 use super::scene_source::{SceneChange, SceneSource, load};
@@ -87,6 +88,9 @@ pub const SHORTCUTS: &[(&str, &str)] = &[
     ("Ctrl+O", "open a scene file"),
     ("F5", "reload the scene file"),
     ("P", "show or hide the side panel"),
+    ("Space", "stop the render, keeping the image as it stands (the way a no-limit render ends)"),
+    ("B", "region tool: the next drag on the image renders only that rectangle (B again: cancel)"),
+    ("Shift+B", "clear the region: render the whole image again"),
     ("F1 or ?", "show or hide this help"),
     ("Esc", "unpin the inspected pixel, close this help"),
 ];
@@ -218,6 +222,53 @@ impl Viewer {
         self.start(ctx, Kind::NewScene);
     }
 
+    /// Renders `region` of the image on screen again (the rest stays).
+    fn render_region(&mut self, ctx: &egui::Context, corners: [[f32; 2]; 2]) {
+        let Some(spec) = self.job_spec() else { return };
+        let Some(region) = Region::spanning(corners[0], corners[1], spec.width, spec.height) else {
+            self.notify("no region: the rectangle misses the image".into());
+            return;
+        };
+        if let Err(e) = self.scheduler.start_region(ctx, spec, region) {
+            self.notify(e);
+        }
+    }
+
+    /// Ends a region render: the whole image renders again.
+    fn clear_region(&mut self, ctx: &egui::Context) {
+        if self.scheduler.region().is_some() {
+            self.start(ctx, Kind::Full);
+        }
+    }
+
+    /// The region row of the side panel: the tool, and Clear.
+    fn region_ui(&mut self, ui: &mut egui::Ui) {
+        let ctx = ui.ctx().clone();
+        ui.horizontal(|ui| {
+            let tool = self.view.region_tool();
+            if ui
+                .selectable_label(tool, "Region")
+                .on_hover_text("B: drag a rectangle on the image to render only it")
+                .clicked()
+            {
+                self.view.toggle_region_tool();
+            }
+            let region = self.scheduler.region().cloned();
+            if ui
+                .add_enabled(region.is_some(), egui::Button::new("Clear region"))
+                .on_hover_text("Shift+B")
+                .clicked()
+            {
+                self.clear_region(&ctx);
+            }
+            if let Some(r) = region {
+                ui.small(format!("{}×{} at ({}, {})", r.width(), r.height(), r.columns.start, r.rows.start));
+            } else if tool {
+                ui.small("drag on the image");
+            }
+        });
+    }
+
     /// Writes the finished image to the Save path, atomically.
     fn save(&mut self) {
         let Some(canvas) = self.scheduler.canvas().filter(|_| self.scheduler.frame_is_final()) else {
@@ -266,6 +317,15 @@ impl Viewer {
         if pressed(Key::P) {
             self.show_panel = !self.show_panel;
         }
+        if pressed(Key::Space) {
+            self.scheduler.stop();
+        }
+        if pressed(Key::B) {
+            self.view.toggle_region_tool();
+        }
+        if ctx.input_mut(|i| i.consume_shortcut(&KeyboardShortcut::new(Modifiers::SHIFT, Key::B))) {
+            self.clear_region(ctx);
+        }
         if pressed(Key::F1)
             || ctx.input(|i| i.events.iter().any(|e| matches!(e, egui::Event::Text(t) if t == "?")))
         {
@@ -285,6 +345,7 @@ impl Viewer {
         input = input | self.camera.ui(ui);
         ui.separator();
         input = input | self.image.ui(ui, &self.source.scene().clone());
+        self.region_ui(ui);
         ui.horizontal(|ui| {
             ui.add(egui::TextEdit::singleline(&mut self.save_path).desired_width(170.0));
             let ready = self.scheduler.frame_is_final();
@@ -306,7 +367,7 @@ impl Viewer {
             ui.label(&n.text);
         }
         ui.separator();
-        ui.small("Drag: orbit · Shift/right drag: pan · Wheel: zoom\nCtrl+wheel, Ctrl+drag: zoom and pan the image\nF1: all shortcuts");
+        ui.small("Drag: orbit · Shift/right drag: pan · Wheel: zoom\nCtrl+wheel, Ctrl+drag: zoom and pan the image\nSpace: stop · B: region · F1: all shortcuts");
         input
     }
 
@@ -362,10 +423,14 @@ impl Viewer {
                 let (scene, scheduler) = (self.source.scene().clone(), &self.scheduler);
                 let settings = *self.camera.settings();
                 let inspect = |p| inspect(&scene, &settings, size, scheduler.shown_job(), p);
+                self.view.outline_region(scheduler.region().cloned());
                 self.view.ui(ui, texture.as_ref(), size, &mut self.camera, inspect)
             })
             .inner;
         input = input | view_input;
+        if let Some(corners) = self.view.take_dragged_region() {
+            self.render_region(&ctx, corners);
+        }
         self.source.browser_ui(&ctx);
         self.help_ui(&ctx);
         if input.changed {

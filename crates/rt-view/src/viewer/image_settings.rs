@@ -203,3 +203,81 @@ fn effect_box(
         None => response,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use egui::accesskit::Toggled;
+    use std::path::Path;
+
+    fn scene(name: &str) -> LoadedScene {
+        rt_core::load_scene(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes").join(name)).unwrap()
+    }
+
+    /// Each checkbox of the panel drawn for `scene`, by label: (ticked, enabled).
+    fn checkboxes(settings: &mut ImageSettings, scene: &LoadedScene) -> Vec<(String, bool, bool)> {
+        let ctx = egui::Context::default();
+        ctx.enable_accesskit();
+        let mut output = ctx.run_ui(egui::RawInput::default(), |ui| {
+            settings.ui(ui, scene);
+        });
+        output.textures_delta.clear();
+        ctx.tex_manager().write().take_delta().clear();
+        let update = output.platform_output.accesskit_update.expect("accesskit is on");
+        update
+            .nodes
+            .iter()
+            .filter_map(|(_, node)| {
+                let ticked = node.toggled()?;
+                Some((node.label()?.to_owned(), ticked == Toggled::True, !node.is_disabled()))
+            })
+            .collect()
+    }
+
+    fn state<'a>(boxes: &'a [(String, bool, bool)], label: &str) -> (bool, bool) {
+        let (_, ticked, enabled) =
+            boxes.iter().find(|(l, ..)| l == label).unwrap_or_else(|| panic!("{label}: {boxes:?}"));
+        (*ticked, *enabled)
+    }
+
+    #[test]
+    fn effects_the_scene_does_not_use_are_shown_unticked_and_disabled_and_the_users_choice_stays() {
+        // Before, effects.ron showed "global illumination" greyed out but ticked.
+        let effects = scene("effects.ron");
+        let mut settings = ImageSettings::new(&effects);
+        let boxes = checkboxes(&mut settings, &effects);
+        assert_eq!(state(&boxes, "global illumination"), (false, false));
+        assert_eq!(state(&boxes, "subsurface"), (false, false));
+        assert_eq!(state(&boxes, "shadows"), (true, true));
+        // A scene that uses them: ticked and enabled, as the toggles say.
+        let cornell = scene("cornell_box.ron");
+        let boxes = checkboxes(&mut settings, &cornell);
+        assert_eq!(state(&boxes, "global illumination"), (true, true));
+        assert!(settings.toggles().global_illumination);
+        assert_eq!(state(&boxes, "no limit"), (false, true));
+    }
+
+    #[test]
+    fn opening_a_scene_at_another_resolution_scale_says_so_and_a_reload_does_not() {
+        let (effects, cornell) = (scene("effects.ron"), scene("cornell_box.ron"));
+        let mut settings = ImageSettings::new(&effects);
+        assert_eq!(settings.scene_loaded(&cornell, &effects, true), None);
+        settings.set_resolution_scale(2.0);
+        let note = settings.scene_loaded(&cornell, &effects, true).expect("a note");
+        let (w, h) = (cornell.settings.image.width(), cornell.settings.image.height());
+        assert!(note.contains(&format!("{} × {} pixels (the file's {w} × {h})", 2 * w, 2 * h)), "{note}");
+        assert_eq!(settings.scene_loaded(&cornell, &cornell, false), None);
+        assert_eq!(settings.resolution_scale(), 2.0, "the scale stays the user's");
+    }
+
+    #[test]
+    fn no_limit_gives_a_target_and_greys_out_the_sample_count() {
+        let effects = scene("effects.ron");
+        let mut settings = ImageSettings::new(&effects);
+        assert_eq!((settings.no_limit(), settings.target_spp()), (false, None));
+        settings.no_limit = true;
+        assert_eq!(settings.target_spp(), Some(DEFAULT_TARGET_SPP));
+        let boxes = checkboxes(&mut settings, &effects);
+        assert_eq!(state(&boxes, "no limit"), (true, true));
+    }
+}

@@ -67,6 +67,9 @@ pub(super) struct Scheduler {
     refine_pending: bool,
     last_change: Option<Instant>,
     last_full: Option<FrameStats>,
+    /// The job had ended before rows were last taken: every row it sent
+    /// is applied (its end is set after its last row is sent).
+    job_drained: bool,
 }
 
 /// `seconds` as the status line shows it: "4.2 s", "3 min 05 s", "2 h 07 min".
@@ -136,6 +139,7 @@ impl Scheduler {
         let job = RenderJob::start(spec, generation, move || repaint.request_repaint())
             .map_err(|e| format!("cannot render: {e}"))?;
         self.job = Some(job); // Dropping the old job cancels it.
+        self.job_drained = false;
         self.job_is_preview = kind == Kind::Preview;
         let max_side = ctx.input(|i| i.max_texture_side);
         match kind {
@@ -182,6 +186,7 @@ impl Scheduler {
         let job = RenderJob::start(spec, generation, move || repaint.request_repaint())
             .map_err(|e| format!("cannot render the region: {e}"))?;
         self.job = Some(job);
+        self.job_drained = false;
         Ok(())
     }
 
@@ -246,6 +251,7 @@ impl Scheduler {
     pub fn apply_rows(&mut self, ctx: &egui::Context) {
         let Some(job) = &self.job else { return };
         let region_start = job.spec().region.as_ref().map(|r| r.columns.start as usize);
+        let ended = job.elapsed().is_some();
         for row in job.try_rows() {
             if let (Some(x), Some(c)) = (region_start, &mut self.shown) {
                 c.apply(&whole_row(c, x, row));
@@ -256,6 +262,7 @@ impl Scheduler {
                 c.apply(&row);
             }
         }
+        self.job_drained |= ended;
         if self.pending.as_ref().is_some_and(Canvas::is_complete) {
             let preview = self.pending.take().expect("checked");
             self.show(ctx, preview);
@@ -268,6 +275,7 @@ impl Scheduler {
             && canvas.generation() == job_generation(&self.job)
             && let Some(job) = &self.job
             && job.spec().region.is_none()
+            && self.job_drained
             && let Some(elapsed) = job.elapsed()
         {
             let rays = job.rays() as f64;
@@ -304,13 +312,11 @@ impl Scheduler {
         self.texture.as_ref()
     }
 
-    /// Whether the full-resolution image has all its samples.
+    /// Whether the full-resolution image has all its samples (or those it
+    /// had when stopped), every row the job sent applied.
     pub fn frame_is_final(&self) -> bool {
         let complete = self.shown.as_ref().is_some_and(Canvas::is_complete);
-        complete
-            && !self.job_is_preview
-            && self.pending.is_none()
-            && self.job.as_ref().is_some_and(|j| j.elapsed().is_some())
+        complete && !self.job_is_preview && self.pending.is_none() && self.job_drained
     }
 
     /// The status line: a Stop button while a job runs, its progress
@@ -505,5 +511,126 @@ mod tests {
         assert_eq!(s.canvas().unwrap().pixels(), &old[..]);
         drop(s);
         ctx.tex_manager().write().take_delta().clear();
+    }
+
+    /// The `spec`'s image as `Renderer::render` makes it.
+    fn headless(spec: &JobSpec) -> Vec<egui::Color32> {
+        let settings =
+            spec.scene.settings.overridden(Some(spec.width), Some(spec.height), Some(spec.spp)).unwrap();
+        Renderer::new(&spec.scene.scene, spec.camera, &settings)
+            .unwrap()
+            .render(|_| {})
+            .to_rgb8()
+            .iter()
+            .map(|&[r, g, b]| egui::Color32::from_rgb(r, g, b))
+            .collect()
+    }
+
+    fn clear_textures(ctx: &egui::Context, s: Scheduler) {
+        drop(s);
+        ctx.tex_manager().write().take_delta().clear();
+    }
+
+    #[test]
+    fn a_region_renders_only_its_pixels_into_the_image_on_screen_and_the_rest_stays() {
+        let ctx = egui::Context::default();
+        let mut s = Scheduler::default();
+        let view = spec(rt_core::Vec3::new(0.0, 2.0, -8.0));
+        s.start(&ctx, || Some(view.clone()), Kind::NewScene).unwrap();
+        wait(&ctx, &mut s, Scheduler::frame_is_final, |_| {});
+        let one = headless(&view);
+        assert_eq!(s.canvas().unwrap().pixels(), &one[..]);
+        // More samples, in a region only (as if spp changed and a region
+        // were drawn before the full render restarted).
+        let region = Region { columns: 30..95, rows: 20..61 };
+        let nine = JobSpec { spp: 9, ..view.clone() };
+        s.start_region(&ctx, nine.clone(), region.clone()).unwrap();
+        let generation = s.canvas().unwrap().generation();
+        assert!(!s.frame_is_final());
+        wait(&ctx, &mut s, Scheduler::frame_is_final, |_| {});
+        assert_eq!((s.region(), s.canvas().unwrap().generation()), (Some(&region), generation));
+        let nine = headless(&nine);
+        let shown = s.canvas().unwrap().pixels();
+        for y in 0..90 {
+            for x in 0..160 {
+                let (i, inside) = (y * 160 + x, region.contains(x as u32, y as u32));
+                let expected = if inside { nine[i] } else { one[i] };
+                assert!(shown[i] == expected, "pixel ({x}, {y}), inside {inside}");
+            }
+        }
+        assert!(
+            s.status_text(None).starts_with("region 65×41 of 160×90 done, 9 spp"),
+            "{}",
+            s.status_text(None)
+        );
+        // The display (texture) image shows it too.
+        assert_eq!(s.canvas().unwrap().display_image(), shown);
+        // A change of view ends the region; a preview refuses a new one.
+        s.schedule(&ctx, Interaction { changed: true, dragging: false }, || Some(view.clone())).unwrap();
+        assert_eq!(s.region(), None);
+        assert!(s.start_region(&ctx, view.clone(), region).is_err());
+        clear_textures(&ctx, s);
+    }
+
+    #[test]
+    fn a_render_with_no_limit_goes_on_until_stopped_and_is_then_final() {
+        let ctx = egui::Context::default();
+        let mut s = Scheduler::default();
+        let view =
+            JobSpec { width: 16, height: 9, open_ended: true, ..spec(rt_core::Vec3::new(0.0, 2.0, -8.0)) };
+        s.start(&ctx, || Some(view.clone()), Kind::NewScene).unwrap();
+        // Past the fixed cap of 1024 samples per pixel.
+        wait(&ctx, &mut s, |s| s.shown_job().unwrap().progress().spp > 1024, |_| {});
+        assert!(!s.frame_is_final() && s.can_stop());
+        let text = s.status_text(Some(1 << 20));
+        assert!(text.contains("no limit") && text.contains(" spp in "), "{text}");
+        s.stop();
+        wait(&ctx, &mut s, Scheduler::frame_is_final, |_| {});
+        assert!(!s.can_stop());
+        let text = s.status_text(None);
+        assert!(text.contains("no limit, stopped") && !text.contains("last full frame: —"), "{text}");
+        clear_textures(&ctx, s);
+    }
+
+    #[test]
+    fn the_image_is_final_only_once_the_rows_sent_before_the_jobs_end_are_applied() {
+        // Before, a finished job made the image final at once, though its
+        // last rows could still wait in the channel (Save then wrote them
+        // without their last pass).
+        let ctx = egui::Context::default();
+        let mut s = Scheduler::default();
+        let view = JobSpec { spp: 64, ..spec(rt_core::Vec3::new(0.0, 2.0, -8.0)) };
+        s.start(&ctx, || Some(view.clone()), Kind::NewScene).unwrap();
+        wait(&ctx, &mut s, |s| s.canvas().unwrap().is_complete(), |_| {});
+        while s.job.as_ref().unwrap().elapsed().is_none() {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        assert!(!s.frame_is_final(), "final with rows of the last pass not applied");
+        s.apply_rows(&ctx);
+        assert!(s.frame_is_final());
+        assert_eq!(s.canvas().unwrap().pixels(), &headless(&view)[..]);
+        clear_textures(&ctx, s);
+    }
+
+    #[test]
+    fn a_new_scene_clears_the_last_full_frames_figures() {
+        // Before, "last full frame" kept the previous scene's figures.
+        let ctx = egui::Context::default();
+        let mut s = Scheduler::default();
+        let view = spec(rt_core::Vec3::new(0.0, 2.0, -8.0));
+        s.start(&ctx, || Some(view.clone()), Kind::NewScene).unwrap();
+        wait(&ctx, &mut s, Scheduler::frame_is_final, |_| {});
+        s.apply_rows(&ctx);
+        assert!(s.status_text(None).contains("last full frame 0."), "{}", s.status_text(None));
+        s.start(&ctx, || Some(view.clone()), Kind::NewScene).unwrap();
+        assert!(s.status_text(None).contains("last full frame: —"), "{}", s.status_text(None));
+        clear_textures(&ctx, s);
+    }
+
+    #[test]
+    fn durations_read_in_seconds_minutes_or_hours() {
+        assert_eq!(duration_text(4.23), "4.2 s");
+        assert_eq!(duration_text(185.0), "3 min 05 s");
+        assert_eq!(duration_text(7650.0), "2 h 07 min");
     }
 }
