@@ -320,11 +320,12 @@ impl Viewer {
         if pressed(Key::Space) {
             self.scheduler.stop();
         }
-        if pressed(Key::B) {
-            self.view.toggle_region_tool();
-        }
+        // Shift+B first: a plain shortcut matches whatever Shift does.
         if ctx.input_mut(|i| i.consume_shortcut(&KeyboardShortcut::new(Modifiers::SHIFT, Key::B))) {
             self.clear_region(ctx);
+        }
+        if pressed(Key::B) {
+            self.view.toggle_region_tool();
         }
         if pressed(Key::F1)
             || ctx.input(|i| i.events.iter().any(|e| matches!(e, egui::Event::Text(t) if t == "?")))
@@ -914,6 +915,84 @@ mod tests {
         assert!(matches!(v.view.zoom(), super::super::image_view::Zoom::Scale { .. }));
         frame(&ctx, &mut v, size, vec![key(Key::F)]);
         assert_eq!(v.view.zoom(), super::super::image_view::Zoom::Fit);
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn opening_a_scene_at_a_resolution_scale_other_than_one_says_so() {
+        // Before, the scale carried over to the next scene unannounced.
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, None);
+        v.image.set_resolution_scale(0.5);
+        v.source.open(scenes().join("box.ron"), &ctx);
+        let change = v.source.wait_for_load(&ctx).unwrap();
+        v.scene_changed(&ctx, change);
+        let text = &v.notice.as_ref().expect("a notice").text;
+        assert!(text.starts_with("resolution scale 0.5× kept"), "{text}");
+        drop_textures(&ctx, v);
+    }
+
+    fn key_with(key: Key, modifiers: Modifiers) -> egui::Event {
+        egui::Event::Key { key, physical_key: None, pressed: true, repeat: false, modifiers }
+    }
+
+    #[test]
+    fn space_stops_a_no_limit_render_and_the_image_can_then_be_saved() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        v.image.set_resolution_scale(0.25);
+        let size = egui::vec2(1000.0, 700.0);
+        frame(&ctx, &mut v, size, vec![]);
+        // Tick "no limit" as a user would: the render starts over without a limit.
+        v.image = {
+            let mut image = ImageSettings::new(v.source.scene());
+            image.set_resolution_scale(0.25);
+            image.set_no_limit(true);
+            image
+        };
+        v.start(&ctx, Kind::Full);
+        let deadline = Instant::now() + Duration::from_secs(30);
+        while v.scheduler.shown_job().is_none_or(|j| j.progress().spp < 16) {
+            assert!(Instant::now() < deadline, "no pass finished");
+            frame(&ctx, &mut v, size, vec![]);
+        }
+        assert!(!v.scheduler.frame_is_final());
+        frame(&ctx, &mut v, size, vec![key(Key::Space)]);
+        finish_render(&ctx, &mut v);
+        assert!(v.scheduler.status_text(None).contains("stopped"), "{}", v.scheduler.status_text(None));
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn b_and_a_drag_render_a_region_and_shift_b_renders_the_whole_image_again() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        v.show_panel = false;
+        let size = egui::vec2(1000.0, 700.0);
+        frame(&ctx, &mut v, size, vec![]);
+        finish_render(&ctx, &mut v);
+        frame(&ctx, &mut v, size, vec![]);
+        let camera = *v.camera.settings();
+        let button = |pos, pressed| egui::Event::PointerButton {
+            pos,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        };
+        let (from, to) = (egui::pos2(400.0, 250.0), egui::pos2(600.0, 400.0));
+        frame(&ctx, &mut v, size, vec![key(Key::B), egui::Event::PointerMoved(from)]);
+        frame(&ctx, &mut v, size, vec![button(from, true)]);
+        for k in 1..=4 {
+            frame(&ctx, &mut v, size, vec![egui::Event::PointerMoved(from + (to - from) * k as f32 / 4.0)]);
+        }
+        frame(&ctx, &mut v, size, vec![button(to, false)]);
+        let region = v.scheduler.region().cloned().expect("a region render");
+        assert!(region.width() > 10 && region.height() > 10, "{region:?}");
+        assert_eq!(*v.camera.settings(), camera, "the drag orbited the camera");
+        finish_render(&ctx, &mut v);
+        frame(&ctx, &mut v, size, vec![key_with(Key::B, Modifiers::SHIFT)]);
+        assert_eq!(v.scheduler.region(), None);
+        assert!(v.scheduler.status_text(None).starts_with("full "), "{}", v.scheduler.status_text(None));
         drop_textures(&ctx, v);
     }
 }

@@ -97,6 +97,12 @@ impl ImageSettings {
         self.no_limit
     }
 
+    /// Renders until stopped (`true`) or to the sample count.
+    #[cfg(test)]
+    pub fn set_no_limit(&mut self, on: bool) {
+        self.no_limit = on;
+    }
+
     /// With no limit, the samples per pixel to show the time to.
     pub fn target_spp(&self) -> Option<u32> {
         self.no_limit.then_some(self.target_spp)
@@ -234,7 +240,7 @@ mod tests {
             .collect()
     }
 
-    fn state<'a>(boxes: &'a [(String, bool, bool)], label: &str) -> (bool, bool) {
+    fn state(boxes: &[(String, bool, bool)], label: &str) -> (bool, bool) {
         let (_, ticked, enabled) =
             boxes.iter().find(|(l, ..)| l == label).unwrap_or_else(|| panic!("{label}: {boxes:?}"));
         (*ticked, *enabled)

@@ -29,7 +29,7 @@ mod app;
 pub mod camera_controls;
 mod camera_panel;
 pub mod canvas;
-mod eta;
+pub mod eta;
 mod file_browser;
 mod image_settings;
 mod image_view;

@@ -324,7 +324,7 @@ impl Scheduler {
     /// end, to the last pass's and to `target` samples per pixel, rays per
     /// second) and the last full frame.
     pub fn status_ui(&mut self, ui: &mut egui::Ui, target: Option<u32>) {
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             if self.can_stop()
                 && ui.button("Stop").on_hover_text("Space: keep the image as it stands").clicked()
             {
@@ -349,6 +349,13 @@ impl Scheduler {
             if job.elapsed().is_some() {
                 let how = if job.stopped() { "stopped" } else { "done" };
                 parts.push(format!("{kind} {}×{}{limit} {how}, {} spp", spec.width, spec.height, p.spp));
+            } else if job.stopped() {
+                parts.push(format!(
+                    "{kind} {}×{}{limit} stopping: finishing the rows in flight, {}",
+                    spec.width,
+                    spec.height,
+                    duration_text(p.elapsed.as_secs_f64())
+                ));
             } else {
                 let mut s = format!("{kind} {}×{}{limit} {} spp", spec.width, spec.height, p.spp);
                 if p.open_ended {
