@@ -26,16 +26,23 @@
 //! region's columns, and each of its pixels equals the whole image's bit for
 //! bit ([`Renderer::accumulate_region`]).
 //!
-//! [`RenderJob::stop`] ends a job as it stands: workers finish their bands
-//! and send them, and the job counts as done. Cancelling (or dropping the job, or dropping its receiver) stops the
-//! workers after the band of rows each is on; rows already in the channel keep their
-//! old generation, and [`super::canvas::Canvas`] refuses them.
+//! A band's pass renders into a copy of its sums, [`CHUNK_SAMPLES`] samples
+//! at a time: the sums stay readable meanwhile (inspection never waits for
+//! a worker), and a long pass (1024 samples of eight rows can take seconds)
+//! can be abandoned between chunks, its band keeping the previous pass.
+//!
+//! [`RenderJob::stop`] ends a job as it stands: once the first pass is
+//! complete, workers abandon the passes in flight and take no more, each
+//! band keeping the samples of its last whole pass (on screen already), and
+//! the job counts as done. Cancelling (or dropping the job, or dropping its
+//! receiver) abandons the work in flight likewise, and rows already in the
+//! channel keep their old generation, so [`super::canvas::Canvas`] refuses them.
 
 use std::ops::Range;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender, TryIter};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
 use egui::Color32;
@@ -62,6 +69,10 @@ pub fn sample_passes(spp: u32) -> Vec<Range<u32>> {
     }
     passes
 }
+
+/// The most samples per pixel a worker adds to a band before it checks
+/// whether the job is to end.
+pub const CHUNK_SAMPLES: u32 = 64;
 
 /// The sample ranges of an open-ended render's passes, pass after pass:
 /// its sampler's blocks ([`open_ended_block`]), `0..1`, `1..4`, … `256..1024`
@@ -205,6 +216,8 @@ pub struct Progress {
 struct Shared {
     /// Each band's running sums of linear colour (bands of [`BAND_ROWS`]).
     bands: Vec<Mutex<BandSums>>,
+    /// Signalled when a band's pass is done (its next pass may start).
+    band_done: Vec<Condvar>,
     /// Each band's samples per pixel so far, read without waiting for its lock.
     band_samples: Vec<AtomicU32>,
     /// Each band's thread time per sample in its last pass, nanoseconds as
@@ -237,6 +250,7 @@ impl Shared {
                     Mutex::new(BandSums { samples: 0, sums: vec![Color::ZERO; pixels] })
                 })
                 .collect(),
+            band_done: (0..bands).map(|_| Condvar::new()).collect(),
             band_samples: (0..bands).map(|_| AtomicU32::new(0)).collect(),
             band_cost: (0..bands).map(|_| AtomicU64::new(0)).collect(),
             busy: AtomicU64::new(0),
@@ -256,6 +270,13 @@ impl Shared {
     /// Whether workers are to take no new band (cancelled or stopped).
     fn ending(&self) -> bool {
         self.cancelled() || self.stop.load(Ordering::Relaxed)
+    }
+
+    /// Whether a pass starting at sample `start` is to be abandoned: the
+    /// job is cancelled, or stopped and the pass is not the first (which
+    /// completes, so a stopped job still has every row).
+    fn abandons(&self, start: u32) -> bool {
+        self.cancelled() || (start > 0 && self.stop.load(Ordering::Relaxed))
     }
 
     /// What the estimate knows of each band now.
@@ -478,13 +499,15 @@ impl<F: Fn() + Send + Sync> Worker<F> {
         let tasks = passes.len() as u64 * bands;
         let next_task = AtomicU64::new(0);
         rayon::broadcast(|_| {
-            while !self.shared.ending() {
+            while !self.shared.cancelled() {
                 let task = next_task.fetch_add(1, Ordering::Relaxed);
                 if task >= tasks {
                     break;
                 }
                 let (pass, band) = ((task / bands) as usize, (task % bands) as u32);
-                if !self.render(&renderer, band, passes[pass].clone()) {
+                if self.shared.abandons(passes[pass].start)
+                    || !self.render(&renderer, band, passes[pass].clone())
+                {
                     break;
                 }
             }
@@ -502,36 +525,51 @@ impl<F: Fn() + Send + Sync> Worker<F> {
         let area = self.spec.area();
         let first = area.rows.start + band * BAND_ROWS;
         let rows = first..(first + BAND_ROWS).min(area.rows.end);
-        let cell = &self.shared.bands[band as usize];
+        let (cell, done) = (&self.shared.bands[band as usize], &self.shared.band_done[band as usize]);
+        let lock = || cell.lock().unwrap_or_else(|e| e.into_inner());
         // This band's previous pass may still be running on another thread.
-        let mut sums = loop {
-            let sums = cell.lock().unwrap_or_else(|e| e.into_inner());
-            if sums.samples == samples.start || self.shared.ending() {
-                break sums;
-            }
-            drop(sums);
-            std::thread::yield_now();
-        };
-        if sums.samples != samples.start || self.shared.ending() {
+        let mut sums = lock();
+        while sums.samples != samples.start && !self.shared.abandons(samples.start) {
+            // Woken when that pass is done; the timeout sees a cancel.
+            let wait = done.wait_timeout(sums, Duration::from_millis(10));
+            sums = wait.unwrap_or_else(|e| e.into_inner()).0;
+        }
+        if sums.samples != samples.start || self.shared.abandons(samples.start) {
             return false; // Ended while waiting.
         }
+        // A copy, so the sums stay readable while the pass renders.
+        let mut pass_sums = sums.sums.clone();
+        drop(sums);
         let started = Instant::now();
-        let rendered = catch_unwind(AssertUnwindSafe(|| {
-            (self.render_band)(renderer, rows.clone(), area.columns.clone(), samples.clone(), &mut sums.sums)
-        }));
-        let nanos = started.elapsed().as_nanos() as u64;
-        let counts = match rendered {
-            Ok(counts) => counts,
-            Err(payload) => {
-                let mut failure = self.shared.failure.lock().unwrap_or_else(|e| e.into_inner());
-                let (first, last) = (rows.start, rows.end - 1);
-                failure.get_or_insert_with(|| format!("rows {first}–{last}: {}", panic_message(&*payload)));
-                self.shared.cancel.store(true, Ordering::Relaxed);
-                (self.on_row)(); // Wake the UI so it shows the failure.
-                return false;
+        let mut counts = RayCounts::default();
+        let mut k = samples.start;
+        while k < samples.end {
+            if self.shared.abandons(samples.start) {
+                return false; // The band keeps its previous pass.
             }
-        };
+            let chunk = k..(k + CHUNK_SAMPLES).min(samples.end);
+            k = chunk.end;
+            let rendered = catch_unwind(AssertUnwindSafe(|| {
+                (self.render_band)(renderer, rows.clone(), area.columns.clone(), chunk, &mut pass_sums)
+            }));
+            match rendered {
+                Ok(c) => counts += c,
+                Err(payload) => {
+                    let mut failure = self.shared.failure.lock().unwrap_or_else(|e| e.into_inner());
+                    let (first, last) = (rows.start, rows.end - 1);
+                    failure
+                        .get_or_insert_with(|| format!("rows {first}–{last}: {}", panic_message(&*payload)));
+                    self.shared.cancel.store(true, Ordering::Relaxed);
+                    (self.on_row)(); // Wake the UI so it shows the failure.
+                    return false;
+                }
+            }
+        }
+        let nanos = started.elapsed().as_nanos() as u64;
+        let mut sums = lock();
+        sums.sums = pass_sums;
         sums.samples = samples.end;
+        done.notify_all();
         let per_sample = nanos as f64 / samples.len().max(1) as f64;
         self.shared.band_cost[band as usize].store(per_sample.max(1.0).to_bits(), Ordering::Relaxed);
         self.shared.band_samples[band as usize].store(samples.end, Ordering::Relaxed);
@@ -853,6 +891,57 @@ mod tests {
             rows += 1;
         }
         assert_eq!((rows, next.failure()), (40, None));
+    }
+
+    #[test]
+    fn a_pass_in_flight_leaves_the_sums_readable_and_stop_abandons_it_between_chunks() {
+        // One band of rows, each call of the band function 20 ms: the pass
+        // 256..1024 is 12 chunks (240 ms). Before, the band stayed locked
+        // for a whole pass (inspection waited for it) and Stop waited for it.
+        let calls = Arc::new(AtomicU32::new(0));
+        let counted = calls.clone();
+        let mut s = spec(8, 8);
+        s.spp = 1024;
+        let job = RenderJob::spawn(
+            s,
+            1,
+            || {},
+            Box::new(move |r, rows, columns, samples, sums| {
+                counted.fetch_add(1, Ordering::Relaxed);
+                std::thread::sleep(Duration::from_millis(20));
+                r.accumulate_region(rows, columns, samples, sums)
+            }),
+        )
+        .unwrap();
+        while job.next_row_blocking().unwrap().samples < 256 {}
+        std::thread::sleep(Duration::from_millis(50));
+        let asked = Instant::now();
+        assert_eq!(job.linear(3, 3).map(|(_, n)| n), Some(256));
+        assert!(asked.elapsed() < Duration::from_millis(15), "inspection waited for the pass");
+        job.stop();
+        let stopped = Instant::now();
+        let mut last = Vec::new();
+        while let Some(row) = job.next_row_blocking() {
+            last.push(row.samples);
+        }
+        assert!(stopped.elapsed() < Duration::from_millis(100), "stop waited for the pass");
+        assert!(last.iter().all(|&n| n == 256), "{last:?}");
+        assert!(job.elapsed().is_some() && calls.load(Ordering::Relaxed) < 1 + 1 + 1 + 1 + 3 + 12);
+        assert_eq!(job.linear(3, 3).map(|(_, n)| n), Some(256));
+    }
+
+    #[test]
+    fn a_job_stopped_in_its_first_pass_completes_that_pass() {
+        let mut s = spec(64, 400);
+        s.spp = 16;
+        let job = RenderJob::start(s, 1, || {}).unwrap();
+        job.stop();
+        let mut seen = vec![0; 400];
+        while let Some(row) = job.next_row_blocking() {
+            seen[row.y as usize] += 1;
+        }
+        assert!(seen.iter().all(|&n| n >= 1), "rows missing after a stop in the first pass");
+        assert!(job.elapsed().is_some() && job.stopped());
     }
 
     #[test]

@@ -351,7 +351,7 @@ impl Scheduler {
                 parts.push(format!("{kind} {}×{}{limit} {how}, {} spp", spec.width, spec.height, p.spp));
             } else if job.stopped() {
                 parts.push(format!(
-                    "{kind} {}×{}{limit} stopping: finishing the rows in flight, {}",
+                    "{kind} {}×{}{limit} stopping, {}",
                     spec.width,
                     spec.height,
                     duration_text(p.elapsed.as_secs_f64())
