@@ -99,6 +99,17 @@ impl<'s> Renderer<'s> {
         })
     }
 
+    /// This renderer for a render whose sample count is not fixed in
+    /// advance (the viewer's "no limit"): film positions come from
+    /// [`Sampler::open_ended`], stratified within blocks of samples
+    /// ([`crate::sampling::sampler::open_ended_block`]) rather than over
+    /// the settings' samples per pixel, so any number of whole blocks is an
+    /// unbiased estimate. Everything else is as before; images differ from
+    /// a fixed-count render's, which stratifies over its count.
+    pub fn open_ended(self) -> Self {
+        Self { sampler: Sampler::open_ended(self.sampler.seed()), ..self }
+    }
+
     /// The view plane rays are generated from.
     pub fn view_plane(&self) -> &ViewPlane {
         &self.view
@@ -189,10 +200,31 @@ impl<'s> Renderer<'s> {
     /// the image width); [`Renderer::accumulate_row`] likewise wants one
     /// row's.
     pub fn accumulate_rows(&self, rows: Range<u32>, samples: Range<u32>, sums: &mut [Color]) -> RayCounts {
-        let width = self.view.width();
-        assert_eq!(sums.len(), rows.len() * width as usize, "one sum per pixel of the rows");
+        self.accumulate_region(rows, 0..self.view.width(), samples, sums)
+    }
+
+    /// [`Renderer::accumulate_rows`] for the columns `columns` of the rows
+    /// `rows` only (a region of the image), `sums` holding the region's
+    /// rows one after the other, each `columns.len()` long. Each pixel gets
+    /// the same sums as from [`Renderer::accumulate_rows`], bit for bit: a
+    /// sample's colour depends on its pixel and index alone, and the tiles
+    /// just start at the region's left edge.
+    ///
+    /// # Panics
+    /// If `sums` does not hold exactly the region's pixels, or the columns
+    /// reach past the image's width.
+    pub fn accumulate_region(
+        &self,
+        rows: Range<u32>,
+        columns: Range<u32>,
+        samples: Range<u32>,
+        sums: &mut [Color],
+    ) -> RayCounts {
+        assert!(columns.end <= self.view.width(), "columns {columns:?} past the image's width");
+        let width = columns.len();
+        assert_eq!(sums.len(), rows.len() * width, "one sum per pixel of the region");
         let per_pixel = rows.len() * samples.len();
-        let tile = (PACKET_RAYS / per_pixel.max(1)).clamp(1, width as usize) as u32;
+        let tile = (PACKET_RAYS / per_pixel.max(1)).clamp(1, width.max(1)) as u32;
         let mut counts = RayCounts::default();
         let mut packet = [(0, 0, 0); PACKET_RAYS];
         let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET_RAYS];
@@ -202,13 +234,13 @@ impl<'s> Renderer<'s> {
             self.scene.cast_all(&rays[..n], &mut hits[..n]);
             for i in 0..n {
                 let (x, y, k) = packet[i];
-                let at = (y - rows.start) as usize * width as usize + x as usize;
+                let at = (y - rows.start) as usize * width + (x - columns.start) as usize;
                 sums[at] += self.shade_sample(x, y, k, &rays[i], hits[i], &mut counts);
             }
         };
-        for x0 in (0..width).step_by(tile as usize) {
+        for x0 in columns.clone().step_by(tile as usize) {
             for y in rows.clone() {
-                for x in x0..(x0 + tile).min(width) {
+                for x in x0..(x0 + tile).min(columns.end) {
                     for k in samples.clone() {
                         packet[n] = (x, y, k);
                         rays[n] = self.primary_ray(x, y, k);
@@ -407,6 +439,47 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_region_gets_the_sums_of_the_whole_rows_bit_for_bit() {
+        // Regions at the edges and inside, one pixel to all columns, fixed
+        // and open-ended sampling, samples added in steps.
+        let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+        let s = crate::load_scene(&scenes.join("showcase.ron")).unwrap();
+        for spp in [1, 5, 70] {
+            let fixed = renderer(&s, 40, 30, spp);
+            for r in [fixed, fixed.open_ended()] {
+                let rows = 6..14;
+                let mut whole = vec![Color::ZERO; 40 * rows.len()];
+                for step in [0..1, 1..spp] {
+                    r.accumulate_rows(rows.clone(), step, &mut whole);
+                }
+                for columns in [0..40, 0..1, 39..40, 3..17, 25..40] {
+                    let mut region = vec![Color::ZERO; columns.len() * rows.len()];
+                    for step in [0..1, 1..spp] {
+                        r.accumulate_region(rows.clone(), columns.clone(), step, &mut region);
+                    }
+                    let expected: Vec<Color> = (0..rows.len())
+                        .flat_map(|y| {
+                            whole[y * 40..][columns.start as usize..columns.end as usize].iter().copied()
+                        })
+                        .collect();
+                    assert_eq!(region, expected, "spp {spp}, columns {columns:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn an_open_ended_render_differs_from_the_fixed_one_only_in_its_film_positions() {
+        // Flat colours: every sample of a pixel inside the sphere is red
+        // either way; edge pixels blend differently (other positions).
+        let s = scene();
+        let (fixed, open) = (renderer(&s, 32, 24, 16), renderer(&s, 32, 24, 16).open_ended());
+        let (a, b) = (fixed.render(|_| {}).to_rgb8(), open.render(|_| {}).to_rgb8());
+        assert_eq!(a[12 * 32 + 16], b[12 * 32 + 16]);
+        assert_ne!(a, b);
     }
 
     #[test]

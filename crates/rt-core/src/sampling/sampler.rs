@@ -11,6 +11,15 @@
 //! cell k, and is jittered inside its cell: stratified jitter
 //! ([`stratified`]). Area-light and ambient-occlusion samples are
 //! stratified the same way.
+//!
+//! That layout needs the count n before the first sample, so an open-ended
+//! render (the viewer's "no limit") uses [`Sampler::open_ended`] instead:
+//! its samples come in blocks ([`open_ended_block`]: `0..1`, `1..4`,
+//! `4..16`, … then blocks of [`OPEN_ENDED_BLOCK`]), each block stratified
+//! over the whole pixel on its own, so after any number of whole blocks
+//! the pixel's samples are an unbiased, stratified estimate.
+
+use std::ops::Range;
 
 use crate::math::real::{Real, Vec3};
 
@@ -22,6 +31,33 @@ pub const MAX_SAMPLES_PER_PIXEL: u32 = 1 << 16;
 #[inline]
 pub fn subpixel_offset(x: u32, y: u32, sample: u32, spp: u32, seed: u64) -> (Real, Real) {
     Strata::new(spp).subpixel_offset(x, y, sample, seed)
+}
+
+/// The length of an open-ended render's blocks of samples once they stop
+/// growing (a power of two: a 32 × 32 grid of strata).
+pub const OPEN_ENDED_BLOCK: u32 = 1024;
+
+/// The most samples an open-ended render takes per pixel, 2²²: a pixel's
+/// sample streams are distinct for indices below it ([`SampleRng`] hashes
+/// 22 bits of the index).
+pub const MAX_OPEN_ENDED_SAMPLES: u32 = 1 << 22;
+
+/// The block of an open-ended render's samples that sample `k` belongs to:
+/// `0..1`, then blocks four times longer than all before them together
+/// (`1..4`, `4..16`, … `256..1024`), then blocks of [`OPEN_ENDED_BLOCK`]
+/// (`1024..2048`, …). Each block is stratified over the pixel on its own
+/// ([`Sampler::open_ended`]).
+pub fn open_ended_block(k: u32) -> Range<u32> {
+    if k == 0 {
+        return 0..1;
+    }
+    if k >= OPEN_ENDED_BLOCK {
+        let start = k / OPEN_ENDED_BLOCK * OPEN_ENDED_BLOCK;
+        return start..start.saturating_add(OPEN_ENDED_BLOCK);
+    }
+    // Powers of four: the block is 4^i..4^(i+1) for 4^i ≤ k.
+    let i = (31 - k.leading_zeros()) / 2;
+    1 << (2 * i)..1 << (2 * i + 2)
 }
 
 /// Point `k` of `n` stratified over [0,1)²: the square is cut into `n`
@@ -105,9 +141,16 @@ impl Strata {
         if self.n <= 1 {
             return (0.5, 0.5);
         }
-        let h = hash(x, y, sample) ^ seed_bits(seed);
-        self.point(sample, (unit_float(h as u32), unit_float((h >> 32) as u32)))
+        self.point(sample, pixel_jitter(x, y, sample, seed))
     }
+}
+
+/// The jitter of sample `sample` of pixel (`x`, `y`) in the image of seed
+/// `seed` inside its stratum, in [0,1)².
+#[inline]
+fn pixel_jitter(x: u32, y: u32, sample: u32, seed: u64) -> (Real, Real) {
+    let h = hash(x, y, sample) ^ seed_bits(seed);
+    (unit_float(h as u32), unit_float((h >> 32) as u32))
 }
 
 /// Shirley and Chiu's concentric map ("A Low Distortion Map Between Disk and
@@ -164,6 +207,8 @@ pub fn uniform_sphere_pdf() -> Real {
 pub struct Sampler {
     strata: Strata,
     spp: u32,
+    /// Film positions stratified per [`open_ended_block`], not over `spp`.
+    open_ended: bool,
     seed: u64,
     stream: SampleRng,
 }
@@ -171,7 +216,28 @@ pub struct Sampler {
 impl Sampler {
     /// A sampler for `spp` samples per pixel (≥ 1) in the image of seed `seed`.
     pub fn new(spp: u32, seed: u64) -> Self {
-        Self { strata: Strata::new(spp), spp, seed, stream: SampleRng::seeded(0, 0, 0, seed) }
+        Self {
+            strata: Strata::new(spp),
+            spp,
+            open_ended: false,
+            seed,
+            stream: SampleRng::seeded(0, 0, 0, seed),
+        }
+    }
+
+    /// A sampler for a render with no sample count fixed in advance, in the
+    /// image of seed `seed`: sample k's film position is stratified within
+    /// its block ([`open_ended_block`]) instead of over all the pixel's
+    /// samples, and is never the bare pixel centre (a one-sample block is a
+    /// uniform point in the pixel). The path's values are those of
+    /// [`Sampler::new`]. Samples must stay below [`MAX_OPEN_ENDED_SAMPLES`].
+    pub fn open_ended(seed: u64) -> Self {
+        Self { open_ended: true, ..Self::new(1, seed) }
+    }
+
+    /// The seed of the image this sampler samples.
+    pub fn seed(&self) -> u64 {
+        self.seed
     }
 
     /// Starts sample `k` of pixel (`x`, `y`): the values handed out next are that sample's.
@@ -186,7 +252,15 @@ impl Sampler {
     /// before their samples' paths start (packets of camera rays).
     #[inline(always)]
     pub fn film_position(&self, x: u32, y: u32, k: u32) -> (Real, Real) {
-        if self.spp == 1 { (0.5, 0.5) } else { self.strata.subpixel_offset(x, y, k, self.seed) }
+        if self.open_ended {
+            let block = open_ended_block(k);
+            let strata = Strata::new(block.end - block.start);
+            strata.point(k - block.start, pixel_jitter(x, y, k, self.seed))
+        } else if self.spp == 1 {
+            (0.5, 0.5)
+        } else {
+            self.strata.subpixel_offset(x, y, k, self.seed)
+        }
     }
 
     /// The lens position of sample `k` of pixel (`x`, `y`), in [0,1)²: the
@@ -460,6 +534,83 @@ mod tests {
         chi_square::plane("concentric disk", grid, 200_000, draw, &|x, y| {
             if x * x + y * y < 1.0 { std::f64::consts::FRAC_1_PI } else { 0.0 }
         });
+    }
+
+    #[test]
+    fn open_ended_blocks_grow_fourfold_then_stay_at_the_block_length_and_tile_the_indices() {
+        let blocks: Vec<Range<u32>> =
+            [0, 1, 3, 4, 15, 16, 64, 256, 1023, 1024, 2047, 5000].into_iter().map(open_ended_block).collect();
+        let expected = [
+            0..1,
+            1..4,
+            1..4,
+            4..16,
+            4..16,
+            16..64,
+            64..256,
+            256..1024,
+            256..1024,
+            1024..2048,
+            1024..2048,
+            4096..5120,
+        ];
+        assert_eq!(blocks, expected);
+        // Every index lies in its block, and blocks follow one another up to the cap.
+        let mut end = 0;
+        let mut k = 0;
+        while k < MAX_OPEN_ENDED_SAMPLES {
+            let block = open_ended_block(k);
+            assert_eq!(block.start, end, "a gap or overlap before {k}");
+            assert!(block.contains(&k) && open_ended_block(block.end - 1) == block);
+            end = block.end;
+            k = block.end;
+        }
+        assert_eq!(end, MAX_OPEN_ENDED_SAMPLES);
+    }
+
+    #[test]
+    fn open_ended_film_positions_are_stratified_per_block_and_uniform_over_the_pixel() {
+        // Each block's positions fall one per stratum of the block's length
+        // (the one-sample block anywhere, not at the centre), so the union
+        // of whole blocks is uniform: χ² of the first 2048 samples of 100
+        // pixels on a 16 × 16 grid against the density 1.
+        let s = Sampler::open_ended(0);
+        assert_ne!(s.film_position(3, 4, 0), (0.5, 0.5));
+        for block in [1..4, 4..16, 16..64] {
+            let n = block.len() as u32;
+            let strata = Strata::new(n);
+            let corner = 1.0 - Real::EPSILON;
+            let cell_of = |(x, y): (Real, Real)| {
+                (0..n).filter(move |&c| {
+                    let ((x0, y0), (x1, y1)) =
+                        (strata.point(c, (0.0, 0.0)), strata.point(c, (corner, corner)));
+                    (x0..=x1).contains(&x) && (y0..=y1).contains(&y)
+                })
+            };
+            let mut cells: Vec<u32> = block.clone().flat_map(|k| cell_of(s.film_position(3, 4, k))).collect();
+            cells.sort();
+            assert_eq!(cells, (0..n).collect::<Vec<_>>(), "block {block:?}");
+        }
+        let mut k = 0;
+        let mut pixel = 0;
+        let draw = |_: &mut SampleRng| {
+            let (x, y) = s.film_position(pixel % 10, pixel / 10, k);
+            k += 1;
+            if k == 2048 {
+                (k, pixel) = (0, pixel + 1);
+            }
+            Draw::At((to_f64(x), to_f64(y)))
+        };
+        let side = Interval { lo: 0.0, hi: 1.0, n: 16 };
+        chi_square::plane("open-ended", Rectangle { s: side, t: side }, 204_800, draw, &|_, _| 1.0);
+    }
+
+    #[test]
+    fn an_open_ended_sampler_hands_out_the_paths_values_of_a_fixed_one() {
+        let (mut open, mut fixed) = (Sampler::open_ended(5), Sampler::new(64, 5));
+        open.start_pixel_sample(7, 8, 9);
+        fixed.start_pixel_sample(7, 8, 9);
+        assert_eq!((open.get_1d(), open.get_2d()), (fixed.get_1d(), fixed.get_2d()));
     }
 
     #[test]

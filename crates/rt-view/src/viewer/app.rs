@@ -19,6 +19,7 @@ use super::camera_panel::CameraPanel;
 use super::image_settings::ImageSettings;
 use super::image_view::ImageView;
 use super::interaction::Interaction;
+use super::region::Region;
 use super::remembered::{LastScene, Remembered, absolute};
 use super::render_job::{JobSpec, RenderJob};
 use super::scene_source::{SceneChange, SceneSource, load};
@@ -93,6 +94,9 @@ pub const SHORTCUTS: &[(&str, &str)] = &[
     ("Ctrl+O", "open a scene file"),
     ("F5", "reload the scene file"),
     ("P", "show or hide the side panel"),
+    ("Space", "stop the render, keeping the image as it stands (the way a no-limit render ends)"),
+    ("B", "region tool: the next drag on the image renders only that rectangle (B again: cancel)"),
+    ("Shift+B", "clear the region: render the whole image again"),
     ("F1 or ?", "show or hide this help"),
     ("Esc", "unpin the inspected pixel, close this help"),
 ];
@@ -189,7 +193,8 @@ impl Viewer {
         let camera = self.camera.settings().to_camera().ok()?;
         let (width, height) = self.image.full_size(scene);
         let toggles = self.image.toggles();
-        Some(JobSpec { scene: scene.clone(), camera, width, height, spp: self.image.spp(), toggles })
+        let (spp, open_ended) = (self.image.spp(), self.image.no_limit());
+        Some(JobSpec { scene: scene.clone(), camera, width, height, spp, open_ended, region: None, toggles })
     }
 
     /// Starts a job of `kind` now.
@@ -217,8 +222,11 @@ impl Viewer {
     fn scene_changed(&mut self, ctx: &egui::Context, change: SceneChange) {
         let scene = self.source.scene().clone();
         self.camera.scene_loaded(&scene.camera, change.opened);
-        self.image.scene_loaded(&scene, &change.previous, change.opened);
+        let scale_note = self.image.scene_loaded(&scene, &change.previous, change.opened);
         self.notice = None;
+        if let Some(note) = scale_note {
+            self.notify(note);
+        }
         self.view.unpin();
         self.start(ctx, Kind::NewScene);
     }
@@ -249,6 +257,53 @@ impl Viewer {
             self.camera.frame_box(bounds.min(), bounds.max(), w as rt_core::Real / h as rt_core::Real);
         self.view.pin([w / 2, h / 2]);
         changed
+    }
+
+    /// Renders `region` of the image on screen again (the rest stays).
+    fn render_region(&mut self, ctx: &egui::Context, corners: [[f32; 2]; 2]) {
+        let Some(spec) = self.job_spec() else { return };
+        let Some(region) = Region::spanning(corners[0], corners[1], spec.width, spec.height) else {
+            self.notify("no region: the rectangle misses the image".into());
+            return;
+        };
+        if let Err(e) = self.scheduler.start_region(ctx, spec, region) {
+            self.notify(e);
+        }
+    }
+
+    /// Ends a region render: the whole image renders again.
+    fn clear_region(&mut self, ctx: &egui::Context) {
+        if self.scheduler.region().is_some() {
+            self.start(ctx, Kind::Full);
+        }
+    }
+
+    /// The region row of the side panel: the tool, and Clear.
+    fn region_ui(&mut self, ui: &mut egui::Ui) {
+        let ctx = ui.ctx().clone();
+        ui.horizontal(|ui| {
+            let tool = self.view.region_tool();
+            if ui
+                .selectable_label(tool, "Region")
+                .on_hover_text("B: drag a rectangle on the image to render only it")
+                .clicked()
+            {
+                self.view.toggle_region_tool();
+            }
+            let region = self.scheduler.region().cloned();
+            if ui
+                .add_enabled(region.is_some(), egui::Button::new("Clear region"))
+                .on_hover_text("Shift+B")
+                .clicked()
+            {
+                self.clear_region(&ctx);
+            }
+            if let Some(r) = region {
+                ui.small(format!("{}×{} at ({}, {})", r.width(), r.height(), r.columns.start, r.rows.start));
+            } else if tool {
+                ui.small("drag on the image");
+            }
+        });
     }
 
     /// Writes the finished image to the Save path, atomically.
@@ -313,6 +368,16 @@ impl Viewer {
         if pressed(Key::P) {
             self.show_panel = !self.show_panel;
         }
+        if pressed(Key::Space) {
+            self.scheduler.stop();
+        }
+        // Shift+B first: a plain shortcut matches whatever Shift does.
+        if ctx.input_mut(|i| i.consume_shortcut(&KeyboardShortcut::new(Modifiers::SHIFT, Key::B))) {
+            self.clear_region(ctx);
+        }
+        if pressed(Key::B) {
+            self.view.toggle_region_tool();
+        }
         if pressed(Key::F1)
             || ctx.input(|i| i.events.iter().any(|e| matches!(e, egui::Event::Text(t) if t == "?")))
         {
@@ -333,6 +398,7 @@ impl Viewer {
         input = input | self.camera.ui(ui, self.source.path(), selected.as_deref());
         ui.separator();
         input = input | self.image.ui(ui, &self.source.scene().clone());
+        self.region_ui(ui);
         ui.horizontal(|ui| {
             ui.add(egui::TextEdit::singleline(&mut self.save_path).desired_width(170.0));
             let ready = self.scheduler.frame_is_final();
@@ -354,7 +420,7 @@ impl Viewer {
             ui.label(&n.text);
         }
         ui.separator();
-        ui.small("Drag: orbit · Shift/right drag: pan · Wheel: zoom\nCtrl+wheel, Ctrl+drag: zoom and pan the image\nF1: all shortcuts");
+        ui.small("Drag: orbit · Shift/right drag: pan · Wheel: zoom\nCtrl+wheel, Ctrl+drag: zoom and pan the image\nSpace: stop · B: region · F1: all shortcuts");
         input
     }
 
@@ -402,7 +468,8 @@ impl Viewer {
                     })
                     .inner;
         }
-        egui::Panel::bottom("status").show(ui, |ui| self.scheduler.status_ui(ui));
+        let target = self.image.target_spp();
+        egui::Panel::bottom("status").show(ui, |ui| self.scheduler.status_ui(ui, target));
         let size = self.image.full_size(self.source.scene());
         let texture = self.scheduler.texture().cloned();
         let (view_input, magnified) = egui::CentralPanel::default()
@@ -410,6 +477,7 @@ impl Viewer {
                 let (scene, scheduler) = (self.source.scene().clone(), &self.scheduler);
                 let settings = *self.camera.settings();
                 let inspect = |p| inspect(&scene, &settings, size, scheduler.shown_job(), p);
+                self.view.outline_region(scheduler.region().cloned());
                 self.view.ui(ui, texture.as_ref(), size, &mut self.camera, inspect)
             })
             .inner;
@@ -418,6 +486,9 @@ impl Viewer {
             input.changed |= self.frame_pinned();
         }
         self.camera.end_frame(&ctx);
+        if let Some(corners) = self.view.take_dragged_region() {
+            self.render_region(&ctx, corners);
+        }
         self.source.browser_ui(&ctx);
         self.help_ui(&ctx);
         if input.changed {
@@ -1105,6 +1176,47 @@ mod tests {
     }
 
     #[test]
+    fn opening_a_scene_at_a_resolution_scale_other_than_one_says_so() {
+        // Before, the scale carried over to the next scene unannounced.
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, None);
+        v.image.set_resolution_scale(0.5);
+        v.source.open(scenes().join("box.ron"), &ctx);
+        let change = v.source.wait_for_load(&ctx).unwrap();
+        v.scene_changed(&ctx, change);
+        let text = &v.notice.as_ref().expect("a notice").text;
+        assert!(text.starts_with("resolution scale 0.5× kept"), "{text}");
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn space_stops_a_no_limit_render_and_the_image_can_then_be_saved() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        v.image.set_resolution_scale(0.25);
+        let size = egui::vec2(1000.0, 700.0);
+        frame(&ctx, &mut v, size, vec![]);
+        // Tick "no limit" as a user would: the render starts over without a limit.
+        v.image = {
+            let mut image = ImageSettings::new(v.source.scene());
+            image.set_resolution_scale(0.25);
+            image.set_no_limit(true);
+            image
+        };
+        v.start(&ctx, Kind::Full);
+        let deadline = Instant::now() + Duration::from_secs(30);
+        while v.scheduler.shown_job().is_none_or(|j| j.progress().spp < 16) {
+            assert!(Instant::now() < deadline, "no pass finished");
+            frame(&ctx, &mut v, size, vec![]);
+        }
+        assert!(!v.scheduler.frame_is_final());
+        frame(&ctx, &mut v, size, vec![key(Key::Space)]);
+        finish_render(&ctx, &mut v);
+        assert!(v.scheduler.status_text(None).contains("stopped"), "{}", v.scheduler.status_text(None));
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
     fn frame_fills_the_view_with_the_pinned_object_and_keeps_the_view_direction() {
         let ctx = egui::Context::default();
         let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
@@ -1183,6 +1295,39 @@ mod tests {
         finish_render(&ctx, &mut v);
         v.save();
         assert!(dir.path().join("render.png").is_file(), "{:?}", v.notice.as_ref().map(|n| &n.text));
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn b_and_a_drag_render_a_region_and_shift_b_renders_the_whole_image_again() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        v.show_panel = false;
+        let size = egui::vec2(1000.0, 700.0);
+        frame(&ctx, &mut v, size, vec![]);
+        finish_render(&ctx, &mut v);
+        frame(&ctx, &mut v, size, vec![]);
+        let camera = *v.camera.settings();
+        let button = |pos, pressed| egui::Event::PointerButton {
+            pos,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        };
+        let (from, to) = (egui::pos2(400.0, 250.0), egui::pos2(600.0, 400.0));
+        frame(&ctx, &mut v, size, vec![key(Key::B), egui::Event::PointerMoved(from)]);
+        frame(&ctx, &mut v, size, vec![button(from, true)]);
+        for k in 1..=4 {
+            frame(&ctx, &mut v, size, vec![egui::Event::PointerMoved(from + (to - from) * k as f32 / 4.0)]);
+        }
+        frame(&ctx, &mut v, size, vec![button(to, false)]);
+        let region = v.scheduler.region().cloned().expect("a region render");
+        assert!(region.width() > 10 && region.height() > 10, "{region:?}");
+        assert_eq!(*v.camera.settings(), camera, "the drag orbited the camera");
+        finish_render(&ctx, &mut v);
+        frame(&ctx, &mut v, size, vec![key_with(Key::B, true, Modifiers::SHIFT)]);
+        assert_eq!(v.scheduler.region(), None);
+        assert!(v.scheduler.status_text(None).starts_with("full "), "{}", v.scheduler.status_text(None));
         drop_textures(&ctx, v);
     }
 }

@@ -13,6 +13,7 @@
 //! | ctrl + drag | pan the image |
 //! | hover | inspect the pixel under the cursor |
 //! | click | pin the inspection to that pixel (Esc unpins) |
+//! | drag, with the region tool on (B) | choose a region to render |
 //!
 //! A drag counts as moving only in frames where the pointer moved: holding
 //! the button still lets the full-resolution render start.
@@ -23,6 +24,7 @@ use rt_core::Real;
 use super::camera_panel::CameraPanel;
 use super::fly;
 use super::interaction::Interaction;
+use super::region::Region;
 
 /// Radians of orbit per point of mouse movement.
 const ORBIT_PER_POINT: f32 = 0.01;
@@ -32,26 +34,30 @@ const ZOOM_PER_POINT: f32 = 0.0015;
 const SCALE_RANGE: (f32, f32) = (0.02, 64.0);
 
 /// How the image is scaled on screen.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(super) enum Zoom {
     /// As large as fits, whole.
+    #[default]
     Fit,
     /// `scale` screen points per image pixel, the image point `center` in
     /// the middle of the panel.
     Scale { scale: f32, center: Pos2 },
 }
 
-/// The image view's state: zoom and the inspected pixel.
+/// The image view's state: zoom, the inspected pixel and the region tool.
+#[derive(Default)]
 pub(super) struct ImageView {
     zoom: Zoom,
     /// The pixel clicked, inspected until Esc.
     pinned: Option<[u32; 2]>,
-}
-
-impl Default for ImageView {
-    fn default() -> Self {
-        Self { zoom: Zoom::Fit, pinned: None }
-    }
+    /// The region tool: a primary drag chooses a region instead of orbiting.
+    region_tool: bool,
+    /// Where the region drag started, in image pixels.
+    region_from: Option<Pos2>,
+    /// A region dragged out, in image pixels, not yet taken.
+    dragged_region: Option<[[f32; 2]; 2]>,
+    /// The region rendered on the image, outlined.
+    outline: Option<Region>,
 }
 
 impl ImageView {
@@ -79,6 +85,30 @@ impl ImageView {
     /// Pins the inspection to `pixel`.
     pub fn pin(&mut self, pixel: [u32; 2]) {
         self.pinned = Some(pixel);
+    }
+
+    /// Turns the region tool on or off: while on, a drag on the image
+    /// chooses a region to render (and turns the tool off) instead of
+    /// orbiting the camera.
+    pub fn toggle_region_tool(&mut self) {
+        self.region_tool = !self.region_tool;
+        self.region_from = None;
+    }
+
+    /// Whether the region tool is on.
+    pub fn region_tool(&self) -> bool {
+        self.region_tool
+    }
+
+    /// The corners of a region dragged out since the last call, in image
+    /// pixels (fractions, any order), if one was.
+    pub fn take_dragged_region(&mut self) -> Option<[[f32; 2]; 2]> {
+        self.dragged_region.take()
+    }
+
+    /// Outlines `region` on the image (`None`: no outline).
+    pub fn outline_region(&mut self, region: Option<Region>) {
+        self.outline = region;
     }
 
     /// The zoom in force.
@@ -124,7 +154,18 @@ impl ImageView {
         let (ctrl, shift) = ui.input(|i| (i.modifiers.command, i.modifiers.shift));
         let delta = response.drag_delta();
         let mut changed = false;
-        if ctrl && response.dragged_by(PointerButton::Primary) {
+        let image_point = |p: Pos2| (p - rect.min) / scale;
+        if self.region_tool && !ctrl && response.dragged_by(PointerButton::Primary) {
+            // Choose a region: the rectangle from the press to the pointer.
+            let origin = ui.input(|i| i.pointer.press_origin());
+            if self.region_from.is_none() {
+                self.region_from = origin.map(|p| image_point(p).to_pos2());
+            }
+            if let (Some(from), Some(to)) = (self.region_from, response.interact_pointer_pos()) {
+                let corners = Rect::from_two_pos(rect.min + from.to_vec2() * scale, to);
+                painter.rect_stroke(corners, 0.0, (1.5, Color32::YELLOW), egui::StrokeKind::Middle);
+            }
+        } else if ctrl && response.dragged_by(PointerButton::Primary) {
             // Pan the image: the point under the cursor follows it.
             self.zoom = Zoom::Scale { scale, center: center - delta / scale };
         } else if response.dragged_by(PointerButton::Secondary)
@@ -159,6 +200,25 @@ impl ImageView {
         if factor != 1.0 {
             let cursor = response.hover_pos().unwrap_or(available.center());
             self.zoom = zoom_about(scale, center, cursor - available.center(), factor);
+        }
+        if response.drag_stopped()
+            && let Some(from) = self.region_from.take()
+            && let Some(to) = response.interact_pointer_pos()
+        {
+            let to = image_point(to);
+            self.dragged_region = Some([[from.x, from.y], [to.x, to.y]]);
+            self.region_tool = false;
+        }
+        if let Some(r) = &self.outline {
+            let corner = |x: u32, y: u32| rect.min + Vec2::new(x as f32, y as f32) * scale;
+            let outline =
+                Rect::from_min_max(corner(r.columns.start, r.rows.start), corner(r.columns.end, r.rows.end));
+            painter.rect_stroke(
+                outline,
+                0.0,
+                (1.0, Color32::from_rgb(255, 200, 0)),
+                egui::StrokeKind::Outside,
+            );
         }
         if response.clicked() {
             self.pinned = response.interact_pointer_pos().and_then(to_pixel);
@@ -304,5 +364,52 @@ mod tests {
         assert_eq!(v.zoom(), Zoom::Scale { scale: 0.5, center: pos2(320.0, 240.0) });
         v.fit();
         assert_eq!(v.zoom(), Zoom::Fit);
+    }
+
+    #[test]
+    fn with_the_region_tool_a_drag_gives_a_region_and_leaves_the_camera() {
+        let ctx = egui::Context::default();
+        let camera = rt_core::Camera::new(
+            rt_core::Vec3::new(0.0, 0.0, -5.0),
+            rt_core::Vec3::ZERO,
+            rt_core::Vec3::Y,
+            40.0,
+            1.0,
+            rt_core::Projection::Perspective,
+        )
+        .unwrap();
+        let mut panel = CameraPanel::new(&camera);
+        let mut view = ImageView::default();
+        view.toggle_region_tool();
+        let screen = Rect::from_min_size(pos2(0.0, 0.0), Vec2::new(640.0, 480.0));
+        let mut frame = |view: &mut ImageView, events: Vec<egui::Event>| {
+            let input = egui::RawInput { screen_rect: Some(screen), events, ..Default::default() };
+            let mut output = ctx.run_ui(input, |ui| {
+                view.ui(ui, None, (640, 480), &mut panel, |_| String::new());
+            });
+            output.textures_delta.clear();
+            ctx.tex_manager().write().take_delta().clear();
+        };
+        let button = |pos, pressed| egui::Event::PointerButton {
+            pos,
+            button: PointerButton::Primary,
+            pressed,
+            modifiers: egui::Modifiers::NONE,
+        };
+        let (from, to) = (pos2(100.0, 120.0), pos2(260.0, 200.0));
+        frame(&mut view, vec![egui::Event::PointerMoved(from)]);
+        frame(&mut view, vec![button(from, true)]);
+        for k in 1..=4 {
+            frame(&mut view, vec![egui::Event::PointerMoved(from + (to - from) * k as f32 / 4.0)]);
+        }
+        frame(&mut view, vec![button(to, false)]);
+        frame(&mut view, vec![]);
+        let corners = view.take_dragged_region().expect("a region");
+        // The image fills the 640 × 480 view at one point per pixel.
+        let region = Region::spanning(corners[0], corners[1], 640, 480).unwrap();
+        assert_eq!(region, Region { columns: 100..260, rows: 120..200 });
+        assert!(!view.region_tool(), "the tool is used once");
+        assert_eq!(panel.settings().position, camera.position(), "the camera orbited");
+        assert_eq!(view.take_dragged_region(), None);
     }
 }

@@ -16,22 +16,44 @@
 //! 1-spp image; the last equals the headless render bit for bit, because
 //! the samples are added in the same order.
 //!
-//! Cancelling (or dropping the job, or dropping its receiver) stops the
-//! workers after the band of rows each is on; rows already in the channel keep their
-//! old generation, and [`super::canvas::Canvas`] refuses them.
+//! With no sample limit ([`JobSpec::open_ended`]) the passes go on until the
+//! job is stopped or cancelled: the same growing passes up to 1024 samples,
+//! then passes of 1024 ([`open_ended_passes`]), sampled with
+//! [`Renderer::open_ended`] (each pass stratified over the pixel on its own,
+//! so the image after any whole pass is unbiased).
+//!
+//! A job may render a [`Region`] of the image only: its rows then hold the
+//! region's columns, and each of its pixels equals the whole image's bit for
+//! bit ([`Renderer::accumulate_region`]).
+//!
+//! A band's pass renders into a copy of its sums, [`CHUNK_SAMPLES`] samples
+//! at a time: the sums stay readable meanwhile (inspection never waits for
+//! a worker), and a long pass (1024 samples of eight rows can take seconds)
+//! can be abandoned between chunks, its band keeping the previous pass.
+//!
+//! [`RenderJob::stop`] ends a job as it stands: once the first pass is
+//! complete, workers abandon the passes in flight and take no more, each
+//! band keeping the samples of its last whole pass (on screen already), and
+//! the job counts as done. Cancelling (or dropping the job, or dropping its
+//! receiver) abandons the work in flight likewise, and rows already in the
+//! channel keep their old generation, so [`super::canvas::Canvas`] refuses them.
 
 use std::ops::Range;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender, TryIter};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
 use egui::Color32;
 use rt_core::math::color::Color;
 use rt_core::render::{BAND_ROWS, RenderError};
+use rt_core::sampling::sampler::{MAX_OPEN_ENDED_SAMPLES, open_ended_block};
 use rt_core::scene::effects::{EffectToggles, RayCounts};
 use rt_core::{Camera, LoadedScene, RenderSettings, Renderer, SettingsError};
+
+use super::eta::{self, BandCost};
+use super::region::Region;
 
 /// The sample ranges of the progressive passes for `spp` samples per pixel:
 /// `0..1`, then ranges four times longer than all before them together
@@ -48,6 +70,25 @@ pub fn sample_passes(spp: u32) -> Vec<Range<u32>> {
     passes
 }
 
+/// The most samples per pixel a worker adds to a band before it checks
+/// whether the job is to end.
+pub const CHUNK_SAMPLES: u32 = 64;
+
+/// The sample ranges of an open-ended render's passes, pass after pass:
+/// its sampler's blocks ([`open_ended_block`]), `0..1`, `1..4`, … `256..1024`
+/// (those of [`sample_passes`]`(1024)`), then `1024..2048`, `2048..3072`, …
+/// up to [`MAX_OPEN_ENDED_SAMPLES`], where sample streams would repeat.
+pub fn open_ended_passes() -> Vec<Range<u32>> {
+    let mut passes = Vec::new();
+    let mut start = 0;
+    while start < MAX_OPEN_ENDED_SAMPLES {
+        let block = open_ended_block(start);
+        start = block.end;
+        passes.push(block);
+    }
+    passes
+}
+
 /// One band's running sums (its rows one after the other) and how many
 /// samples they hold: every row of a band is rendered with the others.
 struct BandSums {
@@ -55,9 +96,9 @@ struct BandSums {
     sums: Vec<Color>,
 }
 
-/// The band function: adds `samples` of the rows `rows` to `sums`, which
-/// holds them one after the other (tests replace it).
-type BandFn = dyn Fn(&Renderer, Range<u32>, Range<u32>, &mut [Color]) -> RayCounts + Send + Sync;
+/// The band function: adds `samples` of the pixels in `columns` of the rows
+/// `rows` to `sums`, which holds them row after row (tests replace it).
+type BandFn = dyn Fn(&Renderer, Range<u32>, Range<u32>, Range<u32>, &mut [Color]) -> RayCounts + Send + Sync;
 
 /// What to render: a scene seen by a camera at a size and sample count.
 #[derive(Clone, Debug)]
@@ -70,8 +111,13 @@ pub struct JobSpec {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
-    /// Samples per pixel.
+    /// Samples per pixel (unused by an open-ended job beyond its check).
     pub spp: u32,
+    /// No sample limit: passes go on until the job is stopped, sampled with
+    /// [`Renderer::open_ended`] (its images differ from a fixed count's).
+    pub open_ended: bool,
+    /// Render only these pixels (`None`: the whole image).
+    pub region: Option<Region>,
     /// The effects the user switched off (the rest of the settings are the file's).
     pub toggles: EffectToggles,
 }
@@ -83,7 +129,18 @@ impl JobSpec {
             Some(self.height),
             Some(self.spp),
         )?;
-        Ok(Renderer::new(&self.scene.scene, self.camera, &settings)?)
+        let renderer = Renderer::new(&self.scene.scene, self.camera, &settings)?;
+        Ok(if self.open_ended { renderer.open_ended() } else { renderer })
+    }
+
+    /// The pixels the job renders: its region, or the whole image.
+    pub fn area(&self) -> Region {
+        self.region.clone().unwrap_or(Region::whole(self.width, self.height))
+    }
+
+    /// The sample ranges of the job's passes.
+    pub fn passes(&self) -> Vec<Range<u32>> {
+        if self.open_ended { open_ended_passes() } else { sample_passes(self.spp) }
     }
 }
 
@@ -93,6 +150,9 @@ pub enum JobError {
     /// The size or sample count is out of range.
     #[error(transparent)]
     Settings(#[from] SettingsError),
+    /// The region is not inside the image.
+    #[error("the region {0:?} is not inside the image")]
+    Region(Region),
     /// The camera's view plane at that size is unusable.
     #[error(transparent)]
     Render(#[from] RenderError),
@@ -107,13 +167,16 @@ pub struct Row {
     pub y: u32,
     /// Samples per pixel the row's colours are the mean of so far.
     pub samples: u32,
-    /// One colour per column.
+    /// One colour per column (per column of the job's region, if it has one).
     pub pixels: Vec<Color32>,
 }
 
 /// A running (or finished, or cancelled) render.
 pub struct RenderJob {
     spec: JobSpec,
+    /// The pixels rendered: the region, or the whole image.
+    area: Region,
+    passes: Vec<Range<u32>>,
     rows: Receiver<Row>,
     shared: Arc<Shared>,
     started: Instant,
@@ -125,19 +188,26 @@ pub struct RenderJob {
 pub struct Progress {
     /// The pass in progress (0-based; the last one once done).
     pub pass: usize,
-    /// How many passes the job makes.
+    /// How many passes the job makes at most.
     pub passes: usize,
+    /// Whether the passes go on until the job is stopped (no sample limit).
+    pub open_ended: bool,
+    /// Samples per pixel every pixel has: those of the passes finished.
+    pub spp: u32,
     /// The samples the pass adds to each pixel.
     pub samples: Range<u32>,
     /// Rows of the pass finished.
     pub rows: u32,
-    /// Rows of the image.
+    /// Rows the job renders (the image's or its region's).
     pub height: u32,
     /// Time since the job started.
     pub elapsed: Duration,
-    /// Time the pass will still take at the rate so far (`None` before
-    /// the first row, and once the pass is done).
+    /// Time the pass will still take, each band of rows priced at its own
+    /// cost ([`eta::time_to`]; `None` during the first pass, before every
+    /// band's cost is known, and once the pass is done).
     pub pass_eta: Option<Duration>,
+    /// Time until the last pass is done, likewise (`None` without a limit).
+    pub eta: Option<Duration>,
     /// Rays of all kinds per second so far.
     pub rays_per_second: f64,
 }
@@ -146,8 +216,19 @@ pub struct Progress {
 struct Shared {
     /// Each band's running sums of linear colour (bands of [`BAND_ROWS`]).
     bands: Vec<Mutex<BandSums>>,
+    /// Signalled when a band's pass is done (its next pass may start).
+    band_done: Vec<Condvar>,
+    /// Each band's samples per pixel so far, read without waiting for its lock.
+    band_samples: Vec<AtomicU32>,
+    /// Each band's thread time per sample in its last pass, nanoseconds as
+    /// `f64` bits (0: not rendered yet).
+    band_cost: Vec<AtomicU64>,
+    /// Thread time spent rendering bands so far, nanoseconds.
+    busy: AtomicU64,
     /// Set to stop the workers after their current band of rows.
     cancel: AtomicBool,
+    /// Set to stop the workers after their current band, the job then done.
+    stop: AtomicBool,
     /// Rays cast so far, all kinds.
     rays: AtomicU64,
     /// Rows finished so far, over all passes.
@@ -160,6 +241,7 @@ struct Shared {
 
 impl Shared {
     fn new(width: u32, height: u32) -> Self {
+        let bands = height.div_ceil(BAND_ROWS) as usize;
         Self {
             bands: (0..height)
                 .step_by(BAND_ROWS as usize)
@@ -168,7 +250,12 @@ impl Shared {
                     Mutex::new(BandSums { samples: 0, sums: vec![Color::ZERO; pixels] })
                 })
                 .collect(),
+            band_done: (0..bands).map(|_| Condvar::new()).collect(),
+            band_samples: (0..bands).map(|_| AtomicU32::new(0)).collect(),
+            band_cost: (0..bands).map(|_| AtomicU64::new(0)).collect(),
+            busy: AtomicU64::new(0),
             cancel: AtomicBool::new(false),
+            stop: AtomicBool::new(false),
             rays: AtomicU64::new(0),
             rows_rendered: AtomicU32::new(0),
             elapsed: Mutex::new(None),
@@ -178,6 +265,33 @@ impl Shared {
 
     fn cancelled(&self) -> bool {
         self.cancel.load(Ordering::Relaxed)
+    }
+
+    /// Whether workers are to take no new band (cancelled or stopped).
+    fn ending(&self) -> bool {
+        self.cancelled() || self.stop.load(Ordering::Relaxed)
+    }
+
+    /// Whether a pass starting at sample `start` is to be abandoned: the
+    /// job is cancelled, or stopped and the pass is not the first (which
+    /// completes, so a stopped job still has every row).
+    fn abandons(&self, start: u32) -> bool {
+        self.cancelled() || (start > 0 && self.stop.load(Ordering::Relaxed))
+    }
+
+    /// What the estimate knows of each band now.
+    fn band_costs(&self) -> Vec<BandCost> {
+        self.band_samples
+            .iter()
+            .zip(&self.band_cost)
+            .map(|(samples, cost)| {
+                let nanos = f64::from_bits(cost.load(Ordering::Relaxed));
+                BandCost {
+                    samples: samples.load(Ordering::Relaxed),
+                    seconds_per_sample: (nanos > 0.0).then_some(nanos * 1e-9),
+                }
+            })
+            .collect()
     }
 }
 
@@ -202,7 +316,9 @@ impl RenderJob {
             spec,
             generation,
             on_row,
-            Box::new(|renderer, rows, samples, sums| renderer.accumulate_rows(rows, samples, sums)),
+            Box::new(|renderer, rows, columns, samples, sums| {
+                renderer.accumulate_region(rows, columns, samples, sums)
+            }),
         )
     }
 
@@ -217,7 +333,11 @@ impl RenderJob {
     ) -> Result<Self, JobError> {
         // Validate on the caller's thread, so errors are returned, not lost.
         spec.renderer()?;
-        let shared = Arc::new(Shared::new(spec.width, spec.height));
+        let area = spec.area();
+        if !area.fits(spec.width, spec.height) {
+            return Err(JobError::Region(area));
+        }
+        let shared = Arc::new(Shared::new(area.width(), area.height()));
         let (tx, rows) = mpsc::channel();
         let worker =
             Worker { spec: spec.clone(), generation, shared: shared.clone(), tx, on_row, render_band };
@@ -225,7 +345,8 @@ impl RenderJob {
             .name(format!("render-job-{generation}"))
             .spawn(move || worker.run())
             .expect("the OS can start a thread");
-        Ok(Self { spec, rows, shared, started: Instant::now(), generation })
+        let passes = spec.passes();
+        Ok(Self { spec, area, passes, rows, shared, started: Instant::now(), generation })
     }
 
     /// The generation its rows carry.
@@ -237,11 +358,13 @@ impl RenderJob {
     /// and how many samples it has; `None` outside the image or before its
     /// row's first pass.
     pub fn linear(&self, x: u32, y: u32) -> Option<(Color, u32)> {
-        if x >= self.spec.width {
+        let area = &self.area;
+        if !area.contains(x, y) {
             return None;
         }
+        let (x, y) = (x - area.columns.start, y - area.rows.start);
         let band = self.shared.bands.get((y / BAND_ROWS) as usize)?.lock().unwrap_or_else(|e| e.into_inner());
-        let sum = *band.sums.get(((y % BAND_ROWS) * self.spec.width + x) as usize)?;
+        let sum = *band.sums.get(((y % BAND_ROWS) * area.width() + x) as usize)?;
         (band.samples > 0).then(|| (sum / band.samples as f32, band.samples))
     }
 
@@ -251,35 +374,62 @@ impl RenderJob {
     }
 
     /// The pass in progress and how many of its rows are finished, the time
-    /// so far, the time the pass still needs, and the rate of rays.
+    /// so far, the time the pass and the job still need, and the rate of rays.
     ///
-    /// The estimate counts work in samples × rows: the rate so far is the
-    /// work done over the time taken, and the pass needs its remaining rows
-    /// times its samples at that rate.
+    /// Rows finish top to bottom and differ in cost many times over, so the
+    /// estimates price each band's remaining samples at that band's own cost
+    /// in its last pass ([`eta::time_to`]), not at the rate of the rows so far.
     pub fn progress(&self) -> Progress {
-        let passes = sample_passes(self.spec.spp);
-        let height = self.spec.height;
+        let passes = &self.passes;
+        let height = self.area.height();
         let done = self.shared.rows_rendered.load(Ordering::Relaxed);
         let pass = ((done / height) as usize).min(passes.len() - 1);
         let rows = (done - pass as u32 * height).min(height);
         let elapsed = self.elapsed().unwrap_or_else(|| self.started.elapsed());
         let seconds = elapsed.as_secs_f64().max(1e-9);
-        let len = |r: &Range<u32>| (r.end - r.start) as f64;
-        let work: f64 = passes[..pass].iter().map(|r| len(r) * height as f64).sum::<f64>()
-            + len(&passes[pass]) * rows as f64;
-        let remaining = len(&passes[pass]) * (height - rows) as f64;
-        let pass_eta =
-            (work > 0.0 && remaining > 0.0).then(|| Duration::from_secs_f64(remaining * seconds / work));
+        let spp = if rows == height { passes[pass].end } else { passes[pass].start };
+        let last = passes.last().expect("at least one pass").end;
         Progress {
             pass,
             passes: passes.len(),
+            open_ended: self.spec.open_ended,
+            spp,
             samples: passes[pass].clone(),
             rows,
             height,
             elapsed,
-            pass_eta,
+            pass_eta: self.eta_to(passes[pass].end),
+            eta: if self.spec.open_ended { None } else { self.eta_to(last) },
             rays_per_second: self.rays() as f64 / seconds,
         }
+    }
+
+    /// Time until every pixel has `samples` samples (the end of the pass
+    /// that reaches them), each band priced at its own cost ([`eta::time_to`]);
+    /// `None` during the first pass, once done, or once the job has ended.
+    pub fn eta_to(&self, samples: u32) -> Option<Duration> {
+        if self.elapsed().is_some() || self.shared.ending() {
+            return None;
+        }
+        let end = self.passes.iter().find(|p| p.end >= samples).map_or(samples, |p| p.end);
+        let busy = self.shared.busy.load(Ordering::Relaxed) as f64 * 1e-9;
+        eta::time_to(end, &self.shared.band_costs(), busy, self.started.elapsed().as_secs_f64())
+    }
+
+    /// Pixel samples taken so far (pixels × their samples), over the
+    /// bands' finished passes.
+    pub fn pixel_samples(&self) -> u64 {
+        let (width, height) = (self.area.width() as u64, self.area.height() as u64);
+        let samples = self.shared.band_samples.iter().map(|s| s.load(Ordering::Relaxed) as u64);
+        samples
+            .enumerate()
+            .map(|(band, n)| (BAND_ROWS as u64).min(height - band as u64 * BAND_ROWS as u64) * width * n)
+            .sum()
+    }
+
+    /// The pixels the job renders: its region, or the whole image.
+    pub fn area(&self) -> &Region {
+        &self.area
     }
 
     /// Why the job stopped on its own, if a band panicked: "rows A–B: message".
@@ -297,6 +447,18 @@ impl RenderJob {
         self.shared.cancel.store(true, Ordering::Relaxed);
     }
 
+    /// Ends the job as it stands: the workers finish and send their current
+    /// bands and take no more, and the job then counts as done
+    /// ([`RenderJob::elapsed`]), each row with the samples it reached.
+    pub fn stop(&self) {
+        self.shared.stop.store(true, Ordering::Relaxed);
+    }
+
+    /// Whether [`RenderJob::stop`] was called.
+    pub fn stopped(&self) -> bool {
+        self.shared.stop.load(Ordering::Relaxed)
+    }
+
     /// Rows that have arrived since the last call, without waiting.
     pub fn try_rows(&self) -> TryIter<'_, Row> {
         self.rows.try_iter()
@@ -308,8 +470,9 @@ impl RenderJob {
         self.rows.recv().ok()
     }
 
-    /// Wall time from start to the last row, once every row is rendered
-    /// (`None` while running or if cancelled).
+    /// Wall time from start to the last row, once every row is rendered or
+    /// the job was stopped and its last rows sent (`None` while running or
+    /// if cancelled).
     pub fn elapsed(&self) -> Option<Duration> {
         *self.shared.elapsed.lock().unwrap_or_else(|e| e.into_inner())
     }
@@ -330,9 +493,9 @@ impl<F: Fn() + Send + Sync> Worker<F> {
     fn run(self) {
         let s = &self.spec;
         let renderer = s.renderer().expect("validated before the thread started");
-        let passes = sample_passes(s.spp);
+        let passes = s.passes();
         let start = Instant::now();
-        let bands = s.height.div_ceil(BAND_ROWS) as u64;
+        let bands = s.area().height().div_ceil(BAND_ROWS) as u64;
         let tasks = passes.len() as u64 * bands;
         let next_task = AtomicU64::new(0);
         rayon::broadcast(|_| {
@@ -342,7 +505,9 @@ impl<F: Fn() + Send + Sync> Worker<F> {
                     break;
                 }
                 let (pass, band) = ((task / bands) as usize, (task % bands) as u32);
-                if !self.render(&renderer, band, passes[pass].clone()) {
+                if self.shared.abandons(passes[pass].start)
+                    || !self.render(&renderer, band, passes[pass].clone())
+                {
                     break;
                 }
             }
@@ -354,43 +519,66 @@ impl<F: Fn() + Send + Sync> Worker<F> {
     }
 
     /// Adds `samples` to the sums of band `band` and sends each of its
-    /// rows' new mean; false when the job is to stop (cancelled, the
+    /// rows' new mean; false when the job is to end (cancelled, stopped, the
     /// receiver gone, or a panic).
     fn render(&self, renderer: &Renderer, band: u32, samples: Range<u32>) -> bool {
-        let rows = band * BAND_ROWS..((band + 1) * BAND_ROWS).min(self.spec.height);
-        let cell = &self.shared.bands[band as usize];
+        let area = self.spec.area();
+        let first = area.rows.start + band * BAND_ROWS;
+        let rows = first..(first + BAND_ROWS).min(area.rows.end);
+        let (cell, done) = (&self.shared.bands[band as usize], &self.shared.band_done[band as usize]);
+        let lock = || cell.lock().unwrap_or_else(|e| e.into_inner());
         // This band's previous pass may still be running on another thread.
-        let mut sums = loop {
-            let sums = cell.lock().unwrap_or_else(|e| e.into_inner());
-            if sums.samples == samples.start || self.shared.cancelled() {
-                break sums;
-            }
-            drop(sums);
-            std::thread::yield_now();
-        };
-        if sums.samples != samples.start {
-            return false; // Cancelled while waiting.
+        let mut sums = lock();
+        while sums.samples != samples.start && !self.shared.abandons(samples.start) {
+            // Woken when that pass is done; the timeout sees a cancel.
+            let wait = done.wait_timeout(sums, Duration::from_millis(10));
+            sums = wait.unwrap_or_else(|e| e.into_inner()).0;
         }
-        let rendered = catch_unwind(AssertUnwindSafe(|| {
-            (self.render_band)(renderer, rows.clone(), samples.clone(), &mut sums.sums)
-        }));
-        let counts = match rendered {
-            Ok(counts) => counts,
-            Err(payload) => {
-                let mut failure = self.shared.failure.lock().unwrap_or_else(|e| e.into_inner());
-                let (first, last) = (rows.start, rows.end - 1);
-                failure.get_or_insert_with(|| format!("rows {first}–{last}: {}", panic_message(&*payload)));
-                self.shared.cancel.store(true, Ordering::Relaxed);
-                (self.on_row)(); // Wake the UI so it shows the failure.
-                return false;
+        if sums.samples != samples.start || self.shared.abandons(samples.start) {
+            return false; // Ended while waiting.
+        }
+        // A copy, so the sums stay readable while the pass renders.
+        let mut pass_sums = sums.sums.clone();
+        drop(sums);
+        let started = Instant::now();
+        let mut counts = RayCounts::default();
+        let mut k = samples.start;
+        while k < samples.end {
+            if self.shared.abandons(samples.start) {
+                return false; // The band keeps its previous pass.
             }
-        };
+            let chunk = k..(k + CHUNK_SAMPLES).min(samples.end);
+            k = chunk.end;
+            let rendered = catch_unwind(AssertUnwindSafe(|| {
+                (self.render_band)(renderer, rows.clone(), area.columns.clone(), chunk, &mut pass_sums)
+            }));
+            match rendered {
+                Ok(c) => counts += c,
+                Err(payload) => {
+                    let mut failure = self.shared.failure.lock().unwrap_or_else(|e| e.into_inner());
+                    let (first, last) = (rows.start, rows.end - 1);
+                    failure
+                        .get_or_insert_with(|| format!("rows {first}–{last}: {}", panic_message(&*payload)));
+                    self.shared.cancel.store(true, Ordering::Relaxed);
+                    (self.on_row)(); // Wake the UI so it shows the failure.
+                    return false;
+                }
+            }
+        }
+        let nanos = started.elapsed().as_nanos() as u64;
+        let mut sums = lock();
+        sums.sums = pass_sums;
         sums.samples = samples.end;
+        done.notify_all();
+        let per_sample = nanos as f64 / samples.len().max(1) as f64;
+        self.shared.band_cost[band as usize].store(per_sample.max(1.0).to_bits(), Ordering::Relaxed);
+        self.shared.band_samples[band as usize].store(samples.end, Ordering::Relaxed);
+        self.shared.busy.fetch_add(nanos, Ordering::Relaxed);
         // The means exactly as `Renderer::pixel` computes them.
         let count = samples.end as f32;
         let color_space = renderer.color_space();
         let finished: Vec<Row> = rows
-            .zip(sums.sums.chunks_exact(self.spec.width as usize))
+            .zip(sums.sums.chunks_exact(area.width() as usize))
             .map(|(y, row)| {
                 let pixels = row
                     .iter()
@@ -436,7 +624,16 @@ mod tests {
     fn spec(width: u32, height: u32) -> JobSpec {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/showcase.ron");
         let scene = Arc::new(rt_core::load_scene(&path).unwrap());
-        JobSpec { camera: scene.camera, scene, width, height, spp: 1, toggles: EffectToggles::default() }
+        JobSpec {
+            camera: scene.camera,
+            scene,
+            width,
+            height,
+            spp: 1,
+            open_ended: false,
+            region: None,
+            toggles: EffectToggles::default(),
+        }
     }
 
     #[test]
@@ -509,23 +706,122 @@ mod tests {
     }
 
     #[test]
-    fn progress_estimates_the_rest_of_the_pass_from_the_rate_so_far() {
+    fn progress_estimates_the_rest_once_every_band_has_a_cost_and_not_before() {
         let mut s = spec(64, 2000);
-        s.spp = 4;
+        s.spp = 16;
         let job = RenderJob::start(s, 1, || {}).unwrap();
-        // Wait for part of the first pass.
-        let mut taken = 0;
-        while taken < 100 {
+        // Part of the first pass: no band below has a cost yet, no estimate.
+        for _ in 0..100 {
             job.next_row_blocking().unwrap();
-            taken += 1;
         }
         let p = job.progress();
-        assert_eq!((p.passes, p.height), (2, 2000));
+        assert_eq!((p.passes, p.height, p.open_ended), (3, 2000, false));
         if p.pass == 0 && p.rows < 2000 {
-            assert!(p.pass_eta.is_some(), "{p:?}");
+            assert_eq!((p.pass_eta, p.eta, p.spp), (None, None, 0), "{p:?}");
         }
+        // Once the first pass's last band is in, in the second pass, every
+        // band has a cost: the pass's end and the job's come before the last pass.
+        let p = loop {
+            let row = job.next_row_blocking().unwrap();
+            let p = job.progress();
+            if p.pass_eta.is_some() {
+                break p;
+            }
+            assert!(row.samples < 16, "no estimate before the last pass: {p:?}");
+        };
+        assert_eq!((p.pass, p.spp), (1, 1), "{p:?}");
+        assert!(p.pass_eta.unwrap() < p.eta.unwrap(), "{p:?}");
         assert!(p.rays_per_second > 0.0 && p.elapsed > Duration::ZERO);
         job.cancel();
+    }
+
+    #[test]
+    fn open_ended_passes_grow_as_the_fixed_ones_to_1024_then_go_by_1024_to_the_cap() {
+        let passes = open_ended_passes();
+        assert_eq!(passes[..6], sample_passes(1024)[..]);
+        assert_eq!(passes[6..8], [1024..2048, 2048..3072]);
+        assert!(passes.windows(2).all(|w| w[0].end == w[1].start));
+        assert_eq!(passes.last().unwrap().end, MAX_OPEN_ENDED_SAMPLES);
+    }
+
+    /// Every row a job sends, in order, with the image its last rows make.
+    fn collect(job: &RenderJob, width: usize, until: impl Fn(&Row) -> bool) -> Vec<Row> {
+        let mut rows = Vec::new();
+        while let Some(row) = job.next_row_blocking() {
+            assert_eq!(row.pixels.len(), width);
+            let done = until(&row);
+            rows.push(row);
+            if done {
+                job.stop();
+            }
+        }
+        rows
+    }
+
+    #[test]
+    fn an_open_ended_job_goes_past_the_fixed_limit_until_stopped_and_each_row_is_its_samples_mean() {
+        let mut s = spec(8, 4);
+        s.open_ended = true;
+        let job = RenderJob::start(s.clone(), 1, || {}).unwrap();
+        let rows = collect(&job, 8, |row| row.samples > 2048);
+        // Stopped: the job is done, each row at the samples it reached.
+        assert!(job.elapsed().is_some() && job.stopped());
+        let ends: Vec<u32> = open_ended_passes().iter().map(|p| p.end).collect();
+        for y in 0..4 {
+            let seen: Vec<u32> = rows.iter().filter(|r| r.y == y).map(|r| r.samples).collect();
+            assert_eq!(seen, ends[..seen.len()], "row {y}");
+            assert!(*seen.last().unwrap() >= 2048, "row {y} stopped at {seen:?}");
+        }
+        // Each row's last colours are the mean of samples 0..n of the
+        // open-ended sampler, added pass by pass.
+        let settings = s.scene.settings.overridden(Some(8), Some(4), Some(1)).unwrap();
+        let r = Renderer::new(&s.scene.scene, s.camera, &settings).unwrap().open_ended();
+        for y in 0..4 {
+            let last = rows.iter().rfind(|row| row.y == y).unwrap();
+            let mut sums = vec![Color::ZERO; 8];
+            for pass in open_ended_passes().into_iter().take_while(|p| p.end <= last.samples) {
+                r.accumulate_row(y, pass, &mut sums);
+            }
+            let expected: Vec<Color32> = sums
+                .iter()
+                .map(|&c| {
+                    let [r, g, b] = r.color_space().encode(c / last.samples as f32);
+                    Color32::from_rgb(r, g, b)
+                })
+                .collect();
+            assert_eq!(last.pixels, expected, "row {y}");
+        }
+    }
+
+    #[test]
+    fn a_region_job_renders_only_its_pixels_and_they_equal_the_headless_render() {
+        let mut s = spec(48, 27);
+        s.spp = 9;
+        s.region = Some(Region { columns: 5..21, rows: 3..14 });
+        let frame = Renderer::new(
+            &s.scene.scene,
+            s.camera,
+            &s.scene.settings.overridden(Some(48), Some(27), Some(9)).unwrap(),
+        )
+        .unwrap()
+        .render(|_| {});
+        let job = RenderJob::start(s, 1, || {}).unwrap();
+        let rows = collect(&job, 16, |_| false);
+        assert_eq!(rows.len(), 11 * 3, "each of the region's rows once a pass");
+        let rgb = frame.to_rgb8();
+        for y in 3..14 {
+            let last = rows.iter().rfind(|row| row.y == y).unwrap();
+            assert_eq!(last.samples, 9);
+            let expected: Vec<Color32> =
+                rgb[y as usize * 48..][5..21].iter().map(|&[r, g, b]| Color32::from_rgb(r, g, b)).collect();
+            assert_eq!(last.pixels, expected, "row {y}");
+        }
+        assert_eq!(job.rays(), 16 * 11 * 9);
+        let (inside, outside) = (job.linear(5, 3).unwrap(), job.linear(4, 3));
+        assert_eq!((inside.0, inside.1, outside), (frame.pixels[3 * 48 + 5], 9, None));
+        let mut bad = spec(48, 27);
+        bad.region = Some(Region { columns: 40..49, rows: 0..1 });
+        assert!(matches!(RenderJob::start(bad, 2, || {}), Err(JobError::Region(_))));
     }
 
     #[test]
@@ -573,11 +869,11 @@ mod tests {
             spec(50, 40),
             1,
             || {},
-            Box::new(|r, rows, samples, sums| {
+            Box::new(|r, rows, columns, samples, sums| {
                 if rows.contains(&7) {
                     panic!("boom at seven");
                 }
-                r.accumulate_rows(rows, samples, sums)
+                r.accumulate_region(rows, columns, samples, sums)
             }),
         )
         .unwrap();
@@ -595,6 +891,57 @@ mod tests {
             rows += 1;
         }
         assert_eq!((rows, next.failure()), (40, None));
+    }
+
+    #[test]
+    fn a_pass_in_flight_leaves_the_sums_readable_and_stop_abandons_it_between_chunks() {
+        // One band of rows, each call of the band function 20 ms: the pass
+        // 256..1024 is 12 chunks (240 ms). Before, the band stayed locked
+        // for a whole pass (inspection waited for it) and Stop waited for it.
+        let calls = Arc::new(AtomicU32::new(0));
+        let counted = calls.clone();
+        let mut s = spec(8, 8);
+        s.spp = 1024;
+        let job = RenderJob::spawn(
+            s,
+            1,
+            || {},
+            Box::new(move |r, rows, columns, samples, sums| {
+                counted.fetch_add(1, Ordering::Relaxed);
+                std::thread::sleep(Duration::from_millis(20));
+                r.accumulate_region(rows, columns, samples, sums)
+            }),
+        )
+        .unwrap();
+        while job.next_row_blocking().unwrap().samples < 256 {}
+        std::thread::sleep(Duration::from_millis(50));
+        let asked = Instant::now();
+        assert_eq!(job.linear(3, 3).map(|(_, n)| n), Some(256));
+        assert!(asked.elapsed() < Duration::from_millis(15), "inspection waited for the pass");
+        job.stop();
+        let stopped = Instant::now();
+        let mut last = Vec::new();
+        while let Some(row) = job.next_row_blocking() {
+            last.push(row.samples);
+        }
+        assert!(stopped.elapsed() < Duration::from_millis(100), "stop waited for the pass");
+        assert!(last.iter().all(|&n| n == 256), "{last:?}");
+        assert!(job.elapsed().is_some() && calls.load(Ordering::Relaxed) < 1 + 1 + 1 + 1 + 3 + 12);
+        assert_eq!(job.linear(3, 3).map(|(_, n)| n), Some(256));
+    }
+
+    #[test]
+    fn a_job_stopped_in_its_first_pass_completes_that_pass() {
+        let mut s = spec(64, 400);
+        s.spp = 16;
+        let job = RenderJob::start(s, 1, || {}).unwrap();
+        job.stop();
+        let mut seen = vec![0; 400];
+        while let Some(row) = job.next_row_blocking() {
+            seen[row.y as usize] += 1;
+        }
+        assert!(seen.iter().all(|&n| n >= 1), "rows missing after a stop in the first pass");
+        assert!(job.elapsed().is_some() && job.stopped());
     }
 
     #[test]

@@ -12,6 +12,10 @@
 //! two); the full-resolution job of the same view then streams its rows
 //! over it (over the preview as far as it got, black below, if the full job
 //! starts before the preview finished); a new scene starts from black.
+//!
+//! A region render ([`Scheduler::start_region`]) renders a rectangle of the
+//! image on screen again: its rows go into the same canvas, the rest of the
+//! image stays as it was. Any other job ends it.
 
 use std::time::{Duration, Instant};
 
@@ -19,7 +23,8 @@ use egui::{TextureHandle, TextureOptions};
 
 use super::canvas::Canvas;
 use super::interaction::Interaction;
-use super::render_job::{JobSpec, RenderJob};
+use super::region::Region;
+use super::render_job::{JobSpec, RenderJob, Row};
 
 /// Preview jobs render at 1/PREVIEW_DIVISOR of the width and height.
 pub const PREVIEW_DIVISOR: u32 = 4;
@@ -62,6 +67,21 @@ pub(super) struct Scheduler {
     refine_pending: bool,
     last_change: Option<Instant>,
     last_full: Option<FrameStats>,
+    /// The job had ended before rows were last taken: every row it sent
+    /// is applied (its end is set after its last row is sent).
+    job_drained: bool,
+}
+
+/// `seconds` as the status line shows it: "4.2 s", "3 min 05 s", "2 h 07 min".
+pub(super) fn duration_text(seconds: f64) -> String {
+    let s = seconds.max(0.0);
+    if s < 60.0 {
+        format!("{s:.1} s")
+    } else if s < 3600.0 {
+        format!("{} min {:02} s", (s / 60.0) as u64, (s % 60.0) as u64)
+    } else {
+        format!("{} h {:02} min", (s / 3600.0) as u64, (s % 3600.0 / 60.0) as u64)
+    }
 }
 
 impl Scheduler {
@@ -109,6 +129,8 @@ impl Scheduler {
         }
         if kind == Kind::NewScene {
             self.refine_pending = false;
+            // The figures were the old scene's.
+            self.last_full = None;
         }
         let (width, height) = (spec.width, spec.height);
         self.next_generation += 1;
@@ -117,6 +139,7 @@ impl Scheduler {
         let job = RenderJob::start(spec, generation, move || repaint.request_repaint())
             .map_err(|e| format!("cannot render: {e}"))?;
         self.job = Some(job); // Dropping the old job cancels it.
+        self.job_drained = false;
         self.job_is_preview = kind == Kind::Preview;
         let max_side = ctx.input(|i| i.max_texture_side);
         match kind {
@@ -137,6 +160,53 @@ impl Scheduler {
             }
         }
         Ok(())
+    }
+
+    /// Renders `region` of the full-resolution image on screen again with
+    /// `spec` (the current view's full job): the job in flight stops, its
+    /// rows go into the image on screen, and the rest of the image stays
+    /// as it was. Refused while no full-resolution image of the current
+    /// view is on screen (a preview, or a region that does not fit).
+    pub fn start_region(
+        &mut self,
+        ctx: &egui::Context,
+        mut spec: JobSpec,
+        region: Region,
+    ) -> Result<(), String> {
+        let Some(canvas) = &self.shown else { return Err("no image to render a region of".into()) };
+        // Every row of the full image once, so the rest stays as it is.
+        let on_screen = canvas.size() == [spec.width as usize, spec.height as usize] && canvas.is_complete();
+        if self.job_is_preview || self.pending.is_some() || self.refine_pending || !on_screen {
+            return Err("a region renders once the full image's first pass is on screen; try again".into());
+        }
+        spec.region = Some(region);
+        // The canvas's own generation: its rows are this image's.
+        let generation = canvas.generation();
+        let repaint = ctx.clone();
+        let job = RenderJob::start(spec, generation, move || repaint.request_repaint())
+            .map_err(|e| format!("cannot render the region: {e}"))?;
+        self.job = Some(job);
+        self.job_drained = false;
+        Ok(())
+    }
+
+    /// The region being rendered or rendered last, if the image on screen has one.
+    pub fn region(&self) -> Option<&Region> {
+        self.shown_job()?.spec().region.as_ref()
+    }
+
+    /// Ends the job in flight as it stands (a render with no sample limit
+    /// ends only so): what is on screen becomes the finished image once its
+    /// last rows arrive, if every row has arrived once.
+    pub fn stop(&mut self) {
+        if let Some(job) = &self.job {
+            job.stop();
+        }
+    }
+
+    /// Whether a job is in flight that [`Scheduler::stop`] would end.
+    pub fn can_stop(&self) -> bool {
+        self.job.as_ref().is_some_and(|j| j.elapsed().is_none() && !j.stopped() && j.failure().is_none())
     }
 
     /// Puts `canvas` on screen, in a new texture if the size changed.
@@ -180,12 +250,19 @@ impl Scheduler {
     /// a preview that is complete goes on screen.
     pub fn apply_rows(&mut self, ctx: &egui::Context) {
         let Some(job) = &self.job else { return };
+        let region_start = job.spec().region.as_ref().map(|r| r.columns.start as usize);
+        let ended = job.elapsed().is_some();
         for row in job.try_rows() {
+            if let (Some(x), Some(c)) = (region_start, &mut self.shown) {
+                c.apply(&whole_row(c, x, row));
+                continue;
+            }
             let applied = self.pending.as_mut().is_some_and(|c| c.apply(&row));
             if !applied && let Some(c) = &mut self.shown {
                 c.apply(&row);
             }
         }
+        self.job_drained |= ended;
         if self.pending.as_ref().is_some_and(Canvas::is_complete) {
             let preview = self.pending.take().expect("checked");
             self.show(ctx, preview);
@@ -197,11 +274,12 @@ impl Scheduler {
             && !self.job_is_preview
             && canvas.generation() == job_generation(&self.job)
             && let Some(job) = &self.job
+            && job.spec().region.is_none()
+            && self.job_drained
             && let Some(elapsed) = job.elapsed()
         {
             let rays = job.rays() as f64;
-            let spec = job.spec();
-            let samples = spec.width as f64 * spec.height as f64 * spec.spp as f64;
+            let samples = job.pixel_samples() as f64;
             let seconds = elapsed.as_secs_f64().max(1e-9);
             self.last_full = Some(FrameStats {
                 seconds,
@@ -239,28 +317,55 @@ impl Scheduler {
         self.texture.as_ref()
     }
 
-    /// Whether the full-resolution image has all its samples.
+    /// Whether the full-resolution image has all its samples (or those it
+    /// had when stopped), every row the job sent applied.
     pub fn frame_is_final(&self) -> bool {
         let complete = self.shown.as_ref().is_some_and(Canvas::is_complete);
-        complete
-            && !self.job_is_preview
-            && self.pending.is_none()
-            && self.job.as_ref().is_some_and(|j| j.elapsed().is_some())
+        complete && !self.job_is_preview && self.pending.is_none() && self.job_drained
     }
 
-    /// The status line: progress of the job in flight (pass, rows, time,
-    /// the pass's remaining time, rays per second) and the last full frame.
-    pub fn status_ui(&self, ui: &mut egui::Ui) {
+    /// The status line: a Stop button while a job runs, its progress
+    /// (pass, samples per pixel so far, rows, time, the time to the pass's
+    /// end, to the last pass's and to `target` samples per pixel, rays per
+    /// second) and the last full frame.
+    pub fn status_ui(&mut self, ui: &mut egui::Ui, target: Option<u32>) {
+        ui.horizontal_wrapped(|ui| {
+            if self.can_stop()
+                && ui.button("Stop").on_hover_text("Space: keep the image as it stands").clicked()
+            {
+                self.stop();
+            }
+            ui.label(self.status_text(target));
+        });
+    }
+
+    /// The text of the status line ([`Scheduler::status_ui`]).
+    pub fn status_text(&self, target: Option<u32>) -> String {
         let mut parts = Vec::new();
         if let Some(job) = &self.job {
             let spec = job.spec();
-            let kind = if self.job_is_preview { "preview" } else { "full" };
+            let kind = match (self.job_is_preview, &spec.region) {
+                (true, _) => "preview".to_owned(),
+                (false, None) => "full".to_owned(),
+                (false, Some(r)) => format!("region {}×{} of", r.width(), r.height()),
+            };
             let p = job.progress();
+            let limit = if p.open_ended { " no limit,".to_owned() } else { String::new() };
             if job.elapsed().is_some() {
-                parts.push(format!("{kind} {}×{} done, {} spp", spec.width, spec.height, spec.spp));
+                let how = if job.stopped() { "stopped" } else { "done" };
+                parts.push(format!("{kind} {}×{}{limit} {how}, {} spp", spec.width, spec.height, p.spp));
+            } else if job.stopped() {
+                parts.push(format!(
+                    "{kind} {}×{}{limit} stopping, {}",
+                    spec.width,
+                    spec.height,
+                    duration_text(p.elapsed.as_secs_f64())
+                ));
             } else {
-                let mut s = format!("{kind} {}×{}", spec.width, spec.height);
-                if p.passes > 1 {
+                let mut s = format!("{kind} {}×{}{limit} {} spp", spec.width, spec.height, p.spp);
+                if p.open_ended {
+                    s += &format!(", pass {} ({}–{} spp)", p.pass + 1, p.samples.start, p.samples.end);
+                } else if p.passes > 1 {
                     s += &format!(
                         ", pass {}/{} ({}–{} spp)",
                         p.pass + 1,
@@ -269,9 +374,19 @@ impl Scheduler {
                         p.samples.end
                     );
                 }
-                s += &format!(", rows {}/{}, {:.1} s", p.rows, p.height, p.elapsed.as_secs_f64());
-                if let Some(eta) = p.pass_eta {
-                    s += &format!(", pass ends in {:.1} s", eta.as_secs_f64());
+                s += &format!(", rows {}/{}, {}", p.rows, p.height, duration_text(p.elapsed.as_secs_f64()));
+                match p.pass_eta {
+                    Some(eta) => s += &format!(", pass ends in {}", duration_text(eta.as_secs_f64())),
+                    None if p.pass == 0 && !self.job_is_preview => s += ", estimating the time left",
+                    None => {}
+                }
+                if let Some(eta) = p.eta.filter(|_| p.passes > p.pass + 1) {
+                    s += &format!(", done in {}", duration_text(eta.as_secs_f64()));
+                }
+                if let Some(target) = target.filter(|&t| t > p.spp && !self.job_is_preview)
+                    && let Some(eta) = job.eta_to(target)
+                {
+                    s += &format!(", {target} spp in {}", duration_text(eta.as_secs_f64()));
                 }
                 s += &format!(", {:.2} Mrays/s", p.rays_per_second / 1e6);
                 parts.push(s);
@@ -284,8 +399,20 @@ impl Scheduler {
             )),
             None => parts.push("last full frame: —".into()),
         }
-        ui.label(parts.join("  ·  "));
+        parts.join("  ·  ")
     }
+}
+
+/// `row`, `x` columns in, as a whole row of `canvas` (its other pixels as
+/// they are on screen): a region job's rows applied to the image.
+fn whole_row(canvas: &Canvas, x: usize, row: Row) -> Row {
+    let [width, _] = canvas.size();
+    let y = row.y as usize;
+    let mut pixels = canvas.pixels().get(y * width..(y + 1) * width).unwrap_or_default().to_vec();
+    if let Some(span) = pixels.get_mut(x..x + row.pixels.len()) {
+        span.copy_from_slice(&row.pixels);
+    }
+    Row { pixels, ..row }
 }
 
 /// The generation of `job`, or 0 (no canvas has it) without one.
@@ -311,7 +438,16 @@ mod tests {
             c.projection(),
         )
         .unwrap();
-        JobSpec { scene, camera, width: 160, height: 90, spp: 1, toggles: Default::default() }
+        JobSpec {
+            scene,
+            camera,
+            width: 160,
+            height: 90,
+            spp: 1,
+            open_ended: false,
+            region: None,
+            toggles: Default::default(),
+        }
     }
 
     fn wait(
@@ -387,5 +523,126 @@ mod tests {
         assert_eq!(s.canvas().unwrap().pixels(), &old[..]);
         drop(s);
         ctx.tex_manager().write().take_delta().clear();
+    }
+
+    /// The `spec`'s image as `Renderer::render` makes it.
+    fn headless(spec: &JobSpec) -> Vec<egui::Color32> {
+        let settings =
+            spec.scene.settings.overridden(Some(spec.width), Some(spec.height), Some(spec.spp)).unwrap();
+        Renderer::new(&spec.scene.scene, spec.camera, &settings)
+            .unwrap()
+            .render(|_| {})
+            .to_rgb8()
+            .iter()
+            .map(|&[r, g, b]| egui::Color32::from_rgb(r, g, b))
+            .collect()
+    }
+
+    fn clear_textures(ctx: &egui::Context, s: Scheduler) {
+        drop(s);
+        ctx.tex_manager().write().take_delta().clear();
+    }
+
+    #[test]
+    fn a_region_renders_only_its_pixels_into_the_image_on_screen_and_the_rest_stays() {
+        let ctx = egui::Context::default();
+        let mut s = Scheduler::default();
+        let view = spec(rt_core::Vec3::new(0.0, 2.0, -8.0));
+        s.start(&ctx, || Some(view.clone()), Kind::NewScene).unwrap();
+        wait(&ctx, &mut s, Scheduler::frame_is_final, |_| {});
+        let one = headless(&view);
+        assert_eq!(s.canvas().unwrap().pixels(), &one[..]);
+        // More samples, in a region only (as if spp changed and a region
+        // were drawn before the full render restarted).
+        let region = Region { columns: 30..95, rows: 20..61 };
+        let nine = JobSpec { spp: 9, ..view.clone() };
+        s.start_region(&ctx, nine.clone(), region.clone()).unwrap();
+        let generation = s.canvas().unwrap().generation();
+        assert!(!s.frame_is_final());
+        wait(&ctx, &mut s, Scheduler::frame_is_final, |_| {});
+        assert_eq!((s.region(), s.canvas().unwrap().generation()), (Some(&region), generation));
+        let nine = headless(&nine);
+        let shown = s.canvas().unwrap().pixels();
+        for y in 0..90 {
+            for x in 0..160 {
+                let (i, inside) = (y * 160 + x, region.contains(x as u32, y as u32));
+                let expected = if inside { nine[i] } else { one[i] };
+                assert!(shown[i] == expected, "pixel ({x}, {y}), inside {inside}");
+            }
+        }
+        assert!(
+            s.status_text(None).starts_with("region 65×41 of 160×90 done, 9 spp"),
+            "{}",
+            s.status_text(None)
+        );
+        // The display (texture) image shows it too.
+        assert_eq!(s.canvas().unwrap().display_image(), shown);
+        // A change of view ends the region; a preview refuses a new one.
+        s.schedule(&ctx, Interaction { changed: true, dragging: false }, || Some(view.clone())).unwrap();
+        assert_eq!(s.region(), None);
+        assert!(s.start_region(&ctx, view.clone(), region).is_err());
+        clear_textures(&ctx, s);
+    }
+
+    #[test]
+    fn a_render_with_no_limit_goes_on_until_stopped_and_is_then_final() {
+        let ctx = egui::Context::default();
+        let mut s = Scheduler::default();
+        let view =
+            JobSpec { width: 16, height: 9, open_ended: true, ..spec(rt_core::Vec3::new(0.0, 2.0, -8.0)) };
+        s.start(&ctx, || Some(view.clone()), Kind::NewScene).unwrap();
+        // Past the fixed cap of 1024 samples per pixel.
+        wait(&ctx, &mut s, |s| s.shown_job().unwrap().progress().spp > 1024, |_| {});
+        assert!(!s.frame_is_final() && s.can_stop());
+        let text = s.status_text(Some(1 << 20));
+        assert!(text.contains("no limit") && text.contains(" spp in "), "{text}");
+        s.stop();
+        wait(&ctx, &mut s, Scheduler::frame_is_final, |_| {});
+        assert!(!s.can_stop());
+        let text = s.status_text(None);
+        assert!(text.contains("no limit, stopped") && !text.contains("last full frame: —"), "{text}");
+        clear_textures(&ctx, s);
+    }
+
+    #[test]
+    fn the_image_is_final_only_once_the_rows_sent_before_the_jobs_end_are_applied() {
+        // Before, a finished job made the image final at once, though its
+        // last rows could still wait in the channel (Save then wrote them
+        // without their last pass).
+        let ctx = egui::Context::default();
+        let mut s = Scheduler::default();
+        let view = JobSpec { spp: 64, ..spec(rt_core::Vec3::new(0.0, 2.0, -8.0)) };
+        s.start(&ctx, || Some(view.clone()), Kind::NewScene).unwrap();
+        wait(&ctx, &mut s, |s| s.canvas().unwrap().is_complete(), |_| {});
+        while s.job.as_ref().unwrap().elapsed().is_none() {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        assert!(!s.frame_is_final(), "final with rows of the last pass not applied");
+        s.apply_rows(&ctx);
+        assert!(s.frame_is_final());
+        assert_eq!(s.canvas().unwrap().pixels(), &headless(&view)[..]);
+        clear_textures(&ctx, s);
+    }
+
+    #[test]
+    fn a_new_scene_clears_the_last_full_frames_figures() {
+        // Before, "last full frame" kept the previous scene's figures.
+        let ctx = egui::Context::default();
+        let mut s = Scheduler::default();
+        let view = spec(rt_core::Vec3::new(0.0, 2.0, -8.0));
+        s.start(&ctx, || Some(view.clone()), Kind::NewScene).unwrap();
+        wait(&ctx, &mut s, Scheduler::frame_is_final, |_| {});
+        s.apply_rows(&ctx);
+        assert!(s.status_text(None).contains("last full frame 0."), "{}", s.status_text(None));
+        s.start(&ctx, || Some(view.clone()), Kind::NewScene).unwrap();
+        assert!(s.status_text(None).contains("last full frame: —"), "{}", s.status_text(None));
+        clear_textures(&ctx, s);
+    }
+
+    #[test]
+    fn durations_read_in_seconds_minutes_or_hours() {
+        assert_eq!(duration_text(4.23), "4.2 s");
+        assert_eq!(duration_text(185.0), "3 min 05 s");
+        assert_eq!(duration_text(7650.0), "2 h 07 min");
     }
 }
