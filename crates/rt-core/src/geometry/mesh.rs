@@ -609,7 +609,7 @@ fn mesh_of(path: &Path, models: &[&tobj::Model], scale: Real, translate: Vec3) -
 /// permutations of `(0, ±1, ±φ)` with φ the golden ratio (circumradius
 /// √(1 + φ²)), and its 20 faces as corner indices, each wound so that
 /// `(b−a)×(c−a)` points outward. The seed of the icosphere of
-/// `examples/gen_meshes.rs` and a closed mesh of [`crate::accuracy::hard_cases`].
+/// `examples/gen_meshes.rs` and a closed mesh of `accuracy::hard_cases` (feature `accuracy`).
 pub fn icosahedron() -> ([[f64; 3]; 12], [[u32; 3]; 20]) {
     let p = (1.0 + 5f64.sqrt()) / 2.0;
     let corners = [
