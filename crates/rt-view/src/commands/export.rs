@@ -20,6 +20,7 @@ use anyhow::Context;
 use clap::Args;
 use rt_core::lights::emitter::Emitter;
 use rt_core::lights::light::LightKind;
+use rt_core::math::real::to_f64;
 use rt_core::{Color, Primitive, Vec3};
 use serde::Serialize;
 
@@ -153,9 +154,9 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
         let material = names[object.material].clone();
         let json_object = match &object.primitive {
             Primitive::Sphere(s) => {
-                ObjectJson::Sphere { center: v3(s.center()), radius: s.radius() as f64, material }
+                ObjectJson::Sphere { center: v3(s.center()), radius: to_f64(s.radius()), material }
             }
-            Primitive::Plane(p) => ObjectJson::Plane { normal: v3(p.normal()), d: p.d() as f64, material },
+            Primitive::Plane(p) => ObjectJson::Plane { normal: v3(p.normal()), d: to_f64(p.d()), material },
             other => {
                 let triangles = triangles_of(other)?;
                 let file = format!("{stem}.object-{i}.obj");
@@ -201,7 +202,7 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
                     LightJson::Directional { direction: v3(direction), power, shadows }
                 }
                 LightKind::Sphere { center, radius, .. } => {
-                    LightJson::Sphere { center: v3(center), radius: radius as f64, power, shadows }
+                    LightJson::Sphere { center: v3(center), radius: to_f64(radius), power, shadows }
                 }
             }
         })
