@@ -16,6 +16,7 @@ use rt_core::ViewPlane;
 
 use super::camera_controls::CameraSettings;
 use super::camera_panel::CameraPanel;
+use super::display_panel::DisplayPanel;
 use super::image_settings::ImageSettings;
 use super::image_view::ImageView;
 use super::interaction::Interaction;
@@ -24,7 +25,7 @@ use super::render_job::{JobSpec, RenderJob};
 use super::scene_source::{SceneChange, SceneSource, load};
 use super::scheduler::{Kind, Scheduler};
 use super::screenshot::{Outcome, Screenshot};
-use crate::image_out::PendingImage;
+use crate::image_out::{Format, PendingImage};
 
 /// How the viewer is started.
 #[derive(Clone, Debug, Default)]
@@ -83,7 +84,7 @@ pub const SHORTCUTS: &[(&str, &str)] = &[
     ("R", "reset the camera to the scene file's"),
     ("F", "fit the image to the window"),
     ("1", "show the image 1:1 (one image pixel per screen pixel)"),
-    ("Ctrl+S", "save the finished image as PNG"),
+    ("Ctrl+S", "save the finished image (PNG or EXR, by the path's extension)"),
     ("Ctrl+O", "open a scene file"),
     ("F5", "reload the scene file"),
     ("P", "show or hide the side panel"),
@@ -104,6 +105,8 @@ pub struct Viewer {
     image: ImageSettings,
     scheduler: Scheduler,
     view: ImageView,
+    /// Exposure, channel views, histogram, reference and comparison.
+    display: DisplayPanel,
     /// The path Save PNG writes to.
     save_path: String,
     notice: Option<Notice>,
@@ -144,6 +147,7 @@ impl Viewer {
             source: SceneSource::new(path, scene, remembered.recent, ctx),
             scheduler: Scheduler::default(),
             view: ImageView::default(),
+            display: DisplayPanel::default(),
             save_path: "render.png".to_owned(),
             notice: None,
             show_panel: remembered.show_panel,
@@ -214,20 +218,31 @@ impl Viewer {
         self.start(ctx, Kind::NewScene);
     }
 
-    /// Writes the finished image to the Save path, atomically.
+    /// Writes the finished image to the Save path, atomically: `.png` as
+    /// 8 bits in the scene's colour space (exposure and views not applied),
+    /// `.exr` as the linear colours, full float.
     fn save(&mut self) {
         let Some(canvas) = self.scheduler.canvas().filter(|_| self.scheduler.frame_is_final()) else {
             self.notify("not saved: the image is not finished yet".into());
             return;
         };
         let path = PathBuf::from(self.save_path.trim());
-        let [width, height] = canvas.size();
-        let saved = PendingImage::png(&path)
-            .and_then(|png| png.write_rgb8(width as u32, height as u32, &canvas.rgb8()));
+        let [width, height] = [canvas.size()[0] as u32, canvas.size()[1] as u32];
+        let saved = PendingImage::create(&path).and_then(|out| match out.format() {
+            Format::Png => out.write_rgb8(width, height, &canvas.rgb8()),
+            Format::Exr => out.write_linear(width, height, canvas.linear()),
+        });
         self.notify(match saved {
             Ok(()) => format!("saved {}", path.display()),
             Err(e) => format!("not saved: {e:#}"),
         });
+    }
+
+    /// Saves to the Save path with its extension made `extension`.
+    fn save_as(&mut self, extension: &str) {
+        let path = PathBuf::from(self.save_path.trim()).with_extension(extension);
+        self.save_path = path.display().to_string();
+        self.save();
     }
 
     /// The keyboard shortcuts ([`SHORTCUTS`]), unless a text field has the keys.
@@ -282,7 +297,7 @@ impl Viewer {
         ui.separator();
         input = input | self.image.ui(ui, &self.source.scene().clone());
         ui.horizontal(|ui| {
-            ui.add(egui::TextEdit::singleline(&mut self.save_path).desired_width(170.0));
+            ui.add(egui::TextEdit::singleline(&mut self.save_path).desired_width(140.0));
             let ready = self.scheduler.frame_is_final();
             let button = ui.add_enabled(ready, egui::Button::new("Save PNG")).on_hover_text("Ctrl+S");
             #[cfg(test)]
@@ -290,9 +305,16 @@ impl Viewer {
                 self.save_button = Some(button.rect);
             }
             if button.clicked() {
-                self.save();
+                self.save_as("png");
+            }
+            let exr =
+                ui.add_enabled(ready, egui::Button::new("EXR")).on_hover_text("Save EXR: linear, full float");
+            if exr.clicked() {
+                self.save_as("exr");
             }
         });
+        ui.separator();
+        self.display.ui(ui, self.scheduler.canvas());
         if let Some(failure) = self.scheduler.failure() {
             ui.separator();
             ui.colored_label(Color32::from_rgb(220, 60, 50), failure);
@@ -351,6 +373,9 @@ impl Viewer {
         }
         egui::Panel::bottom("status").show(ui, |ui| self.scheduler.status_ui(ui));
         let size = self.image.full_size(self.source.scene());
+        let color_space = self.source.scene().settings.color_space;
+        self.scheduler.set_display(self.display.display(color_space));
+        self.view.set_reference(self.display.split_texture());
         let texture = self.scheduler.texture().cloned();
         let (view_input, magnified) = egui::CentralPanel::default()
             .show(ui, |ui| {
@@ -373,6 +398,8 @@ impl Viewer {
         });
         self.schedule(&ctx, input);
         self.scheduler.apply_rows(&ctx);
+        let full_size = [size.0 as usize, size.1 as usize];
+        self.display.update(&ctx, self.scheduler.canvas(), full_size, color_space);
         if let Some(screenshot) = &mut self.screenshot {
             screenshot.step(&ctx, self.scheduler.frame_is_final(), &self.outcome);
         }

@@ -5,16 +5,25 @@
 //! row of a cancelled job can never be drawn over the new view. The UI thread
 //! only copies rows: colours are built by workers.
 //!
-//! The canvas keeps the whole image (for Save PNG and pixel inspection), but
-//! the texture shows a *display* image of at most [`MAX_DISPLAY_SIDE`] pixels
+//! The canvas keeps the whole image twice: linear (scene-referred, the mean
+//! of each pixel's samples so far, for Save EXR, the histogram and the
+//! comparison with a reference) and encoded as 8 bits (for Save PNG). The
+//! texture shows a *display* image of at most [`MAX_DISPLAY_SIDE`] pixels
 //! a side: every k-th pixel of every k-th row, k the smallest whole factor
 //! that fits. A 15 300 × 8 500 render thus shows through a 3 825 × 2 125
 //! texture, and starting a new job touches only that: the full-size buffer
 //! starts as zeroed memory straight from the allocator, transparent until
 //! rows arrive.
+//!
+//! The display image's texels come from the linear image through the
+//! [`Display`] transform (exposure, channel view, false colour, error
+//! against a reference): a row's texels when it arrives, every finished
+//! row's when the transform changes. With the plain transform (exposure
+//! 0, RGB) the rows' own 8-bit colours are copied, as fast as ever.
 
 use egui::{Color32, ColorImage, TextureHandle, TextureOptions};
 
+use super::display::Display;
 use super::render_job::Row;
 
 /// Largest side of the texture the image is shown through, in texels
@@ -30,8 +39,16 @@ pub struct Canvas {
     /// The whole image, row-major, top row first; transparent (all bytes
     /// zero) until rows arrive.
     pixels: Vec<Color32>,
+    /// The whole image in linear colour, row-major; zero until rows arrive.
+    linear: Vec<[f32; 3]>,
     row_done: Vec<bool>,
+    /// Samples per pixel of each row as it arrived (0: not yet).
+    row_samples: Vec<u32>,
     rows_done: u32,
+    /// Rows applied so far, counting a row again each time it arrives.
+    changes: u64,
+    /// How the display image is made from the linear one.
+    transform: Display,
     /// Pixels of the image per display texel along each axis.
     factor: u32,
     /// The display image: `display_size()` texels.
@@ -54,8 +71,12 @@ impl Canvas {
             width,
             height,
             pixels: bytemuck::zeroed_vec(width as usize * height as usize),
+            linear: bytemuck::zeroed_vec(width as usize * height as usize),
             row_done: vec![false; height as usize],
+            row_samples: vec![0; height as usize],
             rows_done: 0,
+            changes: 0,
+            transform: Display::default(),
             factor,
             display: vec![Color32::BLACK; dw as usize * dh as usize],
             pending: Vec::new(),
@@ -111,6 +132,20 @@ impl Canvas {
         (x < self.width && y < self.height)
             .then(|| self.pixels[y as usize * self.width as usize + x as usize])
     }
+    /// Row-major linear colours of the whole image (zero where no row has
+    /// arrived yet).
+    pub fn linear(&self) -> &[[f32; 3]] {
+        &self.linear
+    }
+    /// Samples per pixel of row `y` (0 until it arrives).
+    pub fn row_samples(&self, y: u32) -> u32 {
+        self.row_samples.get(y as usize).copied().unwrap_or(0)
+    }
+    /// How many rows have been applied in all, a row counted each time it
+    /// arrives: what was computed from the image is stale when it changed.
+    pub fn changes(&self) -> u64 {
+        self.changes
+    }
     /// How many distinct rows have arrived.
     pub fn rows_done(&self) -> u32 {
         self.rows_done
@@ -126,29 +161,71 @@ impl Canvas {
         if row.generation != self.generation
             || row.y >= self.height
             || row.pixels.len() != self.width as usize
+            || row.linear.len() != self.width as usize
         {
             return false;
         }
         let start = row.y as usize * self.width as usize;
         self.pixels[start..start + row.pixels.len()].copy_from_slice(&row.pixels);
+        self.linear[start..start + row.linear.len()].copy_from_slice(&row.linear);
         if !std::mem::replace(&mut self.row_done[row.y as usize], true) {
             self.rows_done += 1;
         }
+        self.row_samples[row.y as usize] = row.samples;
+        self.changes += 1;
         if row.y.is_multiple_of(self.factor) {
-            let dy = (row.y / self.factor) as usize;
-            let [dw, _] = self.display_size();
-            let k = self.factor as usize;
-            let texels = &mut self.display[dy * dw..(dy + 1) * dw];
+            let dy = row.y / self.factor;
+            self.make_texels(dy);
+            self.pending.push(dy);
+        }
+        true
+    }
+
+    /// The display transform in force.
+    pub fn display(&self) -> &Display {
+        &self.transform
+    }
+
+    /// Shows the image through `display` from now on: every finished row's
+    /// texels are made again (and uploaded with the next pending rows);
+    /// rows still to come keep the placeholder until they arrive. Nothing
+    /// happens if `display` is the transform in force; returns whether
+    /// it changed.
+    pub fn set_display(&mut self, display: &Display) -> bool {
+        if self.transform == *display {
+            return false;
+        }
+        self.transform = display.clone();
+        let [_, dh] = self.display_size();
+        for dy in 0..dh as u32 {
+            if self.row_done[(dy * self.factor) as usize] {
+                self.make_texels(dy);
+                self.pending.push(dy);
+            }
+        }
+        true
+    }
+
+    /// Makes the texels of display row `dy` from image row `dy·factor`.
+    fn make_texels(&mut self, dy: u32) {
+        let [dw, _] = self.display_size();
+        let (y, k) = ((dy * self.factor) as usize, self.factor as usize);
+        let width = self.width as usize;
+        let texels = &mut self.display[dy as usize * dw..(dy as usize + 1) * dw];
+        if self.transform.is_plain() {
+            let pixels = &self.pixels[y * width..(y + 1) * width];
             if k == 1 {
-                texels.copy_from_slice(&row.pixels);
+                texels.copy_from_slice(pixels);
             } else {
-                for (texel, pixel) in texels.iter_mut().zip(row.pixels.iter().step_by(k)) {
+                for (texel, pixel) in texels.iter_mut().zip(pixels.iter().step_by(k)) {
                     *texel = *pixel;
                 }
             }
-            self.pending.push(dy as u32);
+        } else {
+            let size = [self.width as usize, self.height as usize];
+            let compare = self.transform.error_for(size).map(|e| (e.kind, e.reference.row(y)));
+            self.transform.row(&self.linear[y * width..(y + 1) * width], k, compare, texels);
         }
-        true
     }
 
     /// A new texture holding the whole display image.
@@ -204,7 +281,8 @@ mod tests {
     use super::*;
 
     fn row(generation: u64, y: u32, width: usize, c: Color32) -> Row {
-        Row { generation, y, samples: 1, pixels: vec![c; width] }
+        let linear = [c.r(), c.g(), c.b()].map(|v| v as f32 / 255.0);
+        Row { generation, y, samples: 1, pixels: vec![c; width], linear: vec![linear; width] }
     }
 
     #[test]
@@ -237,7 +315,13 @@ mod tests {
     #[test]
     fn a_new_canvas_shows_the_previous_image_resampled_until_rows_arrive() {
         let mut small = Canvas::new(1, 2, 1, 4096);
-        small.apply(&Row { generation: 1, y: 0, samples: 1, pixels: vec![Color32::RED, Color32::BLUE] });
+        small.apply(&Row {
+            generation: 1,
+            y: 0,
+            samples: 1,
+            pixels: vec![Color32::RED, Color32::BLUE],
+            linear: vec![[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        });
         let big = Canvas::replacing(Some(&small), 2, 4, 2, 4096);
         let r = Color32::RED;
         let b = Color32::BLUE;
@@ -260,7 +344,8 @@ mod tests {
         assert_eq!(texture.size(), c.display_size());
         let mut pixels = vec![Color32::BLACK; 15_300];
         pixels[2 * k] = Color32::RED;
-        assert!(c.apply(&Row { generation: 1, y: k as u32, samples: 1, pixels }));
+        let linear = vec![[0.0; 3]; 15_300];
+        assert!(c.apply(&Row { generation: 1, y: k as u32, samples: 1, pixels, linear }));
         let width = c.display_size()[0];
         assert_eq!(c.display[width + 2], Color32::RED, "texel (2, 1) is pixel (2k, k)");
         assert!(c.apply(&row(1, k as u32 + 1, 15_300, Color32::GREEN)), "rows between texels still count");

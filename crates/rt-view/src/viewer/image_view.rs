@@ -13,6 +13,9 @@
 //! | ctrl + drag | pan the image |
 //! | hover | inspect the pixel under the cursor |
 //! | click | pin the inspection to that pixel (Esc unpins) |
+//! | drag the split line | move it (A/B view: render left, reference right) |
+//!
+//! The zoom is shown in a strip above the image, never over it.
 //!
 //! A drag counts as moving only in frames where the pointer moved: holding
 //! the button still lets the full-resolution render start.
@@ -29,6 +32,10 @@ const ORBIT_PER_POINT: f32 = 0.01;
 const ZOOM_PER_POINT: f32 = 0.0015;
 /// The image zoom's limits, in screen points per image pixel.
 const SCALE_RANGE: (f32, f32) = (0.02, 64.0);
+/// Height of the strip above the image that shows the zoom, in points.
+const LABEL_STRIP: f32 = 18.0;
+/// Half the width of the split line's handle, in points.
+const SPLIT_GRAB: f32 = 5.0;
 
 /// How the image is scaled on screen.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -40,16 +47,20 @@ pub(super) enum Zoom {
     Scale { scale: f32, center: Pos2 },
 }
 
-/// The image view's state: zoom and the inspected pixel.
+/// The image view's state: zoom, the inspected pixel, the A/B split.
 pub(super) struct ImageView {
     zoom: Zoom,
     /// The pixel clicked, inspected until Esc.
     pinned: Option<[u32; 2]>,
+    /// The reference shown right of the split line, if the A/B view is on.
+    reference: Option<TextureHandle>,
+    /// Where the split line is, as a fraction of the image's width.
+    split: f32,
 }
 
 impl Default for ImageView {
     fn default() -> Self {
-        Self { zoom: Zoom::Fit, pinned: None }
+        Self { zoom: Zoom::Fit, pinned: None, reference: None, split: 0.5 }
     }
 }
 
@@ -63,6 +74,18 @@ impl ImageView {
     pub fn one_to_one(&mut self, pixels_per_point: f32, (w, h): (u32, u32)) {
         let center = pos2(w as f32 / 2.0, h as f32 / 2.0);
         self.zoom = Zoom::Scale { scale: 1.0 / pixels_per_point, center };
+    }
+
+    /// Shows `reference` right of the split line (the render left of it),
+    /// or the render alone for `None`.
+    pub fn set_reference(&mut self, reference: Option<TextureHandle>) {
+        self.reference = reference;
+    }
+
+    /// Where the split line is, as a fraction of the image's width.
+    #[cfg(test)]
+    pub fn split(&self) -> f32 {
+        self.split
     }
 
     /// Forgets the pinned pixel.
@@ -89,7 +112,8 @@ impl ImageView {
         camera: &mut CameraPanel,
         inspect: impl FnOnce([u32; 2]) -> String,
     ) -> (Interaction, bool) {
-        let available = ui.available_rect_before_wrap();
+        let whole = ui.available_rect_before_wrap();
+        let (strip, available) = whole.split_top_bottom_at_y(whole.top() + LABEL_STRIP);
         let response = ui.allocate_rect(available, Sense::click_and_drag());
         let size = Vec2::new(w as f32, h as f32);
         let (scale, center) = match self.zoom {
@@ -101,9 +125,45 @@ impl ImageView {
         };
         let rect = Rect::from_min_size(available.center() - center.to_vec2() * scale, size * scale);
         let painter = ui.painter_at(available);
+        let split = self.reference.as_ref().map(|_| rect.left() + rect.width() * self.split);
         if let Some(texture) = texture {
-            let uv = Rect::from_min_max(pos2(0.0, 0.0), pos2(1.0, 1.0));
-            painter.image(texture.id(), rect, uv, Color32::WHITE);
+            let right = split.unwrap_or(rect.right());
+            let part = Rect::from_x_y_ranges(rect.left()..=right, rect.y_range());
+            let uv = Rect::from_min_max(pos2(0.0, 0.0), pos2(self.split_or_whole(), 1.0));
+            painter.image(texture.id(), part, uv, Color32::WHITE);
+        }
+        if let (Some(reference), Some(x)) = (&self.reference, split) {
+            let part = Rect::from_x_y_ranges(x..=rect.right(), rect.y_range());
+            let uv = Rect::from_min_max(pos2(self.split, 0.0), pos2(1.0, 1.0));
+            painter.image(reference.id(), part, uv, Color32::WHITE);
+            let top = rect.top().max(available.top());
+            let bottom = rect.bottom().min(available.bottom());
+            painter.line_segment([pos2(x, top), pos2(x, bottom)], (1.5, Color32::WHITE));
+            // The handle: dragging it moves the line, never the camera.
+            let handle = Rect::from_x_y_ranges(x - SPLIT_GRAB..=x + SPLIT_GRAB, top..=bottom);
+            let grab = ui.interact(handle, ui.make_persistent_id("split line"), Sense::drag());
+            if grab.hovered() || grab.dragged() {
+                ui.ctx().set_cursor_icon(egui::CursorIcon::ResizeHorizontal);
+            }
+            if grab.dragged()
+                && let Some(p) = grab.interact_pointer_pos()
+            {
+                self.split = ((p.x - rect.left()) / rect.width()).clamp(0.0, 1.0);
+            }
+            painter.text(
+                pos2(x - 6.0, top + 4.0),
+                Align2::RIGHT_TOP,
+                "render",
+                FontId::proportional(12.0),
+                Color32::WHITE,
+            );
+            painter.text(
+                pos2(x + 6.0, top + 4.0),
+                Align2::LEFT_TOP,
+                "reference",
+                FontId::proportional(12.0),
+                Color32::WHITE,
+            );
         }
         let to_pixel = |p: Pos2| {
             let q = (p - rect.min) / scale;
@@ -165,9 +225,9 @@ impl ImageView {
             }
         }
         let zoom_text = format!("{:.0} %", scale * ui.ctx().pixels_per_point() * 100.0);
-        painter.text(
-            available.right_top() + Vec2::new(-8.0, 6.0),
-            Align2::RIGHT_TOP,
+        ui.painter_at(strip).text(
+            strip.right_center() + Vec2::new(-8.0, 0.0),
+            Align2::RIGHT_CENTER,
             zoom_text,
             FontId::proportional(12.0),
             Color32::from_white_alpha(160),
@@ -175,6 +235,14 @@ impl ImageView {
         let moving = delta != Vec2::ZERO || scroll != 0.0;
         let magnified = scale * ui.ctx().pixels_per_point() > 1.0;
         (interaction(changed, response.dragged(), moving), magnified)
+    }
+}
+
+impl ImageView {
+    /// How far across the image the render is shown: to the split line in
+    /// the A/B view, else all of it.
+    fn split_or_whole(&self) -> f32 {
+        if self.reference.is_some() { self.split } else { 1.0 }
     }
 }
 

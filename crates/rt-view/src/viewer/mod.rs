@@ -14,6 +14,9 @@
 //!   resolution once still), and the image it streams into: each job
 //!   ([`render_job`]) renders rows in the background and sends them to a
 //!   [`canvas`], from where they reach an egui texture;
+//! - `display_panel`: exposure, the channel and false colour views
+//!   ([`display`]), the [`histogram`], and the [`reference`] image with
+//!   the comparison views and their metrics (`error_metrics`);
 //! - `image_view`: the image on screen (fit, 1:1, zoom), orbit, pan and
 //!   zoom with the mouse, and pixel inspection;
 //! - `screenshot`: `--screenshot`, saving the window once the frame is done;
@@ -29,10 +32,15 @@ mod app;
 pub mod camera_controls;
 mod camera_panel;
 pub mod canvas;
+pub mod display;
+mod display_panel;
+mod error_metrics;
 mod file_browser;
+pub mod histogram;
 mod image_settings;
 mod image_view;
 mod interaction;
+pub mod reference;
 mod remembered;
 pub mod render_job;
 mod scene_source;

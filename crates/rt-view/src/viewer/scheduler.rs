@@ -18,6 +18,7 @@ use std::time::{Duration, Instant};
 use egui::{TextureHandle, TextureOptions};
 
 use super::canvas::Canvas;
+use super::display::Display;
 use super::interaction::Interaction;
 use super::render_job::{JobSpec, RenderJob};
 
@@ -62,6 +63,8 @@ pub(super) struct Scheduler {
     refine_pending: bool,
     last_change: Option<Instant>,
     last_full: Option<FrameStats>,
+    /// The display transform every canvas shows its image through.
+    display: Display,
 }
 
 impl Scheduler {
@@ -176,9 +179,23 @@ impl Scheduler {
         }
     }
 
+    /// Shows every image through `display` from now on (the canvases make
+    /// their texels again, once, if it changed).
+    pub fn set_display(&mut self, display: Display) {
+        self.display = display;
+        for canvas in [&mut self.shown, &mut self.pending].into_iter().flatten() {
+            canvas.set_display(&self.display);
+        }
+    }
+
     /// Applies the rows that arrived since the last frame and uploads them;
     /// a preview that is complete goes on screen.
     pub fn apply_rows(&mut self, ctx: &egui::Context) {
+        // Canvases started since the last `set_display` take the transform
+        // before their first row.
+        for canvas in [&mut self.shown, &mut self.pending].into_iter().flatten() {
+            canvas.set_display(&self.display);
+        }
         let Some(job) = &self.job else { return };
         for row in job.try_rows() {
             let applied = self.pending.as_mut().is_some_and(|c| c.apply(&row));
