@@ -356,6 +356,39 @@ mod tests {
     }
 
     #[test]
+    fn a_new_display_transform_remakes_the_finished_rows_texels_once() {
+        use crate::viewer::display::{Display, ErrorKind, ErrorView};
+        use crate::viewer::reference::Reference;
+        let grey = Color32::from_gray(64); // linear 64/255
+        let mut c = Canvas::replacing(None, 1, 2, 3, 4096);
+        c.apply(&row(1, 0, 2, grey));
+        c.apply(&row(1, 2, 2, grey));
+        c.pending.clear();
+        assert_eq!(c.display, [grey, grey, Color32::BLACK, Color32::BLACK, grey, grey]);
+        let brighter = Display { exposure: 1.0, ..Display::default() };
+        assert!(c.set_display(&brighter));
+        let twice = Color32::from_gray(128);
+        // Rows 0 and 2 made again and pending; row 1 (not rendered) keeps its placeholder.
+        assert_eq!(c.display, [twice, twice, Color32::BLACK, Color32::BLACK, twice, twice]);
+        assert_eq!(c.pending, [0, 2]);
+        assert!(!c.set_display(&brighter), "the same transform again does nothing");
+        assert_eq!(c.pending, [0, 2]);
+        // A row arriving now goes through the transform too.
+        c.apply(&row(1, 1, 2, grey));
+        assert_eq!(c.display[2..4], [twice, twice]);
+        // Back to exposure 0: exactly the rows' own colours.
+        assert!(c.set_display(&Display::default()));
+        assert_eq!(c.display, [grey; 6]);
+        // The absolute error against a reference equal to the render but in pixel 0.
+        let mut pixels = vec![[64.0 / 255.0; 3]; 6];
+        pixels[0] = [0.0; 3];
+        let reference = std::sync::Arc::new(Reference::new(2, 3, pixels, "r".into()).unwrap());
+        let error = ErrorView { kind: ErrorKind::Absolute, reference };
+        c.set_display(&Display { error: Some(error), ..Display::default() });
+        assert_eq!(c.display, [grey, Color32::BLACK, Color32::BLACK, Color32::BLACK, Color32::BLACK, Color32::BLACK]);
+    }
+
+    #[test]
     fn pending_rows_upload_as_one_update_per_run_of_consecutive_rows() {
         let ctx = egui::Context::default();
         let mut c = Canvas::new(1, 3, 6, 4096);

@@ -350,6 +350,137 @@ mod tests {
         assert_ne!(moved, position);
     }
 
+    /// A 640×480 window showing a 640×480 image fitted, its render a red
+    /// texture and, with `split`, a blue reference right of the split line.
+    struct Window {
+        ctx: egui::Context,
+        view: ImageView,
+        panel: CameraPanel,
+        render: TextureHandle,
+        reference: TextureHandle,
+    }
+
+    impl Window {
+        fn new(split: bool) -> Self {
+            let ctx = egui::Context::default();
+            let image = |c| egui::ColorImage::new([64, 48], vec![c; 64 * 48]);
+            let render = ctx.load_texture("render", image(Color32::RED), Default::default());
+            let reference = ctx.load_texture("reference", image(Color32::BLUE), Default::default());
+            let camera = rt_core::Camera::new(
+                rt_core::Vec3::new(0.0, 0.0, -5.0),
+                rt_core::Vec3::ZERO,
+                rt_core::Vec3::Y,
+                40.0,
+                1.0,
+                rt_core::Projection::Perspective,
+            )
+            .unwrap();
+            let mut view = ImageView::default();
+            if split {
+                view.set_reference(Some(reference.clone()));
+            }
+            Self { ctx, view, panel: CameraPanel::new(&camera), render, reference }
+        }
+
+        /// One frame with `events`: what was drawn.
+        fn frame(&mut self, events: Vec<egui::Event>) -> egui::FullOutput {
+            let screen = Rect::from_min_size(pos2(0.0, 0.0), Vec2::new(640.0, 480.0));
+            let input = egui::RawInput { screen_rect: Some(screen), events, ..Default::default() };
+            let (view, panel, render) = (&mut self.view, &mut self.panel, &self.render);
+            let mut output = self.ctx.run_ui(input, |ui| {
+                view.ui(ui, Some(render), (640, 480), panel, |_| String::new());
+            });
+            output.textures_delta.clear();
+            self.ctx.tex_manager().write().take_delta().clear();
+            output
+        }
+
+        /// The screen x range covered by `texture` in `output`, if drawn.
+        fn x_range(&self, output: &egui::FullOutput, texture: &TextureHandle) -> Option<(f32, f32)> {
+            let primitives = self.ctx.tessellate(output.shapes.clone(), output.pixels_per_point);
+            let xs: Vec<f32> = primitives
+                .iter()
+                .filter_map(|p| match &p.primitive {
+                    egui::epaint::Primitive::Mesh(m) if m.texture_id == texture.id() => Some(m),
+                    _ => None,
+                })
+                .flat_map(|m| m.vertices.iter().map(|v| v.pos.x))
+                .collect();
+            let min = xs.iter().copied().reduce(f32::min)?;
+            Some((min, xs.iter().copied().reduce(f32::max)?))
+        }
+    }
+
+    impl Drop for Window {
+        fn drop(&mut self) {
+            self.ctx.tex_manager().write().take_delta().clear();
+        }
+    }
+
+    #[test]
+    fn the_split_view_shows_the_render_left_of_the_line_and_the_reference_right() {
+        let mut w = Window::new(true);
+        w.frame(Vec::new());
+        let output = w.frame(Vec::new());
+        let (render, reference) = (w.x_range(&output, &w.render), w.x_range(&output, &w.reference));
+        let ((r0, r1), (f0, f1)) = (render.expect("render drawn"), reference.expect("reference drawn"));
+        // Fitted below the zoom strip: 616 points wide from x = 12; the line at its middle.
+        assert!((r1 - 320.0).abs() <= 1.0 && (f0 - 320.0).abs() <= 1.0, "{render:?} {reference:?}");
+        assert!(r0 < 20.0 && f1 > 620.0, "{render:?} {reference:?}");
+
+        // Dragging the line moves it (and not the camera) ...
+        let position = w.panel.settings().position;
+        let at = |x| pos2(x, 240.0);
+        let button = |x, pressed| egui::Event::PointerButton {
+            pos: at(x),
+            button: PointerButton::Primary,
+            pressed,
+            modifiers: egui::Modifiers::NONE,
+        };
+        w.frame(vec![egui::Event::PointerMoved(at(320.0))]);
+        w.frame(vec![button(320.0, true)]);
+        w.frame(vec![egui::Event::PointerMoved(at(420.0))]);
+        w.frame(vec![egui::Event::PointerMoved(at(474.0))]);
+        w.frame(vec![button(474.0, false)]);
+        assert!((w.view.split() - 0.75).abs() < 0.01, "{}", w.view.split());
+        assert_eq!(w.panel.settings().position, position, "the drag orbited the camera");
+        let output = w.frame(Vec::new());
+        let (_, r1) = w.x_range(&output, &w.render).unwrap();
+        assert!((r1 - 474.0).abs() <= 1.0, "{r1}");
+
+        // ... and without a reference the render fills the image.
+        let mut alone = Window::new(false);
+        let output = alone.frame(Vec::new());
+        assert!(alone.x_range(&output, &alone.reference).is_none());
+        let (r0, r1) = alone.x_range(&output, &alone.render).unwrap();
+        assert!(r0 < 20.0 && r1 > 620.0, "{r0} {r1}");
+    }
+
+    #[test]
+    fn the_zoom_label_never_covers_the_image() {
+        // Before, "100 %" was drawn in the image's top right corner.
+        let mut w = Window::new(false);
+        let output = w.frame(Vec::new());
+        let (x0, x1) = w.x_range(&output, &w.render).unwrap();
+        let primitives = w.ctx.tessellate(output.shapes.clone(), output.pixels_per_point);
+        let image_clip = primitives
+            .iter()
+            .find(|p| matches!(&p.primitive, egui::epaint::Primitive::Mesh(m) if m.texture_id == w.render.id()))
+            .expect("the image")
+            .clip_rect;
+        let label = output
+            .shapes
+            .iter()
+            .find_map(|s| match &s.shape {
+                egui::Shape::Text(t) if t.galley.text().ends_with(" %") => Some(t.visual_bounding_rect()),
+                _ => None,
+            })
+            .expect("the zoom label");
+        let image = Rect::from_x_y_ranges(x0..=x1, image_clip.y_range()).intersect(image_clip);
+        assert!(!label.intersects(image), "label {label:?} over image {image:?}");
+        assert!(label.right() > x1 - 100.0, "the label stays at the right: {label:?}");
+    }
+
     #[test]
     fn one_to_one_shows_one_image_pixel_per_screen_pixel_and_fit_goes_back() {
         let mut v = ImageView::default();
