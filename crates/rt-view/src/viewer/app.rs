@@ -375,7 +375,7 @@ impl Viewer {
         let size = self.image.full_size(self.source.scene());
         let color_space = self.source.scene().settings.color_space;
         self.scheduler.set_display(self.display.display(color_space));
-        self.view.set_reference(self.display.split_texture());
+        self.view.set_reference(self.display.split_texture(&ctx, color_space));
         let texture = self.scheduler.texture().cloned();
         let (view_input, magnified) = egui::CentralPanel::default()
             .show(ui, |ui| {
@@ -399,7 +399,7 @@ impl Viewer {
         self.schedule(&ctx, input);
         self.scheduler.apply_rows(&ctx);
         let full_size = [size.0 as usize, size.1 as usize];
-        self.display.update(&ctx, self.scheduler.canvas(), full_size, color_space);
+        self.display.update(&ctx, self.scheduler.canvas(), full_size);
         if let Some(screenshot) = &mut self.screenshot {
             screenshot.step(&ctx, self.scheduler.frame_is_final(), &self.outcome);
         }
@@ -853,6 +853,101 @@ mod tests {
             notice.starts_with("the last scene did not open again: ") && notice.contains("scene.ron"),
             "{notice}"
         );
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn save_exr_writes_the_linear_image_and_reads_back_equal() {
+        let dir = tempfile::tempdir().unwrap();
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        finish_render(&ctx, &mut v);
+        v.save_path = dir.path().join("out.png").display().to_string();
+        v.save_as("exr");
+        let path = dir.path().join("out.exr");
+        assert_eq!(v.notice.as_ref().map(|n| n.text.clone()), Some(format!("saved {}", path.display())));
+        let back = image::open(&path).unwrap().to_rgb32f();
+        let canvas = v.scheduler.canvas().unwrap();
+        assert_eq!([back.width() as usize, back.height() as usize], canvas.size());
+        let back: Vec<[f32; 3]> = back.pixels().map(|p| p.0).collect();
+        assert!(back == canvas.linear(), "the EXR differs from the linear image");
+        // The headless render's floats, unclamped: the same numbers.
+        let spec = v.job_spec().unwrap();
+        let settings =
+            spec.scene.settings.overridden(Some(spec.width), Some(spec.height), Some(spec.spp)).unwrap();
+        let frame = rt_core::Renderer::new(&spec.scene.scene, spec.camera, &settings).unwrap().render(|_| {});
+        assert!(back.iter().zip(&frame.pixels).all(|(a, b)| *a == b.to_array()));
+        // Ctrl+S follows the extension: PNG stays 8-bit.
+        v.save_as("png");
+        assert!(image::open(dir.path().join("out.png")).unwrap().as_rgb8().is_some());
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn exposure_and_the_reference_views_go_through_to_the_texels_and_the_metrics() {
+        use crate::viewer::display_panel::Compare;
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        let size = egui::vec2(1000.0, 700.0);
+        finish_render(&ctx, &mut v);
+        frame(&ctx, &mut v, size, vec![]);
+        let plain = v.scheduler.canvas().unwrap().display_image();
+        v.display.set_exposure(1.0);
+        frame(&ctx, &mut v, size, vec![]);
+        let canvas = v.scheduler.canvas().unwrap();
+        let display = canvas.display().clone();
+        assert_eq!(display.exposure, 1.0);
+        let expected: Vec<Color32> = canvas.linear().iter().map(|&c| display.texel(c)).collect();
+        assert_eq!(canvas.display_image(), expected);
+        assert_ne!(canvas.display_image(), plain);
+        v.display.set_exposure(0.0);
+        frame(&ctx, &mut v, size, vec![]);
+        assert_eq!(v.scheduler.canvas().unwrap().display_image(), plain, "exposure 0 is the image as it was");
+
+        // The render becomes the reference: no error, the A/B view on.
+        v.display.use_render(v.scheduler.canvas());
+        frame(&ctx, &mut v, size, vec![]);
+        assert!(v.view.has_reference(), "the split view shows the reference");
+        let m = v.display.metrics().expect("metrics of the finished render");
+        assert_eq!((m.rmse, m.relative_mse), (0.0, 0.0));
+        v.display.set_compare(Compare::Absolute);
+        frame(&ctx, &mut v, size, vec![]);
+        let black = v.scheduler.canvas().unwrap().display_image().iter().all(|&c| c == Color32::BLACK);
+        assert!(black, "the render minus itself is black");
+        // The camera moves: once the new full render is done, the error shows.
+        v.camera.edit(|s| s.orbit(0.3, 0.0));
+        v.start(&ctx, Kind::Full);
+        finish_render(&ctx, &mut v);
+        frame(&ctx, &mut v, size, vec![]);
+        let m = v.display.metrics().unwrap();
+        assert!(m.rmse > 0.01 && m.relative_mse > 0.0, "{m:?}");
+        assert!(v.scheduler.canvas().unwrap().display_image().iter().any(|&c| c != Color32::BLACK));
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn a_reference_of_another_size_or_unreadable_is_a_message_in_the_panel() {
+        let dir = tempfile::tempdir().unwrap();
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        let size = egui::vec2(1000.0, 700.0);
+        let small = dir.path().join("small.png");
+        image::RgbImage::new(7, 5).save(&small).unwrap();
+        for (path, want) in [
+            (small, "the reference is 7 × 5 pixels, the render 320 × 240: no comparison".to_owned()),
+            (
+                dir.path().join("none.exr"),
+                format!("{}: cannot read the image", dir.path().join("none.exr").display()),
+            ),
+        ] {
+            v.display.load(&ctx, path);
+            let deadline = Instant::now() + Duration::from_secs(10);
+            while !v.display.message().is_some_and(|m| m.starts_with(&want)) {
+                assert!(Instant::now() < deadline, "no message: {:?}", v.display.message());
+                frame(&ctx, &mut v, size, vec![]);
+                std::thread::sleep(Duration::from_millis(2));
+            }
+        }
         drop_textures(&ctx, v);
     }
 

@@ -385,7 +385,10 @@ mod tests {
         let reference = std::sync::Arc::new(Reference::new(2, 3, pixels, "r".into()).unwrap());
         let error = ErrorView { kind: ErrorKind::Absolute, reference };
         c.set_display(&Display { error: Some(error), ..Display::default() });
-        assert_eq!(c.display, [grey, Color32::BLACK, Color32::BLACK, Color32::BLACK, Color32::BLACK, Color32::BLACK]);
+        assert_eq!(
+            c.display,
+            [grey, Color32::BLACK, Color32::BLACK, Color32::BLACK, Color32::BLACK, Color32::BLACK]
+        );
     }
 
     #[test]

@@ -47,8 +47,10 @@ pub(super) struct DisplayPanel {
     path: String,
     reference: Option<Arc<Reference>>,
     loading: Option<Loading>,
-    /// Why the last reference did not load, or cannot be compared.
+    /// Why the last reference did not load (or the render was not taken).
     message: Option<String>,
+    /// Why the reference cannot be compared with the render, if it cannot.
+    mismatch: Option<String>,
     histogram: Option<Histogram>,
     /// The canvas (generation, changes) the histogram is of, and when made.
     histogram_of: Option<((u64, u64), Instant)>,
@@ -70,6 +72,7 @@ impl Default for DisplayPanel {
             reference: None,
             loading: None,
             message: None,
+            mismatch: None,
             histogram: None,
             histogram_of: None,
             metrics: Metrics::default(),
@@ -97,11 +100,12 @@ impl DisplayPanel {
         }
     }
 
-    /// The reference to show right of the split line, if the split view is on.
-    pub fn split_texture(&self) -> Option<TextureHandle> {
-        (self.compare == Compare::Split)
-            .then(|| self.reference_texture.as_ref().map(|(t, _)| t.clone()))
-            .flatten()
+    /// The reference to show right of the split line, if the split view is
+    /// on: through the display transform (encoding in `color_space`), made
+    /// again only when the reference or the transform changed.
+    pub fn split_texture(&mut self, ctx: &egui::Context, color_space: ColorSpace) -> Option<TextureHandle> {
+        self.update_reference_texture(ctx, color_space);
+        self.reference_texture.as_ref().map(|(t, _)| t.clone())
     }
 
     /// Sets the exposure, in stops.
@@ -114,6 +118,18 @@ impl DisplayPanel {
     #[cfg(test)]
     pub fn set_compare(&mut self, compare: Compare) {
         self.compare = compare;
+    }
+
+    /// The metrics of the render against the reference, as last updated.
+    #[cfg(test)]
+    pub fn metrics(&self) -> Option<ErrorMetrics> {
+        self.last_metrics
+    }
+
+    /// Why the reference did not load or cannot be compared, if so.
+    #[cfg(test)]
+    pub fn message(&self) -> Option<&str> {
+        self.message.as_deref().or(self.mismatch.as_deref())
     }
 
     /// Starts reading the reference at `path`.
@@ -147,15 +163,8 @@ impl DisplayPanel {
 
     /// Per frame: takes a reference that finished loading, brings the
     /// metrics up to date with `canvas` (the image on screen; `full_size`
-    /// the full render's), makes a histogram if one is due, and the split
-    /// view's texture if the display changed.
-    pub fn update(
-        &mut self,
-        ctx: &egui::Context,
-        canvas: Option<&Canvas>,
-        full_size: [usize; 2],
-        color_space: ColorSpace,
-    ) {
+    /// the full render's), and makes a histogram if one is due.
+    pub fn update(&mut self, ctx: &egui::Context, canvas: Option<&Canvas>, full_size: [usize; 2]) {
         if let Some(result) = self.loading.as_ref().and_then(Loading::poll) {
             self.loading = None;
             match result {
@@ -163,13 +172,13 @@ impl DisplayPanel {
                 Err(e) => self.message = Some(e),
             }
         }
-        if let Some(reference) = &self.reference {
-            if let Some(m) = reference.mismatch(full_size) {
-                self.message = Some(m);
-                self.last_metrics = None;
-            } else if let Some(c) = canvas.filter(|c| c.size() == full_size) {
-                self.last_metrics = self.metrics.update(c, reference);
-            }
+        self.mismatch = self.reference.as_ref().and_then(|r| r.mismatch(full_size));
+        if self.mismatch.is_some() {
+            self.last_metrics = None;
+        } else if let Some(reference) = &self.reference
+            && let Some(c) = canvas.filter(|c| c.size() == full_size)
+        {
+            self.last_metrics = self.metrics.update(c, reference);
         }
         if let Some(c) = canvas {
             let key = (c.generation(), c.changes());
@@ -182,7 +191,6 @@ impl DisplayPanel {
                 ctx.request_repaint_after(histogram::REFRESH);
             }
         }
-        self.update_reference_texture(ctx, color_space);
     }
 
     /// Makes the split view's texture again if the reference or the
@@ -320,7 +328,7 @@ impl DisplayPanel {
                 }
             }
         }
-        if let Some(m) = &self.message {
+        for m in [&self.message, &self.mismatch].into_iter().flatten() {
             ui.colored_label(Color32::from_rgb(220, 60, 50), m);
         }
     }

@@ -82,6 +82,12 @@ impl ImageView {
         self.reference = reference;
     }
 
+    /// Whether a reference is shown right of the split line.
+    #[cfg(test)]
+    pub fn has_reference(&self) -> bool {
+        self.reference.is_some()
+    }
+
     /// Where the split line is, as a fraction of the image's width.
     #[cfg(test)]
     pub fn split(&self) -> f32 {
@@ -465,7 +471,9 @@ mod tests {
         let primitives = w.ctx.tessellate(output.shapes.clone(), output.pixels_per_point);
         let image_clip = primitives
             .iter()
-            .find(|p| matches!(&p.primitive, egui::epaint::Primitive::Mesh(m) if m.texture_id == w.render.id()))
+            .find(
+                |p| matches!(&p.primitive, egui::epaint::Primitive::Mesh(m) if m.texture_id == w.render.id()),
+            )
             .expect("the image")
             .clip_rect;
         let label = output
