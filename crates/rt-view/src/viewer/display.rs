@@ -153,8 +153,62 @@ impl Display {
     /// The texel showing linear colour `c` (already compared with the
     /// reference, if at all).
     pub fn texel(&self, c: [f32; 3]) -> Color32 {
-        let m = self.exposure.exp2();
-        let encoder = Encoder::for_space(self.color_space);
+        Prepared::new(self).texel(c)
+    }
+
+    /// Transforms every `step`-th pixel of linear row `pixels` into
+    /// `texels`, each compared with the same pixel of `reference` (the
+    /// reference's row) under `error`.
+    pub fn row(
+        &self,
+        pixels: &[[f32; 3]],
+        step: usize,
+        compare: Option<(ErrorKind, &[[f32; 3]])>,
+        texels: &mut [Color32],
+    ) {
+        let p = Prepared::new(self);
+        match compare {
+            None => {
+                for (t, c) in texels.iter_mut().zip(pixels.iter().step_by(step)) {
+                    *t = p.texel(*c);
+                }
+            }
+            Some((kind, reference)) => {
+                let pairs = pixels.iter().zip(reference).step_by(step);
+                for (t, (a, b)) in texels.iter_mut().zip(pairs) {
+                    *t = p.texel([0, 1, 2].map(|i| kind.error(a[i], b[i])));
+                }
+            }
+        }
+    }
+}
+
+/// A display transform with what every texel needs worked out once: the
+/// multiplier, the encoder, the false colour scale.
+struct Prepared {
+    multiplier: f32,
+    encoder: &'static Encoder,
+    channel: Channel,
+    /// log2 luminance at the false colour map's low end, and 1 / the range.
+    low: f32,
+    per_stop: f32,
+}
+
+impl Prepared {
+    fn new(d: &Display) -> Self {
+        let [lo, hi] = d.false_colour_range;
+        Self {
+            multiplier: d.exposure.exp2(),
+            encoder: Encoder::for_space(d.color_space),
+            channel: d.channel,
+            low: lo,
+            per_stop: 1.0 / (hi - lo).max(1e-6),
+        }
+    }
+
+    #[inline]
+    fn texel(&self, c: [f32; 3]) -> Color32 {
+        let (m, encoder) = (self.multiplier, self.encoder);
         let grey = |v: f32| {
             let e = encoder.encode(v * m);
             Color32::from_rgb(e, e, e)
@@ -169,35 +223,9 @@ impl Display {
             Channel::B => grey(c[2]),
             Channel::Luminance => grey(luminance(c)),
             Channel::FalseColour => {
-                let [lo, hi] = self.false_colour_range;
                 let y = luminance(c) * m;
-                let t = if y > 0.0 { (y.log2() - lo) / (hi - lo).max(1e-6) } else { 0.0 };
+                let t = if y > 0.0 { (y.log2() - self.low) * self.per_stop } else { 0.0 };
                 turbo(t)
-            }
-        }
-    }
-
-    /// Transforms every `step`-th pixel of linear row `pixels` into
-    /// `texels`, each compared with the same pixel of `reference` (the
-    /// reference's row) under `error`.
-    pub fn row(
-        &self,
-        pixels: &[[f32; 3]],
-        step: usize,
-        compare: Option<(ErrorKind, &[[f32; 3]])>,
-        texels: &mut [Color32],
-    ) {
-        match compare {
-            None => {
-                for (t, p) in texels.iter_mut().zip(pixels.iter().step_by(step)) {
-                    *t = self.texel(*p);
-                }
-            }
-            Some((kind, reference)) => {
-                let pairs = pixels.iter().zip(reference).step_by(step);
-                for (t, (a, b)) in texels.iter_mut().zip(pairs) {
-                    *t = self.texel([0, 1, 2].map(|i| kind.error(a[i], b[i])));
-                }
             }
         }
     }
