@@ -292,8 +292,8 @@ impl Encoder {
     /// rounded to 8 bits.
     #[inline]
     pub fn encode(&self, v: f32) -> u8 {
-        if !(v > 0.0) {
-            return 0; // Zero, negative, NaN.
+        if v.is_nan() || v <= 0.0 {
+            return 0;
         }
         if v >= 1.0 {
             return 255;

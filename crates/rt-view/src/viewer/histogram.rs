@@ -80,7 +80,7 @@ impl Histogram {
 
     /// The bin of value `v`: `None` for zero, below, or NaN.
     pub fn bin(&self, v: f32) -> Option<usize> {
-        if !(v > 0.0) || !v.is_finite() {
+        if v.is_nan() || v <= 0.0 || v.is_infinite() {
             return None;
         }
         let [lo, hi] = self.range;

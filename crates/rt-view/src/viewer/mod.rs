@@ -15,7 +15,7 @@
 //!   ([`render_job`]) renders rows in the background and sends them to a
 //!   [`canvas`], from where they reach an egui texture;
 //! - `display_panel`: exposure, the channel and false colour views
-//!   ([`display`]), the [`histogram`], and the [`reference`] image with
+//!   ([`display`]), the [`histogram`], and the [`reference`](mod@reference) image with
 //!   the comparison views and their metrics (`error_metrics`);
 //! - `image_view`: the image on screen (fit, 1:1, zoom), orbit, pan and
 //!   zoom with the mouse, and pixel inspection;
