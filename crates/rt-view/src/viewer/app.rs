@@ -230,7 +230,7 @@ impl Viewer {
         let [width, height] = [canvas.size()[0] as u32, canvas.size()[1] as u32];
         let saved = PendingImage::create(&path).and_then(|out| match out.format() {
             Format::Png => out.write_rgb8(width, height, &canvas.rgb8()),
-            Format::Exr => out.write_linear(width, height, canvas.linear()),
+            Format::Exr => out.write_linear(width, height, &canvas.linear()),
         });
         self.notify(match saved {
             Ok(()) => format!("saved {}", path.display()),

@@ -3,16 +3,17 @@
 //!
 //! A canvas belongs to one job generation and refuses rows of any other, so a
 //! row of a cancelled job can never be drawn over the new view. The UI thread
-//! only copies rows: colours are built by workers.
+//! only moves rows in and copies their display texels: colours are built by
+//! workers.
 //!
-//! The canvas keeps the whole image twice: linear (scene-referred, the mean
-//! of each pixel's samples so far, for Save EXR, the histogram and the
-//! comparison with a reference) and encoded as 8 bits (for Save PNG). The
-//! texture shows a *display* image of at most [`MAX_DISPLAY_SIDE`] pixels
-//! a side: every k-th pixel of every k-th row, k the smallest whole factor
-//! that fits. A 15 300 × 8 500 render thus shows through a 3 825 × 2 125
-//! texture, and starting a new job touches only that: the full-size buffer
-//! starts as zeroed memory straight from the allocator, transparent until
+//! The canvas keeps the whole image twice, as the rows it was sent (moved
+//! in, not copied): linear (scene-referred, the mean of each pixel's samples
+//! so far, for Save EXR, the histogram and the comparison with a reference)
+//! and encoded as 8 bits (for Save PNG). The texture shows a *display* image
+//! of at most [`MAX_DISPLAY_SIDE`] pixels a side: every k-th pixel of every
+//! k-th row, k the smallest whole factor that fits. A 15 300 × 8 500 render
+//! thus shows through a 3 825 × 2 125 texture, and starting a new job
+//! touches only that: the image has no pixels (transparent, zero) until its
 //! rows arrive.
 //!
 //! The display image's texels come from the linear image through the
@@ -36,14 +37,9 @@ pub struct Canvas {
     generation: u64,
     width: u32,
     height: u32,
-    /// The whole image, row-major, top row first; transparent (all bytes
-    /// zero) until rows arrive.
-    pixels: Vec<Color32>,
-    /// The whole image in linear colour, row-major; zero until rows arrive.
-    linear: Vec<[f32; 3]>,
-    row_done: Vec<bool>,
-    /// Samples per pixel of each row as it arrived (0: not yet).
-    row_samples: Vec<u32>,
+    /// The image's rows, top row first, each the last one that arrived
+    /// (empty until one does).
+    rows: Vec<Stored>,
     rows_done: u32,
     /// Rows applied so far, counting a row again each time it arrives.
     changes: u64,
@@ -55,6 +51,20 @@ pub struct Canvas {
     display: Vec<Color32>,
     /// Display rows changed since the last upload, in arrival order.
     pending: Vec<u32>,
+}
+
+/// One row of the image as it arrived: empty until then.
+#[derive(Clone, Debug, Default)]
+struct Stored {
+    samples: u32,
+    pixels: Vec<Color32>,
+    linear: Vec<[f32; 3]>,
+}
+
+impl Stored {
+    fn done(&self) -> bool {
+        !self.pixels.is_empty()
+    }
 }
 
 impl Canvas {
@@ -70,10 +80,7 @@ impl Canvas {
             generation,
             width,
             height,
-            pixels: bytemuck::zeroed_vec(width as usize * height as usize),
-            linear: bytemuck::zeroed_vec(width as usize * height as usize),
-            row_done: vec![false; height as usize],
-            row_samples: vec![0; height as usize],
+            rows: vec![Stored::default(); height as usize],
             rows_done: 0,
             changes: 0,
             transform: Display::default(),
@@ -123,23 +130,40 @@ impl Canvas {
     pub fn display_factor(&self) -> u32 {
         self.factor
     }
-    /// Row-major pixels of the whole image, top row first.
-    pub fn pixels(&self) -> &[Color32] {
-        &self.pixels
+    /// Row-major 8-bit pixels of the whole image, top row first
+    /// (transparent where no row has arrived yet).
+    pub fn pixels(&self) -> Vec<Color32> {
+        self.gather(|r| &r.pixels, Color32::TRANSPARENT)
     }
-    /// The colour shown at pixel (x, y), if it is inside the image.
+    /// The colour at pixel (x, y), if it is inside the image (transparent
+    /// until its row arrives).
     pub fn pixel(&self, x: u32, y: u32) -> Option<Color32> {
         (x < self.width && y < self.height)
-            .then(|| self.pixels[y as usize * self.width as usize + x as usize])
+            .then(|| self.rows[y as usize].pixels.get(x as usize).copied().unwrap_or(Color32::TRANSPARENT))
     }
     /// Row-major linear colours of the whole image (zero where no row has
     /// arrived yet).
-    pub fn linear(&self) -> &[[f32; 3]] {
-        &self.linear
+    pub fn linear(&self) -> Vec<[f32; 3]> {
+        self.gather(|r| &r.linear, [0.0; 3])
+    }
+    /// The linear colours of row `y`, once it has arrived.
+    pub fn linear_row(&self, y: u32) -> Option<&[[f32; 3]]> {
+        self.rows.get(y as usize).filter(|r| r.done()).map(|r| &r.linear[..])
     }
     /// Samples per pixel of row `y` (0 until it arrives).
     pub fn row_samples(&self, y: u32) -> u32 {
-        self.row_samples.get(y as usize).copied().unwrap_or(0)
+        self.rows.get(y as usize).map_or(0, |r| r.samples)
+    }
+    /// The rows' `part` one after the other, `missing` for rows not arrived.
+    fn gather<T: Copy>(&self, part: impl Fn(&Stored) -> &Vec<T>, missing: T) -> Vec<T> {
+        let mut all = Vec::with_capacity(self.width as usize * self.height as usize);
+        for r in &self.rows {
+            match r.done() {
+                true => all.extend_from_slice(part(r)),
+                false => all.extend(std::iter::repeat_n(missing, self.width as usize)),
+            }
+        }
+        all
     }
     /// How many rows have been applied in all, a row counted each time it
     /// arrives: what was computed from the image is stale when it changed.
@@ -155,30 +179,35 @@ impl Canvas {
         self.rows_done == self.height
     }
 
-    /// Applies `row` if it belongs to this canvas's generation and size;
-    /// returns whether it was applied.
+    /// Applies a copy of `row` if it belongs to this canvas's generation
+    /// and size; returns whether it was applied. ([`Canvas::take`] moves a
+    /// row in without copying it.)
     pub fn apply(&mut self, row: &Row) -> bool {
+        self.take(row.clone()).is_ok()
+    }
+
+    /// Moves `row` in if it belongs to this canvas's generation and size;
+    /// gives it back if not.
+    pub fn take(&mut self, row: Row) -> Result<(), Row> {
         if row.generation != self.generation
             || row.y >= self.height
             || row.pixels.len() != self.width as usize
             || row.linear.len() != self.width as usize
         {
-            return false;
+            return Err(row);
         }
-        let start = row.y as usize * self.width as usize;
-        self.pixels[start..start + row.pixels.len()].copy_from_slice(&row.pixels);
-        self.linear[start..start + row.linear.len()].copy_from_slice(&row.linear);
-        if !std::mem::replace(&mut self.row_done[row.y as usize], true) {
+        let stored = &mut self.rows[row.y as usize];
+        if !stored.done() {
             self.rows_done += 1;
         }
-        self.row_samples[row.y as usize] = row.samples;
+        *stored = Stored { samples: row.samples, pixels: row.pixels, linear: row.linear };
         self.changes += 1;
         if row.y.is_multiple_of(self.factor) {
             let dy = row.y / self.factor;
             self.make_texels(dy);
             self.pending.push(dy);
         }
-        true
+        Ok(())
     }
 
     /// The display transform in force.
@@ -198,7 +227,7 @@ impl Canvas {
         self.transform = display.clone();
         let [_, dh] = self.display_size();
         for dy in 0..dh as u32 {
-            if self.row_done[(dy * self.factor) as usize] {
+            if self.rows[(dy * self.factor) as usize].done() {
                 self.make_texels(dy);
                 self.pending.push(dy);
             }
@@ -210,10 +239,10 @@ impl Canvas {
     fn make_texels(&mut self, dy: u32) {
         let [dw, _] = self.display_size();
         let (y, k) = ((dy * self.factor) as usize, self.factor as usize);
-        let width = self.width as usize;
         let texels = &mut self.display[dy as usize * dw..(dy as usize + 1) * dw];
+        let row = &self.rows[y];
         if self.transform.is_plain() {
-            let pixels = &self.pixels[y * width..(y + 1) * width];
+            let pixels = &row.pixels;
             if k == 1 {
                 texels.copy_from_slice(pixels);
             } else {
@@ -224,7 +253,7 @@ impl Canvas {
         } else {
             let size = [self.width as usize, self.height as usize];
             let compare = self.transform.error_for(size).map(|e| (e.kind, e.reference.row(y)));
-            self.transform.row(&self.linear[y * width..(y + 1) * width], k, compare, texels);
+            self.transform.row(&row.linear, k, compare, texels);
         }
     }
 
@@ -272,7 +301,7 @@ impl Canvas {
 
     /// The image as 8-bit RGB rows, for saving.
     pub fn rgb8(&self) -> Vec<rt_core::render::Rgb8> {
-        self.pixels.iter().map(|c| [c.r(), c.g(), c.b()]).collect()
+        self.pixels().iter().map(|c| [c.r(), c.g(), c.b()]).collect()
     }
 }
 

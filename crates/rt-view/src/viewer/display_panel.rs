@@ -145,7 +145,7 @@ impl DisplayPanel {
         let [w, h] = canvas.map_or([0, 0], Canvas::size);
         let name = format!("the render ({w} × {h})");
         let complete = canvas.filter(|c| c.is_complete());
-        match complete.and_then(|c| Reference::new(w, h, c.linear().to_vec(), name)) {
+        match complete.and_then(|c| Reference::new(w, h, c.linear(), name)) {
             Some(r) => self.set_reference(r),
             None => self.message = Some("the render is not finished yet: no reference taken".into()),
         }
@@ -222,9 +222,8 @@ impl DisplayPanel {
     pub fn ui(&mut self, ui: &mut egui::Ui, canvas: Option<&Canvas>) {
         ui.heading("Display");
         ui.horizontal(|ui| {
-            ui.add(
-                egui::Slider::new(&mut self.exposure, EXPOSURE_RANGE).step_by(0.1).text("exposure (stops)"),
-            );
+            ui.add(egui::Slider::new(&mut self.exposure, EXPOSURE_RANGE).step_by(0.1).text("exposure"))
+                .on_hover_text("in stops: the linear colours are multiplied by 2^exposure");
             if ui.small_button("0").on_hover_text("exposure 0").clicked() {
                 self.exposure = 0.0;
             }

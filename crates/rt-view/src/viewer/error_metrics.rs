@@ -59,7 +59,8 @@ impl Metrics {
         for (y, row) in self.rows.iter_mut().enumerate() {
             let samples = canvas.row_samples(y as u32);
             if samples != row.0 {
-                let (squared, relative) = row_errors(&canvas.linear()[y * w..(y + 1) * w], reference.row(y));
+                let (squared, relative) =
+                    canvas.linear_row(y as u32).map_or((0.0, 0.0), |a| row_errors(a, reference.row(y)));
                 *row = (samples, squared, relative);
             }
         }

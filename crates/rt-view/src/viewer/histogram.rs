@@ -64,14 +64,11 @@ impl Histogram {
     /// k-th of their pixels, k the smallest that keeps to [`MAX_SAMPLES`].
     pub fn of_canvas(canvas: &Canvas) -> Self {
         let [w, h] = canvas.size();
-        let done = (0..h).filter(|&y| canvas.row_samples(y as u32) > 0);
         let step = (canvas.rows_done() as usize * w).div_ceil(MAX_SAMPLES).max(1);
-        let linear = canvas.linear();
         let mut samples = Vec::with_capacity(MAX_SAMPLES.min(canvas.rows_done() as usize * w));
         let mut skip = 0;
-        for y in done {
+        for row in (0..h as u32).filter_map(|y| canvas.linear_row(y)) {
             // Continues the stride across rows, so narrow images sample evenly.
-            let row = &linear[y * w..(y + 1) * w];
             samples.extend(row.iter().skip(skip).step_by(step));
             skip = (skip + step - w % step) % step;
         }
