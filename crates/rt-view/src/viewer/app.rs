@@ -4,7 +4,8 @@
 //! [`Remembered`] for eframe to save (and hands it back out at the start).
 //!
 //! The side panel (scrollable, fixed width) stacks the scene source, the
-//! camera panel, the image settings and Save; the status line and the image
+//! camera panel, the image settings, Save, and the display and reference
+//! sections ([`DisplayPanel`]); the status line and the image
 //! view come from the scheduler and [`ImageView`]. No part renders or
 //! waits: a change of view only asks the scheduler for a new job.
 
@@ -107,7 +108,7 @@ pub struct Viewer {
     view: ImageView,
     /// Exposure, channel views, histogram, reference and comparison.
     display: DisplayPanel,
-    /// The path Save PNG writes to.
+    /// The path Save PNG and Save EXR write to (with their extension).
     save_path: String,
     notice: Option<Notice>,
     show_panel: bool,
@@ -313,8 +314,6 @@ impl Viewer {
                 self.save_as("exr");
             }
         });
-        ui.separator();
-        self.display.ui(ui, self.scheduler.canvas());
         if let Some(failure) = self.scheduler.failure() {
             ui.separator();
             ui.colored_label(Color32::from_rgb(220, 60, 50), failure);
@@ -323,6 +322,8 @@ impl Viewer {
             ui.separator();
             ui.label(&n.text);
         }
+        ui.separator();
+        self.display.ui(ui, self.scheduler.canvas());
         ui.separator();
         ui.small("Drag: orbit · Shift/right drag: pan · Wheel: zoom\nCtrl+wheel, Ctrl+drag: zoom and pan the image\nF1: all shortcuts");
         input
