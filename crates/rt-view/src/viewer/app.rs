@@ -392,11 +392,9 @@ impl Viewer {
         if input.changed {
             self.notice = None;
         }
-        self.scheduler.set_filter(if magnified {
-            egui::TextureOptions::NEAREST
-        } else {
-            egui::TextureOptions::LINEAR
-        });
+        let filter = if magnified { egui::TextureOptions::NEAREST } else { egui::TextureOptions::LINEAR };
+        self.scheduler.set_filter(filter);
+        self.display.set_filter(filter);
         self.schedule(&ctx, input);
         self.scheduler.apply_rows(&ctx);
         let full_size = [size.0 as usize, size.1 as usize];

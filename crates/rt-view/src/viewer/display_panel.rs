@@ -57,8 +57,10 @@ pub(super) struct DisplayPanel {
     metrics: Metrics,
     last_metrics: Option<ErrorMetrics>,
     /// The reference through the display transform, for the split view,
-    /// and the transform it was made with.
-    reference_texture: Option<(TextureHandle, Display)>,
+    /// and the transform and filter it was made with.
+    reference_texture: Option<(TextureHandle, Display, TextureOptions)>,
+    /// How the split view's reference is filtered: as the render is.
+    filter: TextureOptions,
 }
 
 impl Default for DisplayPanel {
@@ -78,6 +80,7 @@ impl Default for DisplayPanel {
             metrics: Metrics::default(),
             last_metrics: None,
             reference_texture: None,
+            filter: TextureOptions::LINEAR,
         }
     }
 }
@@ -105,7 +108,13 @@ impl DisplayPanel {
     /// again only when the reference or the transform changed.
     pub fn split_texture(&mut self, ctx: &egui::Context, color_space: ColorSpace) -> Option<TextureHandle> {
         self.update_reference_texture(ctx, color_space);
-        self.reference_texture.as_ref().map(|(t, _)| t.clone())
+        self.reference_texture.as_ref().map(|(t, _, _)| t.clone())
+    }
+
+    /// Filters the split view's reference with `options` from now on (the
+    /// render's: nearest-neighbour when magnified).
+    pub fn set_filter(&mut self, options: TextureOptions) {
+        self.filter = options;
     }
 
     /// Sets the exposure, in stops.
@@ -201,7 +210,7 @@ impl DisplayPanel {
             return;
         };
         let display = Display { error: None, ..self.display(color_space) };
-        if self.reference_texture.as_ref().is_some_and(|(_, d)| *d == display) {
+        if self.reference_texture.as_ref().is_some_and(|(_, d, f)| *d == display && *f == self.filter) {
             return;
         }
         let [w, h] = reference.size();
@@ -212,9 +221,8 @@ impl DisplayPanel {
         for (dy, out) in texels.chunks_exact_mut(dw).enumerate() {
             display.row(reference.row(dy * k), k, None, out);
         }
-        let texture =
-            ctx.load_texture("reference", ColorImage::new([dw, dh], texels), TextureOptions::LINEAR);
-        self.reference_texture = Some((texture, display));
+        let texture = ctx.load_texture("reference", ColorImage::new([dw, dh], texels), self.filter);
+        self.reference_texture = Some((texture, display, self.filter));
     }
 
     /// The display section, then the reference section. `canvas` is the
