@@ -205,12 +205,21 @@ impl PendingImage {
         match self.format {
             Format::Png => self.write_rgb8(frame.width, frame.height, &frame.to_rgb8()),
             Format::Exr => {
-                let floats: Vec<f32> = frame.pixels.iter().flat_map(|c| c.to_array()).collect();
-                let image = image::Rgb32FImage::from_raw(frame.width, frame.height, floats)
-                    .context("frame size does not match its pixels")?;
-                self.write_bytes(|out| image.write_with_encoder(OpenExrEncoder::new(out)))
+                let pixels: Vec<[f32; 3]> = frame.pixels.iter().map(|c| c.to_array()).collect();
+                self.write_linear(frame.width, frame.height, &pixels)
             }
         }
+    }
+
+    /// Writes linear colours (row-major, top row first) as OpenEXR, 32-bit
+    /// floats as they are (scene-referred: nothing clamped or encoded).
+    pub fn write_linear(self, width: u32, height: u32, pixels: &[[f32; 3]]) -> anyhow::Result<()> {
+        if self.format != Format::Exr {
+            bail!("{}: linear images are written as .exr only", self.file.target.display());
+        }
+        let image = image::Rgb32FImage::from_raw(width, height, pixels.as_flattened().to_vec())
+            .context("image size does not match its pixels")?;
+        self.write_bytes(|out| image.write_with_encoder(OpenExrEncoder::new(out)))
     }
 
     /// Writes 8-bit pixels (row-major, top row first) as PNG.
@@ -251,6 +260,21 @@ mod tests {
             .unwrap();
         child.wait().unwrap();
         child
+    }
+
+    #[test]
+    fn linear_images_read_back_from_exr_as_the_same_floats() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("linear.exr");
+        let pixels = [[0.0, 0.5, 1.0], [3.75, 1e-4, 250.0], [0.1, 0.2, 0.3], [-0.0, 7.0, 0.015625]];
+        PendingImage::create(&target).unwrap().write_linear(2, 2, &pixels).unwrap();
+        let back = image::open(&target).unwrap().to_rgb32f();
+        assert_eq!((back.width(), back.height()), (2, 2));
+        let back: Vec<[f32; 3]> = back.pixels().map(|p| p.0).collect();
+        assert_eq!(back, pixels);
+        // Linear images are not PNGs, nor 8-bit ones EXRs.
+        let png = PendingImage::create(&dir.path().join("x.png")).unwrap();
+        assert!(png.write_linear(2, 2, &pixels).unwrap_err().to_string().contains(".exr only"));
     }
 
     #[test]

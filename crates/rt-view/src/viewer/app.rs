@@ -4,7 +4,8 @@
 //! [`Remembered`] for eframe to save (and hands it back out at the start).
 //!
 //! The side panel (scrollable, fixed width) stacks the scene source, the
-//! camera panel, the image settings and Save; the status line and the image
+//! camera panel, the image settings, Save, and the display and reference
+//! sections ([`DisplayPanel`]); the status line and the image
 //! view come from the scheduler and [`ImageView`]. No part renders or
 //! waits: a change of view only asks the scheduler for a new job.
 
@@ -16,6 +17,7 @@ use rt_core::ViewPlane;
 
 use super::camera_controls::CameraSettings;
 use super::camera_panel::CameraPanel;
+use super::display_panel::DisplayPanel;
 use super::image_settings::ImageSettings;
 use super::image_view::ImageView;
 use super::interaction::Interaction;
@@ -26,7 +28,7 @@ use super::scene_source::{SceneChange, SceneSource, load};
 use super::scheduler::{Kind, Scheduler};
 use super::screenshot::{Outcome, Screenshot};
 use super::trace::{self, Trace};
-use crate::image_out::PendingImage;
+use crate::image_out::{Format, PendingImage};
 
 /// How the viewer is started.
 #[derive(Clone, Debug, Default)]
@@ -90,7 +92,7 @@ pub const SHORTCUTS: &[(&str, &str)] = &[
     (".", "frame the pinned object: it fills the view"),
     ("F", "fit the image to the window"),
     ("1", "show the image 1:1 (one image pixel per screen pixel)"),
-    ("Ctrl+S", "save the finished image as PNG"),
+    ("Ctrl+S", "save the finished image (PNG or EXR, by the path's extension)"),
     ("Ctrl+O", "open a scene file"),
     ("F5", "reload the scene file"),
     ("P", "show or hide the side panel"),
@@ -114,7 +116,9 @@ pub struct Viewer {
     image: ImageSettings,
     scheduler: Scheduler,
     view: ImageView,
-    /// The path Save PNG writes to.
+    /// Exposure, channel views, histogram, reference and comparison.
+    display: DisplayPanel,
+    /// The path Save PNG and Save EXR write to (with their extension).
     save_path: String,
     notice: Option<Notice>,
     show_panel: bool,
@@ -156,6 +160,7 @@ impl Viewer {
             source: SceneSource::new(path, scene, remembered.recent, ctx),
             scheduler: Scheduler::default(),
             view: ImageView::default(),
+            display: DisplayPanel::default(),
             save_path: "render.png".to_owned(),
             notice: None,
             show_panel: remembered.show_panel,
@@ -306,20 +311,31 @@ impl Viewer {
         });
     }
 
-    /// Writes the finished image to the Save path, atomically.
+    /// Writes the finished image to the Save path, atomically: `.png` as
+    /// 8 bits in the scene's colour space (exposure and views not applied),
+    /// `.exr` as the linear colours, full float.
     fn save(&mut self) {
         let Some(canvas) = self.scheduler.canvas().filter(|_| self.scheduler.frame_is_final()) else {
             self.notify("not saved: the image is not finished yet".into());
             return;
         };
         let path = save_path_for(self.save_path.trim(), self.source.path());
-        let [width, height] = canvas.size();
-        let saved = PendingImage::png(&path)
-            .and_then(|png| png.write_rgb8(width as u32, height as u32, &canvas.rgb8()));
+        let [width, height] = [canvas.size()[0] as u32, canvas.size()[1] as u32];
+        let saved = PendingImage::create(&path).and_then(|out| match out.format() {
+            Format::Png => out.write_rgb8(width, height, &canvas.rgb8()),
+            Format::Exr => out.write_linear(width, height, &canvas.linear()),
+        });
         self.notify(match saved {
             Ok(()) => format!("saved {}", path.display()),
             Err(e) => format!("not saved: {e:#}"),
         });
+    }
+
+    /// Saves to the Save path with its extension made `extension`.
+    fn save_as(&mut self, extension: &str) {
+        let path = PathBuf::from(self.save_path.trim()).with_extension(extension);
+        self.save_path = path.display().to_string();
+        self.save();
     }
 
     /// The keyboard shortcuts ([`SHORTCUTS`]), unless a text field has the keys.
@@ -400,7 +416,7 @@ impl Viewer {
         input = input | self.image.ui(ui, &self.source.scene().clone());
         self.region_ui(ui);
         ui.horizontal(|ui| {
-            ui.add(egui::TextEdit::singleline(&mut self.save_path).desired_width(170.0));
+            ui.add(egui::TextEdit::singleline(&mut self.save_path).desired_width(140.0));
             let ready = self.scheduler.frame_is_final();
             let button = ui.add_enabled(ready, egui::Button::new("Save PNG")).on_hover_text("Ctrl+S");
             #[cfg(test)]
@@ -408,7 +424,12 @@ impl Viewer {
                 self.save_button = Some(button.rect);
             }
             if button.clicked() {
-                self.save();
+                self.save_as("png");
+            }
+            let exr =
+                ui.add_enabled(ready, egui::Button::new("EXR")).on_hover_text("Save EXR: linear, full float");
+            if exr.clicked() {
+                self.save_as("exr");
             }
         });
         if let Some(failure) = self.scheduler.failure() {
@@ -419,6 +440,8 @@ impl Viewer {
             ui.separator();
             ui.label(&n.text);
         }
+        ui.separator();
+        self.display.ui(ui, self.scheduler.canvas());
         ui.separator();
         ui.small("Drag: orbit · Shift/right drag: pan · Wheel: zoom\nCtrl+wheel, Ctrl+drag: zoom and pan the image\nSpace: stop · B: region · F1: all shortcuts");
         input
@@ -471,6 +494,9 @@ impl Viewer {
         let target = self.image.target_spp();
         egui::Panel::bottom("status").show(ui, |ui| self.scheduler.status_ui(ui, target));
         let size = self.image.full_size(self.source.scene());
+        let color_space = self.source.scene().settings.color_space;
+        self.scheduler.set_display(self.display.display(color_space));
+        self.view.set_reference(self.display.split_texture(&ctx, color_space));
         let texture = self.scheduler.texture().cloned();
         let (view_input, magnified) = egui::CentralPanel::default()
             .show(ui, |ui| {
@@ -494,13 +520,13 @@ impl Viewer {
         if input.changed {
             self.notice = None;
         }
-        self.scheduler.set_filter(if magnified {
-            egui::TextureOptions::NEAREST
-        } else {
-            egui::TextureOptions::LINEAR
-        });
+        let filter = if magnified { egui::TextureOptions::NEAREST } else { egui::TextureOptions::LINEAR };
+        self.scheduler.set_filter(filter);
+        self.display.set_filter(filter);
         self.schedule(&ctx, input);
         self.scheduler.apply_rows(&ctx);
+        let full_size = [size.0 as usize, size.1 as usize];
+        self.display.update(&ctx, self.scheduler.canvas(), full_size);
         if let Some(screenshot) = &mut self.screenshot {
             screenshot.step(&ctx, self.scheduler.frame_is_final(), &self.outcome);
         }
@@ -1000,6 +1026,101 @@ mod tests {
             notice.starts_with("the last scene did not open again: ") && notice.contains("scene.ron"),
             "{notice}"
         );
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn save_exr_writes_the_linear_image_and_reads_back_equal() {
+        let dir = tempfile::tempdir().unwrap();
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        finish_render(&ctx, &mut v);
+        v.save_path = dir.path().join("out.png").display().to_string();
+        v.save_as("exr");
+        let path = dir.path().join("out.exr");
+        assert_eq!(v.notice.as_ref().map(|n| n.text.clone()), Some(format!("saved {}", path.display())));
+        let back = image::open(&path).unwrap().to_rgb32f();
+        let canvas = v.scheduler.canvas().unwrap();
+        assert_eq!([back.width() as usize, back.height() as usize], canvas.size());
+        let back: Vec<[f32; 3]> = back.pixels().map(|p| p.0).collect();
+        assert!(back == canvas.linear(), "the EXR differs from the linear image");
+        // The headless render's floats, unclamped: the same numbers.
+        let spec = v.job_spec().unwrap();
+        let settings =
+            spec.scene.settings.overridden(Some(spec.width), Some(spec.height), Some(spec.spp)).unwrap();
+        let frame = rt_core::Renderer::new(&spec.scene.scene, spec.camera, &settings).unwrap().render(|_| {});
+        assert!(back.iter().zip(&frame.pixels).all(|(a, b)| *a == b.to_array()));
+        // Ctrl+S follows the extension: PNG stays 8-bit.
+        v.save_as("png");
+        assert!(image::open(dir.path().join("out.png")).unwrap().as_rgb8().is_some());
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn exposure_and_the_reference_views_go_through_to_the_texels_and_the_metrics() {
+        use crate::viewer::display_panel::Compare;
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        let size = egui::vec2(1000.0, 700.0);
+        finish_render(&ctx, &mut v);
+        frame(&ctx, &mut v, size, vec![]);
+        let plain = v.scheduler.canvas().unwrap().display_image();
+        v.display.set_exposure(1.0);
+        frame(&ctx, &mut v, size, vec![]);
+        let canvas = v.scheduler.canvas().unwrap();
+        let display = canvas.display().clone();
+        assert_eq!(display.exposure, 1.0);
+        let expected: Vec<Color32> = canvas.linear().iter().map(|&c| display.texel(c)).collect();
+        assert_eq!(canvas.display_image(), expected);
+        assert_ne!(canvas.display_image(), plain);
+        v.display.set_exposure(0.0);
+        frame(&ctx, &mut v, size, vec![]);
+        assert_eq!(v.scheduler.canvas().unwrap().display_image(), plain, "exposure 0 is the image as it was");
+
+        // The render becomes the reference: no error, the A/B view on.
+        v.display.use_render(v.scheduler.canvas());
+        frame(&ctx, &mut v, size, vec![]);
+        assert!(v.view.has_reference(), "the split view shows the reference");
+        let m = v.display.metrics().expect("metrics of the finished render");
+        assert_eq!((m.rmse, m.relative_mse), (0.0, 0.0));
+        v.display.set_compare(Compare::Absolute);
+        frame(&ctx, &mut v, size, vec![]);
+        let black = v.scheduler.canvas().unwrap().display_image().iter().all(|&c| c == Color32::BLACK);
+        assert!(black, "the render minus itself is black");
+        // The camera moves: once the new full render is done, the error shows.
+        v.camera.edit(|s| s.orbit(0.3, 0.0));
+        v.start(&ctx, Kind::Full);
+        finish_render(&ctx, &mut v);
+        frame(&ctx, &mut v, size, vec![]);
+        let m = v.display.metrics().unwrap();
+        assert!(m.rmse > 0.01 && m.relative_mse > 0.0, "{m:?}");
+        assert!(v.scheduler.canvas().unwrap().display_image().iter().any(|&c| c != Color32::BLACK));
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn a_reference_of_another_size_or_unreadable_is_a_message_in_the_panel() {
+        let dir = tempfile::tempdir().unwrap();
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        let size = egui::vec2(1000.0, 700.0);
+        let small = dir.path().join("small.png");
+        image::RgbImage::new(7, 5).save(&small).unwrap();
+        for (path, want) in [
+            (small, "the reference is 7 × 5 pixels, the render 320 × 240: no comparison".to_owned()),
+            (
+                dir.path().join("none.exr"),
+                format!("{}: cannot read the image", dir.path().join("none.exr").display()),
+            ),
+        ] {
+            v.display.load(&ctx, path);
+            let deadline = Instant::now() + Duration::from_secs(10);
+            while !v.display.message().is_some_and(|m| m.starts_with(&want)) {
+                assert!(Instant::now() < deadline, "no message: {:?}", v.display.message());
+                frame(&ctx, &mut v, size, vec![]);
+                std::thread::sleep(Duration::from_millis(2));
+            }
+        }
         drop_textures(&ctx, v);
     }
 

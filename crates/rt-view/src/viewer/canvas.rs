@@ -3,18 +3,28 @@
 //!
 //! A canvas belongs to one job generation and refuses rows of any other, so a
 //! row of a cancelled job can never be drawn over the new view. The UI thread
-//! only copies rows: colours are built by workers.
+//! only moves rows in and copies their display texels: colours are built by
+//! workers.
 //!
-//! The canvas keeps the whole image (for Save PNG and pixel inspection), but
-//! the texture shows a *display* image of at most [`MAX_DISPLAY_SIDE`] pixels
-//! a side: every k-th pixel of every k-th row, k the smallest whole factor
-//! that fits. A 15 300 × 8 500 render thus shows through a 3 825 × 2 125
-//! texture, and starting a new job touches only that: the full-size buffer
-//! starts as zeroed memory straight from the allocator, transparent until
+//! The canvas keeps the whole image twice, as the rows it was sent (moved
+//! in, not copied): linear (scene-referred, the mean of each pixel's samples
+//! so far, for Save EXR, the histogram and the comparison with a reference)
+//! and encoded as 8 bits (for Save PNG). The texture shows a *display* image
+//! of at most [`MAX_DISPLAY_SIDE`] pixels a side: every k-th pixel of every
+//! k-th row, k the smallest whole factor that fits. A 15 300 × 8 500 render
+//! thus shows through a 3 825 × 2 125 texture, and starting a new job
+//! touches only that: the image has no pixels (transparent, zero) until its
 //! rows arrive.
+//!
+//! The display image's texels come from the linear image through the
+//! [`Display`] transform (exposure, channel view, false colour, error
+//! against a reference): a row's texels when it arrives, every finished
+//! row's when the transform changes. With the plain transform (exposure
+//! 0, RGB) the rows' own 8-bit colours are copied, as fast as ever.
 
 use egui::{Color32, ColorImage, TextureHandle, TextureOptions};
 
+use super::display::Display;
 use super::render_job::Row;
 
 /// Largest side of the texture the image is shown through, in texels
@@ -27,11 +37,14 @@ pub struct Canvas {
     generation: u64,
     width: u32,
     height: u32,
-    /// The whole image, row-major, top row first; transparent (all bytes
-    /// zero) until rows arrive.
-    pixels: Vec<Color32>,
-    row_done: Vec<bool>,
+    /// The image's rows, top row first, each the last one that arrived
+    /// (empty until one does).
+    rows: Vec<Stored>,
     rows_done: u32,
+    /// Rows applied so far, counting a row again each time it arrives.
+    changes: u64,
+    /// How the display image is made from the linear one.
+    transform: Display,
     /// Pixels of the image per display texel along each axis.
     factor: u32,
     /// The display image: `display_size()` texels.
@@ -42,6 +55,20 @@ pub struct Canvas {
     /// own, an older one's carried over by [`Canvas::replacing`], or 0 for a
     /// row no job has drawn yet (the window's trace reports it).
     sources: Vec<u64>,
+}
+
+/// One row of the image as it arrived: empty until then.
+#[derive(Clone, Debug, Default)]
+struct Stored {
+    samples: u32,
+    pixels: Vec<Color32>,
+    linear: Vec<[f32; 3]>,
+}
+
+impl Stored {
+    fn done(&self) -> bool {
+        !self.pixels.is_empty()
+    }
 }
 
 impl Canvas {
@@ -57,9 +84,10 @@ impl Canvas {
             generation,
             width,
             height,
-            pixels: bytemuck::zeroed_vec(width as usize * height as usize),
-            row_done: vec![false; height as usize],
+            rows: vec![Stored::default(); height as usize],
             rows_done: 0,
+            changes: 0,
+            transform: Display::default(),
             factor,
             display: vec![Color32::BLACK; dw as usize * dh as usize],
             pending: Vec::new(),
@@ -108,14 +136,49 @@ impl Canvas {
     pub fn display_factor(&self) -> u32 {
         self.factor
     }
-    /// Row-major pixels of the whole image, top row first.
-    pub fn pixels(&self) -> &[Color32] {
-        &self.pixels
+    /// Row-major 8-bit pixels of the whole image, top row first
+    /// (transparent where no row has arrived yet).
+    pub fn pixels(&self) -> Vec<Color32> {
+        self.gather(|r| &r.pixels, Color32::TRANSPARENT)
     }
-    /// The colour shown at pixel (x, y), if it is inside the image.
+    /// The colour at pixel (x, y), if it is inside the image (transparent
+    /// until its row arrives).
     pub fn pixel(&self, x: u32, y: u32) -> Option<Color32> {
         (x < self.width && y < self.height)
-            .then(|| self.pixels[y as usize * self.width as usize + x as usize])
+            .then(|| self.rows[y as usize].pixels.get(x as usize).copied().unwrap_or(Color32::TRANSPARENT))
+    }
+    /// Row-major linear colours of the whole image (zero where no row has
+    /// arrived yet).
+    pub fn linear(&self) -> Vec<[f32; 3]> {
+        self.gather(|r| &r.linear, [0.0; 3])
+    }
+    /// The 8-bit pixels of row `y`, once it has arrived.
+    pub fn pixel_row(&self, y: u32) -> Option<&[Color32]> {
+        self.rows.get(y as usize).filter(|r| r.done()).map(|r| &r.pixels[..])
+    }
+    /// The linear colours of row `y`, once it has arrived.
+    pub fn linear_row(&self, y: u32) -> Option<&[[f32; 3]]> {
+        self.rows.get(y as usize).filter(|r| r.done()).map(|r| &r.linear[..])
+    }
+    /// Samples per pixel of row `y` (0 until it arrives).
+    pub fn row_samples(&self, y: u32) -> u32 {
+        self.rows.get(y as usize).map_or(0, |r| r.samples)
+    }
+    /// The rows' `part` one after the other, `missing` for rows not arrived.
+    fn gather<T: Copy>(&self, part: impl Fn(&Stored) -> &Vec<T>, missing: T) -> Vec<T> {
+        let mut all = Vec::with_capacity(self.width as usize * self.height as usize);
+        for r in &self.rows {
+            match r.done() {
+                true => all.extend_from_slice(part(r)),
+                false => all.extend(std::iter::repeat_n(missing, self.width as usize)),
+            }
+        }
+        all
+    }
+    /// How many rows have been applied in all, a row counted each time it
+    /// arrives: what was computed from the image is stale when it changed.
+    pub fn changes(&self) -> u64 {
+        self.changes
     }
     /// Per display row, the job generation whose pixels it shows (this
     /// canvas's, or an older one's carried over from the image it replaced);
@@ -132,36 +195,83 @@ impl Canvas {
         self.rows_done == self.height
     }
 
-    /// Applies `row` if it belongs to this canvas's generation and size;
-    /// returns whether it was applied.
+    /// Applies a copy of `row` if it belongs to this canvas's generation
+    /// and size; returns whether it was applied. ([`Canvas::take`] moves a
+    /// row in without copying it.)
     pub fn apply(&mut self, row: &Row) -> bool {
+        self.take(row.clone()).is_ok()
+    }
+
+    /// Moves `row` in if it belongs to this canvas's generation and size;
+    /// gives it back if not.
+    pub fn take(&mut self, row: Row) -> Result<(), Row> {
         if row.generation != self.generation
             || row.y >= self.height
             || row.pixels.len() != self.width as usize
+            || row.linear.len() != self.width as usize
         {
-            return false;
+            return Err(row);
         }
-        let start = row.y as usize * self.width as usize;
-        self.pixels[start..start + row.pixels.len()].copy_from_slice(&row.pixels);
-        if !std::mem::replace(&mut self.row_done[row.y as usize], true) {
+        let stored = &mut self.rows[row.y as usize];
+        if !stored.done() {
             self.rows_done += 1;
         }
+        *stored = Stored { samples: row.samples, pixels: row.pixels, linear: row.linear };
+        self.changes += 1;
         if row.y.is_multiple_of(self.factor) {
-            let dy = (row.y / self.factor) as usize;
-            let [dw, _] = self.display_size();
-            let k = self.factor as usize;
-            let texels = &mut self.display[dy * dw..(dy + 1) * dw];
+            let dy = row.y / self.factor;
+            self.make_texels(dy);
+            self.pending.push(dy);
+            self.sources[dy as usize] = self.generation;
+        }
+        Ok(())
+    }
+
+    /// The display transform in force.
+    pub fn display(&self) -> &Display {
+        &self.transform
+    }
+
+    /// Shows the image through `display` from now on: every finished row's
+    /// texels are made again (and uploaded with the next pending rows);
+    /// rows still to come keep the placeholder until they arrive. Nothing
+    /// happens if `display` is the transform in force; returns whether
+    /// it changed.
+    pub fn set_display(&mut self, display: &Display) -> bool {
+        if self.transform == *display {
+            return false;
+        }
+        self.transform = display.clone();
+        let [_, dh] = self.display_size();
+        for dy in 0..dh as u32 {
+            if self.rows[(dy * self.factor) as usize].done() {
+                self.make_texels(dy);
+                self.pending.push(dy);
+            }
+        }
+        true
+    }
+
+    /// Makes the texels of display row `dy` from image row `dy·factor`.
+    fn make_texels(&mut self, dy: u32) {
+        let [dw, _] = self.display_size();
+        let (y, k) = ((dy * self.factor) as usize, self.factor as usize);
+        let texels = &mut self.display[dy as usize * dw..(dy as usize + 1) * dw];
+        let row = &self.rows[y];
+        if self.transform.is_plain() {
+            let pixels = &row.pixels;
             if k == 1 {
-                texels.copy_from_slice(&row.pixels);
+                texels.copy_from_slice(pixels);
             } else {
-                for (texel, pixel) in texels.iter_mut().zip(row.pixels.iter().step_by(k)) {
+                for (texel, pixel) in texels.iter_mut().zip(pixels.iter().step_by(k)) {
                     *texel = *pixel;
                 }
             }
-            self.pending.push(dy as u32);
-            self.sources[dy] = self.generation;
+        } else {
+            let size = [self.width as usize, self.height as usize];
+            let compare = self.transform.error_for(size).map(|e| (e.kind, e.reference.row(y)));
+            self.transform.row(&row.linear, k, compare, texels);
         }
-        true
     }
 
     /// A new texture holding the whole display image.
@@ -208,7 +318,7 @@ impl Canvas {
 
     /// The image as 8-bit RGB rows, for saving.
     pub fn rgb8(&self) -> Vec<rt_core::render::Rgb8> {
-        self.pixels.iter().map(|c| [c.r(), c.g(), c.b()]).collect()
+        self.pixels().iter().map(|c| [c.r(), c.g(), c.b()]).collect()
     }
 }
 
@@ -217,7 +327,8 @@ mod tests {
     use super::*;
 
     fn row(generation: u64, y: u32, width: usize, c: Color32) -> Row {
-        Row { generation, y, samples: 1, pixels: vec![c; width] }
+        let linear = [c.r(), c.g(), c.b()].map(|v| v as f32 / 255.0);
+        Row { generation, y, samples: 1, pixels: vec![c; width], linear: vec![linear; width] }
     }
 
     #[test]
@@ -270,7 +381,13 @@ mod tests {
     #[test]
     fn a_new_canvas_shows_the_previous_image_resampled_until_rows_arrive() {
         let mut small = Canvas::new(1, 2, 1, 4096);
-        small.apply(&Row { generation: 1, y: 0, samples: 1, pixels: vec![Color32::RED, Color32::BLUE] });
+        small.apply(&Row {
+            generation: 1,
+            y: 0,
+            samples: 1,
+            pixels: vec![Color32::RED, Color32::BLUE],
+            linear: vec![[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        });
         let big = Canvas::replacing(Some(&small), 2, 4, 2, 4096);
         let r = Color32::RED;
         let b = Color32::BLUE;
@@ -293,7 +410,8 @@ mod tests {
         assert_eq!(texture.size(), c.display_size());
         let mut pixels = vec![Color32::BLACK; 15_300];
         pixels[2 * k] = Color32::RED;
-        assert!(c.apply(&Row { generation: 1, y: k as u32, samples: 1, pixels }));
+        let linear = vec![[0.0; 3]; 15_300];
+        assert!(c.apply(&Row { generation: 1, y: k as u32, samples: 1, pixels, linear }));
         let width = c.display_size()[0];
         assert_eq!(c.display[width + 2], Color32::RED, "texel (2, 1) is pixel (2k, k)");
         assert!(c.apply(&row(1, k as u32 + 1, 15_300, Color32::GREEN)), "rows between texels still count");
@@ -301,6 +419,42 @@ mod tests {
         assert_eq!(c.pixel(2 * k as u32, k as u32), Some(Color32::RED));
         drop(texture);
         ctx.tex_manager().write().take_delta().clear();
+    }
+
+    #[test]
+    fn a_new_display_transform_remakes_the_finished_rows_texels_once() {
+        use crate::viewer::display::{Display, ErrorKind, ErrorView};
+        use crate::viewer::reference::Reference;
+        let grey = Color32::from_gray(64); // linear 64/255
+        let mut c = Canvas::replacing(None, 1, 2, 3, 4096);
+        c.apply(&row(1, 0, 2, grey));
+        c.apply(&row(1, 2, 2, grey));
+        c.pending.clear();
+        assert_eq!(c.display, [grey, grey, Color32::BLACK, Color32::BLACK, grey, grey]);
+        let brighter = Display { exposure: 1.0, ..Display::default() };
+        assert!(c.set_display(&brighter));
+        let twice = Color32::from_gray(128);
+        // Rows 0 and 2 made again and pending; row 1 (not rendered) keeps its placeholder.
+        assert_eq!(c.display, [twice, twice, Color32::BLACK, Color32::BLACK, twice, twice]);
+        assert_eq!(c.pending, [0, 2]);
+        assert!(!c.set_display(&brighter), "the same transform again does nothing");
+        assert_eq!(c.pending, [0, 2]);
+        // A row arriving now goes through the transform too.
+        c.apply(&row(1, 1, 2, grey));
+        assert_eq!(c.display[2..4], [twice, twice]);
+        // Back to exposure 0: exactly the rows' own colours.
+        assert!(c.set_display(&Display::default()));
+        assert_eq!(c.display, [grey; 6]);
+        // The absolute error against a reference equal to the render but in pixel 0.
+        let mut pixels = vec![[64.0 / 255.0; 3]; 6];
+        pixels[0] = [0.0; 3];
+        let reference = std::sync::Arc::new(Reference::new(2, 3, pixels, "r".into()).unwrap());
+        let error = ErrorView { kind: ErrorKind::Absolute, reference };
+        c.set_display(&Display { error: Some(error), ..Display::default() });
+        assert_eq!(
+            c.display,
+            [grey, Color32::BLACK, Color32::BLACK, Color32::BLACK, Color32::BLACK, Color32::BLACK]
+        );
     }
 
     #[test]

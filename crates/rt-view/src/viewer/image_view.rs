@@ -14,6 +14,9 @@
 //! | hover | inspect the pixel under the cursor |
 //! | click | pin the inspection to that pixel (Esc unpins) |
 //! | drag, with the region tool on (B) | choose a region to render |
+//! | drag the split line | move it (A/B view: render left, reference right) |
+//!
+//! The zoom is shown in a strip above the image, never over it.
 //!
 //! A drag counts as moving only in frames where the pointer moved: holding
 //! the button still lets the full-resolution render start.
@@ -32,6 +35,10 @@ const ORBIT_PER_POINT: f32 = 0.01;
 const ZOOM_PER_POINT: f32 = 0.0015;
 /// The image zoom's limits, in screen points per image pixel.
 const SCALE_RANGE: (f32, f32) = (0.02, 64.0);
+/// Height of the strip above the image that shows the zoom, in points.
+const LABEL_STRIP: f32 = 18.0;
+/// Half the width of the split line's handle, in points.
+const SPLIT_GRAB: f32 = 5.0;
 
 /// How the image is scaled on screen.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -44,8 +51,8 @@ pub(super) enum Zoom {
     Scale { scale: f32, center: Pos2 },
 }
 
-/// The image view's state: zoom, the inspected pixel and the region tool.
-#[derive(Default)]
+/// The image view's state: zoom, the inspected pixel, the region tool and
+/// the A/B split.
 pub(super) struct ImageView {
     zoom: Zoom,
     /// The pixel clicked, inspected until Esc.
@@ -58,6 +65,25 @@ pub(super) struct ImageView {
     dragged_region: Option<[[f32; 2]; 2]>,
     /// The region rendered on the image, outlined.
     outline: Option<Region>,
+    /// The reference shown right of the split line, if the A/B view is on.
+    reference: Option<TextureHandle>,
+    /// Where the split line is, as a fraction of the image's width.
+    split: f32,
+}
+
+impl Default for ImageView {
+    fn default() -> Self {
+        Self {
+            zoom: Zoom::Fit,
+            pinned: None,
+            region_tool: false,
+            region_from: None,
+            dragged_region: None,
+            outline: None,
+            reference: None,
+            split: 0.5,
+        }
+    }
 }
 
 impl ImageView {
@@ -70,6 +96,24 @@ impl ImageView {
     pub fn one_to_one(&mut self, pixels_per_point: f32, (w, h): (u32, u32)) {
         let center = pos2(w as f32 / 2.0, h as f32 / 2.0);
         self.zoom = Zoom::Scale { scale: 1.0 / pixels_per_point, center };
+    }
+
+    /// Shows `reference` right of the split line (the render left of it),
+    /// or the render alone for `None`.
+    pub fn set_reference(&mut self, reference: Option<TextureHandle>) {
+        self.reference = reference;
+    }
+
+    /// Whether a reference is shown right of the split line.
+    #[cfg(test)]
+    pub fn has_reference(&self) -> bool {
+        self.reference.is_some()
+    }
+
+    /// Where the split line is, as a fraction of the image's width.
+    #[cfg(test)]
+    pub fn split(&self) -> f32 {
+        self.split
     }
 
     /// Forgets the pinned pixel.
@@ -130,7 +174,8 @@ impl ImageView {
         camera: &mut CameraPanel,
         inspect: impl FnOnce([u32; 2]) -> String,
     ) -> (Interaction, bool) {
-        let available = ui.available_rect_before_wrap();
+        let whole = ui.available_rect_before_wrap();
+        let (strip, available) = whole.split_top_bottom_at_y(whole.top() + LABEL_STRIP);
         let response = ui.allocate_rect(available, Sense::click_and_drag());
         let size = Vec2::new(w as f32, h as f32);
         let (scale, center) = match self.zoom {
@@ -142,9 +187,45 @@ impl ImageView {
         };
         let rect = Rect::from_min_size(available.center() - center.to_vec2() * scale, size * scale);
         let painter = ui.painter_at(available);
+        let split = self.reference.as_ref().map(|_| rect.left() + rect.width() * self.split);
         if let Some(texture) = texture {
-            let uv = Rect::from_min_max(pos2(0.0, 0.0), pos2(1.0, 1.0));
-            painter.image(texture.id(), rect, uv, Color32::WHITE);
+            let right = split.unwrap_or(rect.right());
+            let part = Rect::from_x_y_ranges(rect.left()..=right, rect.y_range());
+            let uv = Rect::from_min_max(pos2(0.0, 0.0), pos2(self.split_or_whole(), 1.0));
+            painter.image(texture.id(), part, uv, Color32::WHITE);
+        }
+        if let (Some(reference), Some(x)) = (&self.reference, split) {
+            let part = Rect::from_x_y_ranges(x..=rect.right(), rect.y_range());
+            let uv = Rect::from_min_max(pos2(self.split, 0.0), pos2(1.0, 1.0));
+            painter.image(reference.id(), part, uv, Color32::WHITE);
+            let top = rect.top().max(available.top());
+            let bottom = rect.bottom().min(available.bottom());
+            painter.line_segment([pos2(x, top), pos2(x, bottom)], (1.5, Color32::WHITE));
+            // The handle: dragging it moves the line, never the camera.
+            let handle = Rect::from_x_y_ranges(x - SPLIT_GRAB..=x + SPLIT_GRAB, top..=bottom);
+            let grab = ui.interact(handle, ui.make_persistent_id("split line"), Sense::drag());
+            if grab.hovered() || grab.dragged() {
+                ui.ctx().set_cursor_icon(egui::CursorIcon::ResizeHorizontal);
+            }
+            if grab.dragged()
+                && let Some(p) = grab.interact_pointer_pos()
+            {
+                self.split = ((p.x - rect.left()) / rect.width()).clamp(0.0, 1.0);
+            }
+            painter.text(
+                pos2(x - 6.0, top + 4.0),
+                Align2::RIGHT_TOP,
+                "render",
+                FontId::proportional(12.0),
+                Color32::WHITE,
+            );
+            painter.text(
+                pos2(x + 6.0, top + 4.0),
+                Align2::LEFT_TOP,
+                "reference",
+                FontId::proportional(12.0),
+                Color32::WHITE,
+            );
         }
         let to_pixel = |p: Pos2| {
             let q = (p - rect.min) / scale;
@@ -240,9 +321,9 @@ impl ImageView {
             }
         }
         let zoom_text = format!("{:.0} %", scale * ui.ctx().pixels_per_point() * 100.0);
-        painter.text(
-            available.right_top() + Vec2::new(-8.0, 6.0),
-            Align2::RIGHT_TOP,
+        ui.painter_at(strip).text(
+            strip.right_center() + Vec2::new(-8.0, 0.0),
+            Align2::RIGHT_CENTER,
             zoom_text,
             FontId::proportional(12.0),
             Color32::from_white_alpha(160),
@@ -250,6 +331,14 @@ impl ImageView {
         let moving = delta != Vec2::ZERO || scroll != 0.0;
         let magnified = scale * ui.ctx().pixels_per_point() > 1.0;
         (interaction(changed, response.dragged(), moving), magnified)
+    }
+}
+
+impl ImageView {
+    /// How far across the image the render is shown: to the split line in
+    /// the A/B view, else all of it.
+    fn split_or_whole(&self) -> f32 {
+        if self.reference.is_some() { self.split } else { 1.0 }
     }
 }
 
@@ -355,6 +444,139 @@ mod tests {
         let (zoom, moved) = after_events(vec![wheel(egui::Modifiers::NONE)], egui::Modifiers::NONE);
         assert_eq!(zoom, Zoom::Fit);
         assert_ne!(moved, position);
+    }
+
+    /// A 640×480 window showing a 640×480 image fitted, its render a red
+    /// texture and, with `split`, a blue reference right of the split line.
+    struct Window {
+        ctx: egui::Context,
+        view: ImageView,
+        panel: CameraPanel,
+        render: TextureHandle,
+        reference: TextureHandle,
+    }
+
+    impl Window {
+        fn new(split: bool) -> Self {
+            let ctx = egui::Context::default();
+            let image = |c| egui::ColorImage::new([64, 48], vec![c; 64 * 48]);
+            let render = ctx.load_texture("render", image(Color32::RED), Default::default());
+            let reference = ctx.load_texture("reference", image(Color32::BLUE), Default::default());
+            let camera = rt_core::Camera::new(
+                rt_core::Vec3::new(0.0, 0.0, -5.0),
+                rt_core::Vec3::ZERO,
+                rt_core::Vec3::Y,
+                40.0,
+                1.0,
+                rt_core::Projection::Perspective,
+            )
+            .unwrap();
+            let mut view = ImageView::default();
+            if split {
+                view.set_reference(Some(reference.clone()));
+            }
+            Self { ctx, view, panel: CameraPanel::new(&camera), render, reference }
+        }
+
+        /// One frame with `events`: what was drawn.
+        fn frame(&mut self, events: Vec<egui::Event>) -> egui::FullOutput {
+            let screen = Rect::from_min_size(pos2(0.0, 0.0), Vec2::new(640.0, 480.0));
+            let input = egui::RawInput { screen_rect: Some(screen), events, ..Default::default() };
+            let (view, panel, render) = (&mut self.view, &mut self.panel, &self.render);
+            let mut output = self.ctx.run_ui(input, |ui| {
+                view.ui(ui, Some(render), (640, 480), panel, |_| String::new());
+            });
+            output.textures_delta.clear();
+            self.ctx.tex_manager().write().take_delta().clear();
+            output
+        }
+
+        /// The screen x range covered by `texture` in `output`, if drawn.
+        fn x_range(&self, output: &egui::FullOutput, texture: &TextureHandle) -> Option<(f32, f32)> {
+            let primitives = self.ctx.tessellate(output.shapes.clone(), output.pixels_per_point);
+            let xs: Vec<f32> = primitives
+                .iter()
+                .filter_map(|p| match &p.primitive {
+                    egui::epaint::Primitive::Mesh(m) if m.texture_id == texture.id() => Some(m),
+                    _ => None,
+                })
+                .flat_map(|m| m.vertices.iter().map(|v| v.pos.x))
+                .collect();
+            let min = xs.iter().copied().reduce(f32::min)?;
+            Some((min, xs.iter().copied().reduce(f32::max)?))
+        }
+    }
+
+    impl Drop for Window {
+        fn drop(&mut self) {
+            self.ctx.tex_manager().write().take_delta().clear();
+        }
+    }
+
+    #[test]
+    fn the_split_view_shows_the_render_left_of_the_line_and_the_reference_right() {
+        let mut w = Window::new(true);
+        w.frame(Vec::new());
+        let output = w.frame(Vec::new());
+        let (render, reference) = (w.x_range(&output, &w.render), w.x_range(&output, &w.reference));
+        let ((r0, r1), (f0, f1)) = (render.expect("render drawn"), reference.expect("reference drawn"));
+        // Fitted below the zoom strip: 616 points wide from x = 12; the line at its middle.
+        assert!((r1 - 320.0).abs() <= 1.0 && (f0 - 320.0).abs() <= 1.0, "{render:?} {reference:?}");
+        assert!(r0 < 20.0 && f1 > 620.0, "{render:?} {reference:?}");
+
+        // Dragging the line moves it (and not the camera) ...
+        let position = w.panel.settings().position;
+        let at = |x| pos2(x, 240.0);
+        let button = |x, pressed| egui::Event::PointerButton {
+            pos: at(x),
+            button: PointerButton::Primary,
+            pressed,
+            modifiers: egui::Modifiers::NONE,
+        };
+        w.frame(vec![egui::Event::PointerMoved(at(320.0))]);
+        w.frame(vec![button(320.0, true)]);
+        w.frame(vec![egui::Event::PointerMoved(at(420.0))]);
+        w.frame(vec![egui::Event::PointerMoved(at(474.0))]);
+        w.frame(vec![button(474.0, false)]);
+        assert!((w.view.split() - 0.75).abs() < 0.01, "{}", w.view.split());
+        assert_eq!(w.panel.settings().position, position, "the drag orbited the camera");
+        let output = w.frame(Vec::new());
+        let (_, r1) = w.x_range(&output, &w.render).unwrap();
+        assert!((r1 - 474.0).abs() <= 1.0, "{r1}");
+
+        // ... and without a reference the render fills the image.
+        let mut alone = Window::new(false);
+        let output = alone.frame(Vec::new());
+        assert!(alone.x_range(&output, &alone.reference).is_none());
+        let (r0, r1) = alone.x_range(&output, &alone.render).unwrap();
+        assert!(r0 < 20.0 && r1 > 620.0, "{r0} {r1}");
+    }
+
+    #[test]
+    fn the_zoom_label_never_covers_the_image() {
+        // Before, "100 %" was drawn in the image's top right corner.
+        let mut w = Window::new(false);
+        let output = w.frame(Vec::new());
+        let (x0, x1) = w.x_range(&output, &w.render).unwrap();
+        let primitives = w.ctx.tessellate(output.shapes.clone(), output.pixels_per_point);
+        let image_clip = primitives
+            .iter()
+            .find(
+                |p| matches!(&p.primitive, egui::epaint::Primitive::Mesh(m) if m.texture_id == w.render.id()),
+            )
+            .expect("the image")
+            .clip_rect;
+        let label = output
+            .shapes
+            .iter()
+            .find_map(|s| match &s.shape {
+                egui::Shape::Text(t) if t.galley.text().ends_with(" %") => Some(t.visual_bounding_rect()),
+                _ => None,
+            })
+            .expect("the zoom label");
+        let image = Rect::from_x_y_ranges(x0..=x1, image_clip.y_range()).intersect(image_clip);
+        assert!(!label.intersects(image), "label {label:?} over image {image:?}");
+        assert!(label.right() > x1 - 100.0, "the label stays at the right: {label:?}");
     }
 
     #[test]

@@ -16,6 +16,9 @@
 //!   resolution once still), and the image it streams into: each job
 //!   ([`render_job`]) renders rows in the background and sends them to a
 //!   [`canvas`], from where they reach an egui texture;
+//! - `display_panel`: exposure, the channel and false colour views
+//!   ([`display`]), the [`histogram`], and the [`reference`](mod@reference) image with
+//!   the comparison views and their metrics (`error_metrics`);
 //! - `image_view`: the image on screen (fit, 1:1, zoom), orbit, pan and
 //!   zoom with the mouse, and pixel inspection;
 //! - `screenshot`: `--screenshot`, saving the window once the frame is done;
@@ -35,12 +38,17 @@ mod camera_history;
 mod camera_in_file;
 mod camera_panel;
 pub mod canvas;
+pub mod display;
+mod display_panel;
+mod error_metrics;
 pub mod eta;
 mod file_browser;
 mod fly;
+pub mod histogram;
 mod image_settings;
 mod image_view;
 mod interaction;
+pub mod reference;
 pub mod region;
 mod remembered;
 pub mod render_job;

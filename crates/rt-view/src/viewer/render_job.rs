@@ -1,7 +1,8 @@
 //! A render running in the background, streaming finished rows.
 //!
 //! The job knows nothing about the UI beyond its row type: each finished row
-//! is an [`egui::Color32`] vector tagged with the job's generation, sent over
+//! is its pixels' linear colours (the mean of their samples so far) and the
+//! same encoded as [`egui::Color32`], tagged with the job's generation, sent over
 //! a channel, followed by a call to the `on_row` hook (the viewer passes
 //! `request_repaint`). Workers take bands of [`BAND_ROWS`] rows from a shared
 //! counter, so rows finish roughly top to bottom, like the course's
@@ -167,8 +168,13 @@ pub struct Row {
     pub y: u32,
     /// Samples per pixel the row's colours are the mean of so far.
     pub samples: u32,
-    /// One colour per column (per column of the job's region, if it has one).
+    /// One colour per column (per column of the job's region, if it has
+    /// one), encoded in the scene's colour space (what the display shows at
+    /// exposure 0).
     pub pixels: Vec<Color32>,
+    /// One linear colour per column: the mean of its samples so far
+    /// (scene-referred radiance, not clamped).
+    pub linear: Vec<[f32; 3]>,
 }
 
 /// A running (or finished, or cancelled) render.
@@ -580,14 +586,15 @@ impl<F: Fn() + Send + Sync> Worker<F> {
         let finished: Vec<Row> = rows
             .zip(sums.sums.chunks_exact(area.width() as usize))
             .map(|(y, row)| {
-                let pixels = row
+                let linear: Vec<[f32; 3]> = row.iter().map(|&sum| (sum / count).to_array()).collect();
+                let pixels = linear
                     .iter()
-                    .map(|&sum| {
-                        let [r, g, b] = color_space.encode(sum / count);
+                    .map(|&mean| {
+                        let [r, g, b] = color_space.encode(Color::from_array(mean));
                         Color32::from_rgb(r, g, b)
                     })
                     .collect();
-                Row { generation: self.generation, y, samples: samples.end, pixels }
+                Row { generation: self.generation, y, samples: samples.end, pixels, linear }
             })
             .collect();
         self.shared.rays.fetch_add(counts.total(), Ordering::Relaxed);
@@ -660,13 +667,17 @@ mod tests {
         .render(|_| {});
         let job = RenderJob::start(s, 1, || {}).unwrap();
         let mut image = vec![Color32::BLACK; 80 * 45];
+        let mut linear = vec![[0.0; 3]; 80 * 45];
         while let Some(row) = job.next_row_blocking() {
             let y = row.y as usize;
             image[y * 80..(y + 1) * 80].copy_from_slice(&row.pixels);
+            linear[y * 80..(y + 1) * 80].copy_from_slice(&row.linear);
         }
         let expected: Vec<Color32> =
             frame.to_rgb8().iter().map(|&[r, g, b]| Color32::from_rgb(r, g, b)).collect();
         assert!(image == expected, "streamed image differs from `render`");
+        let expected: Vec<[f32; 3]> = frame.pixels.iter().map(|c| c.to_array()).collect();
+        assert!(linear == expected, "streamed linear colours differ from `render`");
     }
 
     #[test]

@@ -19,9 +19,10 @@
 
 use std::time::{Duration, Instant};
 
-use egui::{TextureHandle, TextureOptions};
+use egui::{Color32, TextureHandle, TextureOptions};
 
 use super::canvas::Canvas;
+use super::display::Display;
 use super::interaction::Interaction;
 use super::region::Region;
 use super::render_job::{JobSpec, RenderJob, Row};
@@ -70,6 +71,8 @@ pub(super) struct Scheduler {
     /// The job had ended before rows were last taken: every row it sent
     /// is applied (its end is set after its last row is sent).
     job_drained: bool,
+    /// The display transform every canvas shows its image through.
+    display: Display,
 }
 
 /// `seconds` as the status line shows it: "4.2 s", "3 min 05 s", "2 h 07 min".
@@ -246,20 +249,37 @@ impl Scheduler {
         }
     }
 
+    /// Shows every image through `display` from now on (the canvases make
+    /// their texels again, once, if it changed).
+    pub fn set_display(&mut self, display: Display) {
+        self.display = display;
+        for canvas in [&mut self.shown, &mut self.pending].into_iter().flatten() {
+            canvas.set_display(&self.display);
+        }
+    }
+
     /// Applies the rows that arrived since the last frame and uploads them;
     /// a preview that is complete goes on screen.
     pub fn apply_rows(&mut self, ctx: &egui::Context) {
+        // Canvases started since the last `set_display` take the transform
+        // before their first row.
+        for canvas in [&mut self.shown, &mut self.pending].into_iter().flatten() {
+            canvas.set_display(&self.display);
+        }
         let Some(job) = &self.job else { return };
         let region_start = job.spec().region.as_ref().map(|r| r.columns.start as usize);
         let ended = job.elapsed().is_some();
         for row in job.try_rows() {
             if let (Some(x), Some(c)) = (region_start, &mut self.shown) {
-                c.apply(&whole_row(c, x, row));
+                let _ = c.take(whole_row(c, x, row));
                 continue;
             }
-            let applied = self.pending.as_mut().is_some_and(|c| c.apply(&row));
-            if !applied && let Some(c) = &mut self.shown {
-                c.apply(&row);
+            let row = match &mut self.pending {
+                Some(c) => c.take(row),
+                None => Err(row),
+            };
+            if let (Err(row), Some(c)) = (row, &mut self.shown) {
+                let _ = c.take(row); // A row of no canvas shown is dropped.
             }
         }
         self.job_drained |= ended;
@@ -407,12 +427,15 @@ impl Scheduler {
 /// they are on screen): a region job's rows applied to the image.
 fn whole_row(canvas: &Canvas, x: usize, row: Row) -> Row {
     let [width, _] = canvas.size();
-    let y = row.y as usize;
-    let mut pixels = canvas.pixels().get(y * width..(y + 1) * width).unwrap_or_default().to_vec();
+    let mut pixels = canvas.pixel_row(row.y).map_or_else(|| vec![Color32::TRANSPARENT; width], <[_]>::to_vec);
+    let mut linear = canvas.linear_row(row.y).map_or_else(|| vec![[0.0; 3]; width], <[_]>::to_vec);
     if let Some(span) = pixels.get_mut(x..x + row.pixels.len()) {
         span.copy_from_slice(&row.pixels);
     }
-    Row { pixels, ..row }
+    if let Some(span) = linear.get_mut(x..x + row.linear.len()) {
+        span.copy_from_slice(&row.linear);
+    }
+    Row { pixels, linear, ..row }
 }
 
 /// The generation of `job`, or 0 (no canvas has it) without one.
@@ -495,7 +518,7 @@ mod tests {
             |s| s.canvas().is_some_and(|c| c.size() == [40, 22]),
             |s| {
                 let c = s.canvas().unwrap();
-                assert!(c.size() == [40, 22] || c.pixels() == &old[..], "old and new rows mixed");
+                assert!(c.size() == [40, 22] || c.pixels() == old, "old and new rows mixed");
             },
         );
         assert!(s.canvas().unwrap().is_complete(), "a preview is shown only complete");
