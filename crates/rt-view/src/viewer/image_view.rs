@@ -603,7 +603,8 @@ mod tests {
         let mut panel = CameraPanel::new(&camera);
         let mut view = ImageView::default();
         view.toggle_region_tool();
-        let screen = Rect::from_min_size(pos2(0.0, 0.0), Vec2::new(640.0, 480.0));
+        // The zoom strip above, then the image at one point per pixel.
+        let screen = Rect::from_min_size(pos2(0.0, 0.0), Vec2::new(640.0, 480.0 + LABEL_STRIP));
         let mut frame = |view: &mut ImageView, events: Vec<egui::Event>| {
             let input = egui::RawInput { screen_rect: Some(screen), events, ..Default::default() };
             let mut output = ctx.run_ui(input, |ui| {
@@ -618,7 +619,7 @@ mod tests {
             pressed,
             modifiers: egui::Modifiers::NONE,
         };
-        let (from, to) = (pos2(100.0, 120.0), pos2(260.0, 200.0));
+        let (from, to) = (pos2(100.0, 120.0 + LABEL_STRIP), pos2(260.0, 200.0 + LABEL_STRIP));
         frame(&mut view, vec![egui::Event::PointerMoved(from)]);
         frame(&mut view, vec![button(from, true)]);
         for k in 1..=4 {
@@ -627,7 +628,6 @@ mod tests {
         frame(&mut view, vec![button(to, false)]);
         frame(&mut view, vec![]);
         let corners = view.take_dragged_region().expect("a region");
-        // The image fills the 640 × 480 view at one point per pixel.
         let region = Region::spanning(corners[0], corners[1], 640, 480).unwrap();
         assert_eq!(region, Region { columns: 100..260, rows: 120..200 });
         assert!(!view.region_tool(), "the tool is used once");
