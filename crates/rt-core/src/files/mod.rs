@@ -4,6 +4,8 @@
 //! `cast` command's input ([`ray_text`]).
 
 pub mod gltf_model;
+#[cfg(test)]
+mod gltf_mutation;
 pub mod model;
 pub mod mtl;
 pub mod obj_model;
