@@ -22,8 +22,9 @@ use gltf_mutation::{Choices, mutate};
 
 /// The real files mutated: `.glb` (JSON chunk mutated, BIN chunk kept) and
 /// `.gltf` texts.
-const FILES: [&[u8]; 4] = [
+const FILES: [&[u8]; 5] = [
     include_bytes!("../corpus/gltf/blender-like.glb"),
+    include_bytes!("../corpus/gltf/meshopt.glb"),
     include_bytes!("../corpus/gltf/triangle.glb"),
     include_bytes!("../corpus/gltf/blender-like.gltf"),
     include_bytes!("../corpus/gltf/triangle.gltf"),

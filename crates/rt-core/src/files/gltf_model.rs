@@ -7,9 +7,10 @@
 //! `TEXCOORD_0`, indices. Triangle lists, strips and fans are read; points
 //! and lines are an error. Attributes may be quantized
 //! (`KHR_mesh_quantization`: 8- and 16-bit integers, normalized or not,
-//! [`read_vectors`]). Compressed meshes (`EXT_meshopt_compression`,
-//! `KHR_draco_mesh_compression`) are refused with a way out when required,
-//! read from their uncompressed fallback when not.
+//! `read_vectors`) and compressed (`EXT_meshopt_compression`,
+//! [`meshopt_views`]). Draco-compressed meshes
+//! (`KHR_draco_mesh_compression`) are refused with a way out when required,
+//! read from their uncompressed data when not.
 //!
 //! **Lights and cameras.** `KHR_lights_punctual` lights are placed by their
 //! nodes ([`load_with_lights`]; candela and lux over [`LUMENS_PER_WATT`]);
@@ -49,7 +50,7 @@
 //! not used: textures are always filtered bilinearly.
 //!
 //! **Bad input.** The `gltf` crate's validation runs on every file, its
-//! errors turned into a sentence naming the JSON paths ([`parse`]); what it
+//! errors turned into a sentence naming the JSON paths (`parse`); what it
 //! does not check but would unwrap is checked first (an image in a buffer
 //! view without a MIME type, among others). Every accessor is checked before it is read (type, count,
 //! stride, and that it lies inside its buffer view and buffer), every index
@@ -67,6 +68,7 @@ use ::gltf::texture::WrappingMode;
 use glam::{DMat3, DMat4, DVec3};
 
 use crate::camera::{Camera, Projection};
+use crate::files::meshopt_views::{self, CompressedView};
 use crate::files::model::{Model, ModelError};
 use crate::geometry::mesh::{MAX_MESH_TRIANGLES, Mesh};
 use crate::lights::light::{Light, LightKind};
@@ -84,20 +86,21 @@ pub const MAX_NODE_DEPTH: usize = 64;
 pub const MAX_NODE_INSTANCES: usize = 1 << 20;
 
 /// The extensions whose data is used.
-const KNOWN_EXTENSIONS: [&str; 5] = [
+const KNOWN_EXTENSIONS: [&str; 6] = [
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_materials_emissive_strength",
     "KHR_mesh_quantization",
     "KHR_lights_punctual",
+    meshopt_views::EXTENSION,
 ];
 
-/// The mesh-compression extensions, which rt-view does not decode: no
-/// well-kept pure-Rust decoder exists for Draco, and the `meshopt` crate
-/// (C++ meshoptimizer through `cc`) is not a dependency yet. A file that
-/// requires one is refused with a way out; one that only uses one (its
-/// uncompressed fallback data present) is read from the fallback.
-const COMPRESSION_EXTENSIONS: [&str; 2] = ["EXT_meshopt_compression", "KHR_draco_mesh_compression"];
+/// The mesh-compression extensions rt-view does not decode: Draco, for
+/// which no well-kept Rust decoder exists (`draco_decoder` 0.0.31 calls
+/// itself work in progress). A file that requires it is refused with a way
+/// out; one that only uses it (its uncompressed data present) is read from
+/// that data.
+const COMPRESSION_EXTENSIONS: [&str; 1] = ["KHR_draco_mesh_compression"];
 
 /// Luminous efficacy of the SI definition of the candela, 683 lm/W
 /// (monochromatic light of 540 THz): glTF's photometric light units
@@ -175,7 +178,7 @@ pub fn load_geometry(
 pub fn camera(path: &Path, index: usize, scale: Real, translate: Vec3) -> Result<Camera, ModelError> {
     let err = |reason: String| ModelError::Gltf { path: path.to_owned(), reason };
     let bytes = read_limited(path, MAX_GLTF_BYTES).map_err(err)?;
-    let gltf = parse(&bytes).map_err(err)?;
+    let (gltf, _) = parse(&bytes).map_err(err)?;
     let json = gltf.document.as_json();
     let Some(desc) = json.cameras.get(index) else {
         return Err(err(format!("it has no camera {index} (it has {})", json.cameras.len())));
@@ -230,7 +233,7 @@ fn read(
     with_materials: bool,
 ) -> Result<(Model, Vec<Light>), ModelError> {
     let err = |reason: String| ModelError::Gltf { path: path.to_owned(), reason };
-    let gltf = parse(bytes).map_err(err)?;
+    let (gltf, compressed) = parse(bytes).map_err(err)?;
     let mut warnings = Vec::new();
     for used in gltf.extensions_used() {
         if COMPRESSION_EXTENSIONS.contains(&used) {
@@ -250,8 +253,9 @@ fn read(
             return Err(err(format!("buffer {} ({uri}) cannot be read: {e}", buffer.index())));
         }
     }
-    let buffer_data = ::gltf::import_buffers(&document, Some(base), blob)
+    let mut buffer_data = ::gltf::import_buffers(&document, Some(base), blob)
         .map_err(|e| err(format!("its buffers cannot be read: {e}")))?;
+    meshopt_views::decode(&compressed, &mut buffer_data).map_err(err)?;
     let buffers: Vec<&[u8]> = buffer_data.iter().map(|b| &b.0[..]).collect();
 
     let Some(scene) = document.default_scene().or_else(|| document.scenes().next()) else {
@@ -499,7 +503,7 @@ fn place_light(
 /// POSITION index (validated unchecked), a relative URI that is not
 /// percent-encoded UTF-8. What is wrong with an image, camera or light
 /// is checked where it is read.
-fn parse(bytes: &[u8]) -> Result<::gltf::Gltf, String> {
+fn parse(bytes: &[u8]) -> Result<(::gltf::Gltf, Vec<CompressedView>), String> {
     let ::gltf::Gltf { document, blob } =
         ::gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| match e {
             ::gltf::Error::Deserialize(e) => format!("its JSON is not a glTF 2.0 document: {e}"),
@@ -531,6 +535,8 @@ fn parse(bytes: &[u8]) -> Result<::gltf::Gltf, String> {
             return Err(format!("{what} {k}: its URI {uri:?} is not percent-encoded UTF-8"));
         }
     }
+    // Compressed buffer views read decoded data from buffers of their own.
+    let compressed = meshopt_views::redirect(&mut json)?;
     // Every required extension is known here (checked above); the crate's
     // validation would refuse those it has no feature for
     // (KHR_mesh_quantization, whose data is only numbers read here).
@@ -552,7 +558,7 @@ fn parse(bytes: &[u8]) -> Result<::gltf::Gltf, String> {
         ::gltf::Error::Validation(errors) => validation_message(&errors),
         other => other.to_string(),
     })?;
-    Ok(::gltf::Gltf { document, blob })
+    Ok((::gltf::Gltf { document, blob }, compressed))
 }
 
 /// The validation errors as a sentence: each JSON path with what is wrong
@@ -1346,22 +1352,100 @@ mod tests {
     }
 
     #[test]
-    fn compressed_meshes_are_refused_naming_the_extension_and_a_way_out_unless_a_fallback_is_there() {
-        for ext in ["EXT_meshopt_compression", "KHR_draco_mesh_compression"] {
-            let e = error_of(|doc, _| {
-                doc["extensionsUsed"] = json!([ext]);
-                doc["extensionsRequired"] = json!([ext]);
+    fn draco_compressed_meshes_are_refused_naming_the_extension_and_a_way_out_unless_their_data_is_there() {
+        let ext = "KHR_draco_mesh_compression";
+        let e = error_of(|doc, _| {
+            doc["extensionsUsed"] = json!([ext]);
+            doc["extensionsRequired"] = json!([ext]);
+        });
+        assert!(
+            e.contains(&format!("its meshes are compressed with {ext}, which rt-view does not decode")),
+            "{e}"
+        );
+        assert!(e.contains("uncompressed"), "{e}");
+        let model = load_bytes(&triangle_glb(|doc, _| doc["extensionsUsed"] = json!([ext]))).unwrap();
+        assert_eq!(
+            model.warnings,
+            [format!("extension {ext} is not decoded: its uncompressed fallback data is read")]
+        );
+    }
+
+    /// [`triangle_glb`] as `gltfpack -cc` writes it (`EXT_meshopt_compression`):
+    /// the positions, octahedral-filtered normals and indices compressed in
+    /// the GLB's buffer, their views in a fallback buffer without data.
+    fn meshopt_compressed(doc: &mut Value, bin: &mut Vec<u8>) {
+        let positions: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let normals = meshopt::encode_filter_oct::<i8>(&[[0.0, 0.0, 1.0, 0.0]; 3], 8);
+        let streams = [
+            meshopt::encode_vertex_buffer(&positions).unwrap(),
+            meshopt::encode_vertex_buffer(&normals).unwrap(),
+            meshopt::encode_index_buffer(&[0, 1, 2], 3).unwrap(),
+        ];
+        bin.clear();
+        let mut at = Vec::new();
+        for s in &streams {
+            at.push(bin.len());
+            bin.extend(s);
+            bin.resize(bin.len().next_multiple_of(4), 0);
+        }
+        let ext = |k: usize, stride: usize, mode: &str, filter: &str| {
+            json!({ "EXT_meshopt_compression": {
+                "buffer": 0, "byteOffset": at[k], "byteLength": streams[k].len(),
+                "byteStride": stride, "count": 3, "mode": mode, "filter": filter
+            } })
+        };
+        doc["extensionsUsed"] = json!(["EXT_meshopt_compression", "KHR_mesh_quantization"]);
+        doc["extensionsRequired"] = json!(["EXT_meshopt_compression", "KHR_mesh_quantization"]);
+        doc["buffers"] = json!([
+            { "byteLength": bin.len() },
+            { "byteLength": 54, "extensions": { "EXT_meshopt_compression": { "fallback": true } } }
+        ]);
+        doc["bufferViews"] = json!([
+            { "buffer": 1, "byteOffset": 0, "byteLength": 36, "byteStride": 12, "extensions": ext(0, 12, "ATTRIBUTES", "NONE") },
+            { "buffer": 1, "byteOffset": 36, "byteLength": 12, "byteStride": 4, "extensions": ext(1, 4, "ATTRIBUTES", "OCTAHEDRAL") },
+            { "buffer": 1, "byteOffset": 48, "byteLength": 6, "extensions": ext(2, 2, "TRIANGLES", "NONE") }
+        ]);
+        doc["accessors"] = json!([
+            { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0] },
+            { "bufferView": 1, "componentType": 5120, "normalized": true, "count": 3, "type": "VEC3" },
+            { "bufferView": 2, "componentType": 5123, "count": 3, "type": "SCALAR" }
+        ]);
+        doc["meshes"][0]["primitives"][0]["attributes"] = json!({ "POSITION": 0, "NORMAL": 1 });
+        doc["meshes"][0]["primitives"][0]["indices"] = json!(2);
+    }
+
+    #[test]
+    fn meshopt_compressed_views_are_decoded_and_read_as_the_uncompressed_file() {
+        let model = load_bytes(&triangle_glb(meshopt_compressed)).unwrap();
+        assert!(model.warnings.is_empty(), "{:?}", model.warnings);
+        let mesh = &model.parts[0].0;
+        assert_eq!(mesh.triangle(0), [Vec3::ZERO, Vec3::Y, Vec3::X]);
+        let n = mesh.shading_normal(0, Vec3::new(0.2, 0.2, 0.0)).unwrap();
+        assert!((n - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-2, "{n}");
+        // What the specification forbids (and meshoptimizer would assert)
+        // is refused, naming the view; a stream that does not decode too.
+        for (edit, says) in [
+            (
+                json!({ "byteStride": 6 }),
+                "buffer view 0 (EXT_meshopt_compression): byteStride 6 is not allowed in mode Attributes",
+            ),
+            (json!({ "mode": "TRIANGLES" }), "byteStride 12 is not allowed in mode Triangles"),
+            (json!({ "filter": "QUATERNION" }), "filter Quaternion does not apply to byteStride 12"),
+            (json!({ "count": 4 }), "4 elements of 12 bytes do not fill the view's byteLength 36"),
+            (json!({ "buffer": 7 }), "its buffer 7 does not exist"),
+            (json!({ "mode": "POINTS" }), "its mode Some(\"POINTS\") is not ATTRIBUTES"),
+            (json!({ "byteLength": 100000 }), "its compressed data runs past the end of its buffer"),
+            (json!({ "byteLength": 3 }), "meshoptimizer cannot decode it"),
+        ] {
+            let e = error_of(|doc, bin| {
+                meshopt_compressed(doc, bin);
+                let ext =
+                    doc["bufferViews"][0]["extensions"]["EXT_meshopt_compression"].as_object_mut().unwrap();
+                for (k, v) in edit.as_object().unwrap() {
+                    ext.insert(k.clone(), v.clone());
+                }
             });
-            assert!(
-                e.contains(&format!("its meshes are compressed with {ext}, which rt-view does not decode")),
-                "{e}"
-            );
-            assert!(e.contains("uncompressed"), "{e}");
-            let model = load_bytes(&triangle_glb(|doc, _| doc["extensionsUsed"] = json!([ext]))).unwrap();
-            assert_eq!(
-                model.warnings,
-                [format!("extension {ext} is not decoded: its uncompressed fallback data is read")]
-            );
+            assert!(e.contains(says), "{edit}: {e}");
         }
     }
 
@@ -1612,7 +1696,8 @@ mod tests {
     fn thousands_of_damaged_json_documents_never_panic() {
         // Each mutant: 1 to 4 structure-aware changes (numbers, dropped
         // keys, swapped types, indices past the end) of a Blender-like file,
-        // as .glb and as .gltf text with an external buffer. The mutants
+        // as .glb and as .gltf text with an external buffer, or of a
+        // meshopt-compressed one. The mutants
         // that load must be consistent. A longer run by hand:
         // RT_GLTF_MUTANTS=200000 cargo test -p rt-core --lib thousands_of_damaged
         use crate::files::gltf_mutation::{Choices, mutate};
@@ -1620,19 +1705,25 @@ mod tests {
         let glb = triangle_glb(blender_like);
         let (glb_doc, glb_bin) = (json_of(&glb), bin_of(&glb));
         let (text_doc, text_bin) = blender_like_text();
+        let packed = triangle_glb(meshopt_compressed);
+        let (packed_doc, packed_bin) = (json_of(&packed), bin_of(&packed));
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(dir.path().join("m.bin"), &text_bin).unwrap();
         let (mut loaded, mut refused) = (0, 0);
         for seed in 0..runs {
             let mut choices = Choices::Seeded(seed);
-            let as_text = seed % 2 == 1;
-            let mut doc = if as_text { text_doc.clone() } else { glb_doc.clone() };
+            let as_text = seed % 3 == 1;
+            let (mut doc, bin) = match seed % 3 {
+                0 => (glb_doc.clone(), &glb_bin),
+                1 => (text_doc.clone(), &glb_bin),
+                _ => (packed_doc.clone(), &packed_bin),
+            };
             let count = 1 + choices.below(4);
             mutate(&mut doc, count, &mut choices);
             let (bytes, name) = if as_text {
                 (doc.to_string().into_bytes(), "m.gltf")
             } else {
-                (encode_glb(&doc.to_string(), &glb_bin), "m.glb")
+                (encode_glb(&doc.to_string(), bin), "m.glb")
             };
             let path = dir.path().join(name);
             let result = std::panic::catch_unwind(|| {
@@ -1707,6 +1798,7 @@ mod tests {
         std::fs::write(corpus.join("image-without-source.glb"), bytes).unwrap();
         let (doc, _) = blender_like_text();
         std::fs::write(corpus.join("blender-like.gltf"), doc.to_string()).unwrap();
+        std::fs::write(corpus.join("meshopt.glb"), triangle_glb(meshopt_compressed)).unwrap();
     }
 
     proptest! {

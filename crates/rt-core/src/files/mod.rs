@@ -6,6 +6,7 @@
 pub mod gltf_model;
 #[cfg(test)]
 mod gltf_mutation;
+pub mod meshopt_views;
 pub mod model;
 pub mod mtl;
 pub mod obj_model;
