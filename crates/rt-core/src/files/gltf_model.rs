@@ -170,9 +170,12 @@ pub fn load_geometry(
 /// interest is where the view line passes closest to the model's origin
 /// (the scene's `translate`), or one unit ahead when that is behind the
 /// camera; glTF gives no distance. Perspective: `fov_y` = `yfov` in
-/// degrees, `near` = `znear`·scale. Orthographic: a view plane `2·ymag`
-/// high at `near` = `znear`·scale (at least `ymag`·scale·10⁻³, since
-/// rt-view's near is positive), so `fov_y` = 2·atan(ymag·scale/near). The
+/// degrees, `near` = `znear`·scale. Orthographic: a view plane `2·ymag`·scale
+/// high where glTF's starts, `znear`·scale ahead of the node: with `near`
+/// = `znear`·scale and `fov_y` = 2·atan(ymag/znear) when `znear` ≥ `ymag`;
+/// else (the usual case, and `znear` may be 0 where rt-view's near is
+/// positive) with C stepped back along the view so that `near` =
+/// `ymag`·scale and `fov_y` = 90°, the rays starting on the same plane. The
 /// image's aspect is the scene's image size: `aspectRatio` and `xmag`
 /// are not used, `zfar` neither (nothing is clipped far away).
 pub fn camera(path: &Path, index: usize, scale: Real, translate: Vec3) -> Result<Camera, ModelError> {
@@ -197,7 +200,7 @@ pub fn camera(path: &Path, index: usize, scale: Real, translate: Vec3) -> Result
     .map_err(err)?;
     let matrix = placed.ok_or_else(|| err(format!("{}: no node of its scene holds it", at())))?;
     let t = crate::math::real::widen(translate);
-    let eye = matrix.transform_point3(DVec3::ZERO) + t;
+    let mut eye = matrix.transform_point3(DVec3::ZERO) + t;
     let forward = matrix.transform_vector3(DVec3::NEG_Z).normalize_or_zero();
     let up = matrix.transform_vector3(DVec3::Y);
     let along = (t - eye).dot(forward);
@@ -211,8 +214,15 @@ pub fn camera(path: &Path, index: usize, scale: Real, translate: Vec3) -> Result
         }
         (Checked::Valid(Type::Orthographic), _, Some(o)) => {
             let half = f64::from(o.ymag).abs() * s;
-            let near = (f64::from(o.znear) * s).max(half * 1e-3);
-            (2.0 * (half / near).atan().to_degrees(), near, Projection::Orthographic)
+            let start = f64::from(o.znear).max(0.0) * s;
+            if start >= half {
+                (2.0 * (half / start).atan().to_degrees(), start, Projection::Orthographic)
+            } else {
+                // Rays start on the plane at `znear` either way; the eye
+                // steps back so the view is 90° wide, not nearly 180°.
+                eye -= forward * (half - start);
+                (90.0, half, Projection::Orthographic)
+            }
         }
         (Checked::Valid(ty), _, _) => {
             return Err(err(format!("{}: its type is {ty:?} but it has no {ty:?} properties", at())));
@@ -1614,7 +1624,20 @@ mod tests {
         let c = camera(&path, 0, 1.0, Vec3::ZERO).unwrap();
         assert_eq!(c.projection(), Projection::Orthographic);
         let half = c.near() * (c.fov_y().to_radians() / 2.0).tan();
-        assert!((half - 2.0).abs() < 1e-4 && (c.near() - 0.5).abs() < 1e-6, "{half}");
+        assert!((half - 2.0).abs() < 1e-4 && (c.fov_y() - 90.0).abs() < 1e-4, "{half}");
+        // Its rays start where glTF's do: 0.5 in front of the node, at z = −4.5.
+        let start = c.position() + c.near() * Vec3::Z;
+        assert!((start - Vec3::new(0.0, 0.0, -4.5)).length() < 1e-5, "{start}");
+        // A near plane farther than the half height: the eye stays, the view narrows.
+        let bytes = triangle_glb(|doc, bin| {
+            blender_like(doc, bin);
+            doc["cameras"][0] = json!({ "type": "orthographic", "orthographic": { "xmag": 1.0, "ymag": 1.0, "znear": 2.0, "zfar": 10.0 } });
+        });
+        std::fs::write(&path, &bytes).unwrap();
+        let c = camera(&path, 0, 1.0, Vec3::ZERO).unwrap();
+        assert!((c.position() - Vec3::new(0.0, 0.0, -5.0)).length() < 1e-5 && (c.near() - 2.0).abs() < 1e-6);
+        let half = c.near() * (c.fov_y().to_radians() / 2.0).tan();
+        assert!((half - 1.0).abs() < 1e-4, "{half}");
         // A type without its properties, a camera that is not there, one no node holds.
         for (edit, says) in [
             (
