@@ -430,7 +430,11 @@ fn unused_features(document: &::gltf::Document) -> Vec<String> {
         out.push(format!("vertex attributes not used: {}", attributes.join(", ")));
     }
     let cameras = json.cameras.len();
-    out.extend(count(cameras, "camera(s)", "a scene's camera can name one: camera: (gltf: FILE, index: N)"));
+    if cameras > 0 {
+        out.push(format!(
+            "its {cameras} camera(s) are used only where a scene's camera names one: camera: (gltf: FILE, index: N)"
+        ));
+    }
     out
 }
 
@@ -1682,7 +1686,7 @@ mod tests {
             "1 animation(s) not used",
             "1 primitive(s) with morph targets not used",
             "vertex attributes not used: COLOR_0",
-            "1 camera(s) not used: a scene's camera can name one",
+            "its 1 camera(s) are used only where a scene's camera names one",
             "1 KHR_lights_punctual light(s) are not used",
         ] {
             assert!(w.iter().any(|x| x.contains(says)), "{says}: {w:?}");
