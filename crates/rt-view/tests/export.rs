@@ -284,6 +284,13 @@ fn the_lights_of_the_every_effect_scene_are_exported_as_rt_view_loads_them() {
                 assert_eq!(j["kind"], "Point", "{j}");
                 assert_eq!(floats(&j["position"]), wide(position), "{j}");
             }
+            LightKind::Spot { position, direction, cos_inner, cos_outer } => {
+                assert_eq!(j["kind"], "Spot", "{j}");
+                assert_eq!(floats(&j["position"]), wide(position), "{j}");
+                assert_eq!(floats(&j["direction"]), wide(direction), "{j}");
+                assert_eq!(j["cos_inner"].as_f64().unwrap(), cos_inner as f64, "{j}");
+                assert_eq!(j["cos_outer"].as_f64().unwrap(), cos_outer as f64, "{j}");
+            }
             LightKind::Directional { direction } => {
                 assert_eq!(j["kind"], "Directional", "{j}");
                 assert_eq!(floats(&j["direction"]), wide(direction), "{j}");

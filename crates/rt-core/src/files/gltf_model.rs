@@ -5,7 +5,18 @@
 //! its first scene), placed by its node's transform composed with its
 //! parents' (glTF 2.0 §3.5.3): positions, normals (as shading normals),
 //! `TEXCOORD_0`, indices. Triangle lists, strips and fans are read; points
-//! and lines are an error.
+//! and lines are an error. Attributes may be quantized
+//! (`KHR_mesh_quantization`: 8- and 16-bit integers, normalized or not,
+//! `read_vectors`) and compressed (`EXT_meshopt_compression`,
+//! [`meshopt_views`]). Draco-compressed meshes
+//! (`KHR_draco_mesh_compression`) are refused with a way out when required,
+//! read from their uncompressed data when not.
+//!
+//! **Lights and cameras.** `KHR_lights_punctual` lights are placed by their
+//! nodes ([`load_with_lights`]; candela and lux over [`LUMENS_PER_WATT`]);
+//! a camera of the file is placed by its node on request ([`camera`]).
+//! Animations, skins, morph targets, other vertex attributes, and cameras
+//! and lights not asked for are warnings naming them.
 //!
 //! **Coordinates.** glTF's world is right-handed with +Y up and a model's
 //! front facing +Z; rt-view's is left-handed ([`crate::camera`]). Every
@@ -38,7 +49,10 @@
 //! *requires* and rt-view does not know is an error. Samplers' filters are
 //! not used: textures are always filtered bilinearly.
 //!
-//! **Bad input.** Every accessor is checked before it is read (type, count,
+//! **Bad input.** The `gltf` crate's validation runs on every file, its
+//! errors turned into a sentence naming the JSON paths (`parse`); what it
+//! does not check but would unwrap is checked first (an image in a buffer
+//! view without a MIME type, among others). Every accessor is checked before it is read (type, count,
 //! stride, and that it lies inside its buffer view and buffer), every index
 //! against the vertex count, and the node hierarchy's depth and instance
 //! count are bounded, so a malformed or truncated file is an
@@ -53,8 +67,11 @@ use ::gltf::mesh::Mode;
 use ::gltf::texture::WrappingMode;
 use glam::{DMat3, DMat4, DVec3};
 
+use crate::camera::{Camera, Projection};
+use crate::files::meshopt_views::{self, CompressedView};
 use crate::files::model::{Model, ModelError};
 use crate::geometry::mesh::{MAX_MESH_TRIANGLES, Mesh};
+use crate::lights::light::{Light, LightKind};
 use crate::materials::material::Material;
 use crate::materials::texture::{Texture, Wrap};
 use crate::math::color::Color;
@@ -69,84 +86,169 @@ pub const MAX_NODE_DEPTH: usize = 64;
 pub const MAX_NODE_INSTANCES: usize = 1 << 20;
 
 /// The extensions whose data is used.
-const KNOWN_EXTENSIONS: [&str; 3] =
-    ["KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_emissive_strength"];
+const KNOWN_EXTENSIONS: [&str; 6] = [
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
+    "KHR_materials_emissive_strength",
+    "KHR_mesh_quantization",
+    "KHR_lights_punctual",
+    meshopt_views::EXTENSION,
+];
+
+/// The mesh-compression extensions rt-view does not decode: Draco, for
+/// which no well-kept Rust decoder exists (`draco_decoder` 0.0.31 calls
+/// itself work in progress). A file that requires it is refused with a way
+/// out; one that only uses it (its uncompressed data present) is read from
+/// that data.
+const COMPRESSION_EXTENSIONS: [&str; 1] = ["KHR_draco_mesh_compression"];
+
+/// Luminous efficacy of the SI definition of the candela, 683 lm/W
+/// (monochromatic light of 540 THz): glTF's photometric light units
+/// (candela, lux) divided by it are radiometric (W/sr, W/m²), rt-view's
+/// units ([`crate::lights::light`]). Blender's glTF exporter and importer
+/// use the same factor (`PBR_WATTS_TO_LUMENS`) in their standard mode.
+pub const LUMENS_PER_WATT: f32 = 683.0;
 
 /// Reads the glTF file at `path`, then scales every vertex by `scale` and
 /// moves it by `translate`.
 pub fn load(path: &Path, scale: Real, translate: Vec3) -> Result<Model, ModelError> {
+    load_with_lights(path, scale, translate, false).map(|(model, _)| model)
+}
+
+/// [`load`], with the file's `KHR_lights_punctual` lights placed in the
+/// scene `with_lights` (without, a file with lights has a warning saying
+/// they are not used).
+pub fn load_with_lights(
+    path: &Path,
+    scale: Real,
+    translate: Vec3,
+    with_lights: bool,
+) -> Result<(Model, Vec<Light>), ModelError> {
     let bytes = read_limited(path, MAX_GLTF_BYTES)
         .map_err(|reason| ModelError::Gltf { path: path.to_owned(), reason })?;
-    from_slice(&bytes, path, scale, translate)
+    let (mut model, lights) = read(&bytes, path, scale, translate, true)?;
+    if !with_lights && !lights.is_empty() {
+        model.warnings.push(format!(
+            "its {} KHR_lights_punctual light(s) are not used: add `lights: true` to its Mesh entry to use them",
+            lights.len()
+        ));
+        return Ok((model, Vec::new()));
+    }
+    Ok((model, lights))
 }
 
 /// [`load`] for a file's bytes already read; `path` names it in errors, and
 /// its folder is where the files it refers to are looked for.
 pub fn from_slice(bytes: &[u8], path: &Path, scale: Real, translate: Vec3) -> Result<Model, ModelError> {
-    read(bytes, path, scale, translate, true)
+    read(bytes, path, scale, translate, true).map(|(model, _)| model)
 }
 
 /// The glTF file at `path` as one mesh, for a scene that gives it its own
 /// material: [`load`] without reading the materials or decoding textures,
 /// the parts concatenated in their order; with the files it refers to
-/// ([`Model::files`]).
-pub fn load_geometry(path: &Path, scale: Real, translate: Vec3) -> Result<(Mesh, Vec<PathBuf>), ModelError> {
+/// ([`Model::files`]) and its lights.
+pub fn load_geometry(
+    path: &Path,
+    scale: Real,
+    translate: Vec3,
+) -> Result<(Mesh, Vec<PathBuf>, Vec<Light>), ModelError> {
     let err = |reason: String| ModelError::Gltf { path: path.to_owned(), reason };
     let bytes = read_limited(path, MAX_GLTF_BYTES).map_err(err)?;
-    let model = read(&bytes, path, scale, translate, false)?;
+    let (model, lights) = read(&bytes, path, scale, translate, false)?;
     let mesh = Mesh::concat(model.parts.into_iter().map(|(m, _)| m).collect())
         .ok_or_else(|| err("it has too many vertices".into()))?;
-    Ok((mesh, model.files))
+    Ok((mesh, model.files, lights))
 }
 
-/// [`from_slice`], reading the materials and textures only `with_materials`.
+/// Camera `index` of the glTF file at `path` (its `cameras` list), placed
+/// by the first node of the file's scene that holds it, in rt-view's world
+/// as [`load`] places the model with the same `scale` and `translate`.
+///
+/// A glTF camera looks along its node's −z with +y up (glTF 2.0 §3.10.1);
+/// the mirror into rt-view's left-handed world keeps its right on the
+/// image's right (docs/conventions.md: cam_x = up × cam_z). The centre of
+/// interest is where the view line passes closest to the model's origin
+/// (the scene's `translate`), or one unit ahead when that is behind the
+/// camera; glTF gives no distance. Perspective: `fov_y` = `yfov` in
+/// degrees, `near` = `znear`·scale. Orthographic: a view plane `2·ymag`·scale
+/// high where glTF's starts, `znear`·scale ahead of the node: with `near`
+/// = `znear`·scale and `fov_y` = 2·atan(ymag/znear) when `znear` ≥ `ymag`;
+/// else (the usual case, and `znear` may be 0 where rt-view's near is
+/// positive) with C stepped back along the view so that `near` =
+/// `ymag`·scale and `fov_y` = 90°, the rays starting on the same plane. The
+/// image's aspect is the scene's image size: `aspectRatio` and `xmag`
+/// are not used, `zfar` neither (nothing is clipped far away).
+pub fn camera(path: &Path, index: usize, scale: Real, translate: Vec3) -> Result<Camera, ModelError> {
+    let err = |reason: String| ModelError::Gltf { path: path.to_owned(), reason };
+    let bytes = read_limited(path, MAX_GLTF_BYTES).map_err(err)?;
+    let (gltf, _) = parse(&bytes).map_err(err)?;
+    let json = gltf.document.as_json();
+    let Some(desc) = json.cameras.get(index) else {
+        return Err(err(format!("it has no camera {index} (it has {})", json.cameras.len())));
+    };
+    let at = || format!("camera {}", describe(Some(index), desc.name.as_deref()));
+    let Some(scene) = gltf.document.default_scene().or_else(|| gltf.document.scenes().next()) else {
+        return Err(err("it has no scene".into()));
+    };
+    let mut placed = None;
+    walk(&scene, to_rt_view(scale), |node, matrix| {
+        if placed.is_none() && node.camera().is_some_and(|c| c.index() == index) {
+            placed = Some(*matrix);
+        }
+        Ok(())
+    })
+    .map_err(err)?;
+    let matrix = placed.ok_or_else(|| err(format!("{}: no node of its scene holds it", at())))?;
+    let t = crate::math::real::widen(translate);
+    let mut eye = matrix.transform_point3(DVec3::ZERO) + t;
+    let forward = matrix.transform_vector3(DVec3::NEG_Z).normalize_or_zero();
+    let up = matrix.transform_vector3(DVec3::Y);
+    let along = (t - eye).dot(forward);
+    let center = eye + forward * if along > 0.0 && along.is_finite() { along } else { 1.0 };
+    let s = to_f64(scale);
+    use ::gltf::json::camera::Type;
+    use ::gltf::json::validation::Checked;
+    let (fov_y, near, projection) = match (&desc.type_, &desc.perspective, &desc.orthographic) {
+        (Checked::Valid(Type::Perspective), Some(p), _) => {
+            (f64::from(p.yfov).to_degrees(), f64::from(p.znear) * s, Projection::Perspective)
+        }
+        (Checked::Valid(Type::Orthographic), _, Some(o)) => {
+            let half = f64::from(o.ymag).abs() * s;
+            let start = f64::from(o.znear).max(0.0) * s;
+            if start >= half {
+                (2.0 * (half / start).atan().to_degrees(), start, Projection::Orthographic)
+            } else {
+                // Rays start on the plane at `znear` either way; the eye
+                // steps back so the view is 90° wide, not nearly 180°.
+                eye -= forward * (half - start);
+                (90.0, half, Projection::Orthographic)
+            }
+        }
+        (Checked::Valid(ty), _, _) => {
+            return Err(err(format!("{}: its type is {ty:?} but it has no {ty:?} properties", at())));
+        }
+        (Checked::Invalid, _, _) => return Err(err(format!("{}: its type is unknown", at()))),
+    };
+    Camera::new(narrow(eye), narrow(center), narrow(up), fov_y as Real, near as Real, projection)
+        .map_err(|e| err(format!("{}: {e}", at())))
+}
+
+/// [`from_slice`], reading the materials and textures only `with_materials`;
+/// with the file's lights.
 fn read(
     bytes: &[u8],
     path: &Path,
     scale: Real,
     translate: Vec3,
     with_materials: bool,
-) -> Result<Model, ModelError> {
+) -> Result<(Model, Vec<Light>), ModelError> {
     let err = |reason: String| ModelError::Gltf { path: path.to_owned(), reason };
-    let ::gltf::Gltf { document, blob } = ::gltf::Gltf::from_slice_without_validation(bytes)
-        .map_err(|e| err(format!("it cannot be read as glTF ({e}): a truncated or damaged file?")))?;
-    // gltf-json's validation indexes the accessors with a POSITION
-    // attribute's index unchecked (1.4.1, `primitive_validate_hook`): check
-    // those first, then validate.
-    let json = document.into_json();
-    for required in &json.extensions_required {
-        if !KNOWN_EXTENSIONS.contains(&required.as_str()) {
-            return Err(err(format!("it requires the extension {required}, which rt-view does not support")));
-        }
-    }
-    // gltf 1.4.1 unwraps the percent-decoding of a relative URI: refuse one
-    // that does not decode to UTF-8 before it is read.
-    let buffers = json.buffers.iter().enumerate().map(|(k, b)| ("buffer", k, b.uri.as_deref()));
-    for (what, k, uri) in
-        buffers.chain(json.images.iter().enumerate().map(|(k, i)| ("image", k, i.uri.as_deref())))
-    {
-        if let Some(uri) = uri
-            && !uri.contains(':')
-            && percent_decode(uri).is_none()
-        {
-            return Err(err(format!("{what} {k}: its URI {uri:?} is not percent-encoded UTF-8")));
-        }
-    }
-    for (m, mesh) in json.meshes.iter().enumerate() {
-        for (k, primitive) in mesh.primitives.iter().enumerate() {
-            let position = primitive
-                .attributes
-                .get(&::gltf::json::validation::Checked::Valid(::gltf::Semantic::Positions));
-            if position.is_some_and(|a| a.value() >= json.accessors.len()) {
-                return Err(err(format!("mesh {m} primitive {k}: its POSITION accessor does not exist")));
-            }
-        }
-    }
-    let gltf =
-        ::gltf::Gltf { document: ::gltf::Document::from_json(json).map_err(|e| err(e.to_string()))?, blob };
+    let (gltf, compressed) = parse(bytes).map_err(err)?;
     let mut warnings = Vec::new();
     for used in gltf.extensions_used() {
-        if !KNOWN_EXTENSIONS.contains(&used) {
+        if COMPRESSION_EXTENSIONS.contains(&used) {
+            warnings.push(format!("extension {used} is not decoded: its uncompressed fallback data is read"));
+        } else if !KNOWN_EXTENSIONS.contains(&used) {
             warnings.push(format!("extension {used} is not used"));
         }
     }
@@ -161,59 +263,49 @@ fn read(
             return Err(err(format!("buffer {} ({uri}) cannot be read: {e}", buffer.index())));
         }
     }
-    let buffer_data = ::gltf::import_buffers(&document, Some(base), blob)
+    let mut buffer_data = ::gltf::import_buffers(&document, Some(base), blob)
         .map_err(|e| err(format!("its buffers cannot be read: {e}")))?;
+    meshopt_views::decode(&compressed, &mut buffer_data).map_err(err)?;
     let buffers: Vec<&[u8]> = buffer_data.iter().map(|b| &b.0[..]).collect();
 
     let Some(scene) = document.default_scene().or_else(|| document.scenes().next()) else {
         return Err(err("it has no scene".into()));
     };
-    // glTF's world → rt-view's: mirror z, then the scene's scale.
-    let mirror = DMat4::from_scale(DVec3::new(1.0, 1.0, -1.0));
-    let place = DMat4::from_scale(DVec3::splat(to_f64(scale)));
     let mut groups: Vec<Group> = Vec::new();
     let mut group_of: HashMap<Option<usize>, usize> = HashMap::new();
     let mut triangles = 0usize;
-    let mut stack: Vec<(::gltf::Node, DMat4, usize)> =
-        scene.nodes().map(|n| (n, place * mirror, 1)).collect();
-    let mut visits = 0usize;
-    while let Some((node, parent, depth)) = stack.pop() {
-        if depth > MAX_NODE_DEPTH {
-            return Err(err(format!("its node hierarchy is deeper than {MAX_NODE_DEPTH} levels (a cycle?)")));
+    let mut lights = Vec::new();
+    let json = document.as_json();
+    walk(&scene, to_rt_view(scale), |node, matrix| {
+        if let Some(light) = node_light(json, node.index()) {
+            lights.push(place_light(light, matrix, translate).map_err(|e| {
+                format!(
+                    "light {}: {e}",
+                    describe(Some(node_light_index(json, node.index())), light.name.as_deref())
+                )
+            })?);
         }
-        // A node may be reached along many paths (a child listed twice, or
-        // by several parents): each is an instance. Bound the work.
-        visits += 1;
-        if visits > MAX_NODE_INSTANCES {
-            return Err(err(format!(
-                "its node hierarchy places more than {MAX_NODE_INSTANCES} node instances"
-            )));
-        }
-        let matrix = parent * DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
-        if let Some(mesh) = node.mesh() {
-            for primitive in mesh.primitives() {
-                let at = || {
-                    format!(
-                        "mesh {} primitive {}",
-                        describe(Some(mesh.index()), mesh.name()),
-                        primitive.index()
-                    )
-                };
-                let material = primitive.material().index();
-                let g = *group_of.entry(material).or_insert_with(|| {
-                    groups.push(Group { material, ..Group::default() });
-                    groups.len() - 1
-                });
-                let added = read_primitive(&primitive, &buffers, &matrix, translate, &mut groups[g])
-                    .map_err(|reason| err(format!("{}: {reason}", at())))?;
-                triangles += added;
-                if triangles > MAX_MESH_TRIANGLES {
-                    return Err(err(format!("it has more than {MAX_MESH_TRIANGLES} triangles")));
-                }
+        let Some(mesh) = node.mesh() else { return Ok(()) };
+        for primitive in mesh.primitives() {
+            let at = || {
+                format!("mesh {} primitive {}", describe(Some(mesh.index()), mesh.name()), primitive.index())
+            };
+            let material = primitive.material().index();
+            let g = *group_of.entry(material).or_insert_with(|| {
+                groups.push(Group { material, ..Group::default() });
+                groups.len() - 1
+            });
+            let added = read_primitive(&primitive, &buffers, matrix, translate, &mut groups[g])
+                .map_err(|reason| format!("{}: {reason}", at()))?;
+            triangles += added;
+            if triangles > MAX_MESH_TRIANGLES {
+                return Err(format!("it has more than {MAX_MESH_TRIANGLES} triangles"));
             }
         }
-        stack.extend(node.children().map(|c| (c, matrix, depth + 1)));
-    }
+        Ok(())
+    })
+    .map_err(err)?;
+    warnings.extend(unused_features(&document));
     if groups.is_empty() {
         return Err(err("its scene has no meshes".into()));
     }
@@ -248,7 +340,7 @@ fn read(
             } else {
                 let t = info.texture();
                 material.texture = *texture_of.entry(t.index()).or_insert_with(|| {
-                    match read_texture(&t, base, &buffer_data) {
+                    match read_texture(&t, document.as_json(), base, &buffer_data) {
                         Ok(texture) => {
                             textures.push(texture);
                             Some(textures.len() as u32 - 1)
@@ -279,11 +371,253 @@ fn read(
             ::gltf::buffer::Source::Bin => None,
         })
         .collect();
-    files.extend(document.images().filter_map(|i| match i.source() {
-        ::gltf::image::Source::Uri { uri, .. } => base_file(Some(uri)),
-        ::gltf::image::Source::View { .. } => None,
-    }));
-    Ok(Model { parts, materials, textures, warnings, files })
+    // From the JSON: `Image::source` unwraps what may be missing.
+    files.extend(
+        document
+            .as_json()
+            .images
+            .iter()
+            .filter(|i| i.buffer_view.is_none())
+            .filter_map(|i| base_file(i.uri.as_deref())),
+    );
+    Ok((Model { parts, materials, textures, warnings, files }, lights))
+}
+
+/// glTF's world → rt-view's: mirror z, then scale by `scale` (the scene's
+/// `translate` is added to each point after).
+fn to_rt_view(scale: Real) -> DMat4 {
+    DMat4::from_scale(DVec3::splat(to_f64(scale))) * DMat4::from_scale(DVec3::new(1.0, 1.0, -1.0))
+}
+
+/// What the file holds that nothing here reads, a sentence each (the
+/// materials' own are named with each material; lights and cameras where
+/// they are offered).
+fn unused_features(document: &::gltf::Document) -> Vec<String> {
+    let mut out = Vec::new();
+    let count = |n: usize, what: &str, why: &str| (n > 0).then(|| format!("{n} {what} not used: {why}"));
+    out.extend(count(
+        document.animations().count(),
+        "animation(s)",
+        "the model is shown as its nodes place it",
+    ));
+    out.extend(count(document.skins().count(), "skin(s)", "skinned meshes are shown in their bind pose"));
+    let json = document.as_json();
+    let morphs = json
+        .meshes
+        .iter()
+        .flat_map(|m| &m.primitives)
+        .filter(|p| p.targets.as_ref().is_some_and(|t| !t.is_empty()))
+        .count();
+    out.extend(count(morphs, "primitive(s) with morph targets", "the base shape is shown"));
+    let mut attributes: Vec<String> = json
+        .meshes
+        .iter()
+        .flat_map(|m| &m.primitives)
+        .flat_map(|p| p.attributes.keys())
+        .filter_map(|k| match k {
+            ::gltf::json::validation::Checked::Valid(semantic) => match semantic {
+                ::gltf::Semantic::Positions | ::gltf::Semantic::Normals | ::gltf::Semantic::TexCoords(0) => {
+                    None
+                }
+                other => Some(other.to_string()),
+            },
+            ::gltf::json::validation::Checked::Invalid => None,
+        })
+        .collect();
+    attributes.sort();
+    attributes.dedup();
+    if !attributes.is_empty() {
+        out.push(format!("vertex attributes not used: {}", attributes.join(", ")));
+    }
+    let cameras = json.cameras.len();
+    if cameras > 0 {
+        out.push(format!(
+            "its {cameras} camera(s) are used only where a scene's camera names one: camera: (gltf: FILE, index: N)"
+        ));
+    }
+    out
+}
+
+/// The `KHR_lights_punctual` light on node `node`, if it has one that exists.
+fn node_light(
+    json: &::gltf::json::Root,
+    node: usize,
+) -> Option<&::gltf::json::extensions::scene::khr_lights_punctual::Light> {
+    let lights = json.extensions.as_ref()?.khr_lights_punctual.as_ref()?;
+    lights.lights.get(node_light_index(json, node))
+}
+
+/// The index of node `node`'s light (past the end if it has none).
+fn node_light_index(json: &::gltf::json::Root, node: usize) -> usize {
+    json.nodes
+        .get(node)
+        .and_then(|n| n.extensions.as_ref())
+        .and_then(|e| e.khr_lights_punctual.as_ref())
+        .map_or(usize::MAX, |l| l.light.value())
+}
+
+/// A `KHR_lights_punctual` light placed by its node's `matrix` (glTF's
+/// world to rt-view's, [`to_rt_view`], included) and moved by `translate`.
+/// It shines along its node's −z. Intensity: candela (point, spot) or lux
+/// (directional) over [`LUMENS_PER_WATT`], times its colour. `range` is
+/// ignored: the specification lets a renderer light beyond it (its falloff
+/// "should" reach zero there, but inverse-square is what is physical).
+fn place_light(
+    light: &::gltf::json::extensions::scene::khr_lights_punctual::Light,
+    matrix: &DMat4,
+    translate: Vec3,
+) -> Result<Light, String> {
+    use ::gltf::json::extensions::scene::khr_lights_punctual::Type;
+    let color = light.color.map(|c| if c.is_finite() { c.max(0.0) } else { f32::NAN });
+    let intensity = light.intensity;
+    if !(intensity.is_finite() && intensity >= 0.0) || color.iter().any(|c| c.is_nan()) {
+        return Err(format!(
+            "its intensity {intensity} or colour {:?} is not a non-negative number",
+            light.color
+        ));
+    }
+    let power = Color::from_array(color) * (intensity / LUMENS_PER_WATT);
+    let position = narrow(matrix.transform_point3(DVec3::ZERO) + crate::math::real::widen(translate));
+    let direction = narrow(matrix.transform_vector3(DVec3::NEG_Z));
+    let direction = crate::math::real::normalize_robust(direction);
+    let kind = match light.type_ {
+        ::gltf::json::validation::Checked::Valid(Type::Point) => LightKind::Point { position },
+        ::gltf::json::validation::Checked::Valid(Type::Directional) => LightKind::Directional {
+            direction: direction.ok_or("its node's transform has no direction (a zero scale?)")?,
+        },
+        ::gltf::json::validation::Checked::Valid(Type::Spot) => {
+            let spot = light.spot.as_ref().ok_or("a spot light without its spot cone")?;
+            let (inner, outer) = (spot.inner_cone_angle, spot.outer_cone_angle);
+            if !(0.0 <= inner && inner < outer && outer <= std::f32::consts::FRAC_PI_2) {
+                return Err(format!(
+                    "its cone angles must satisfy 0 <= innerConeAngle < outerConeAngle <= π/2, got {inner} and {outer}"
+                ));
+            }
+            LightKind::Spot {
+                position,
+                direction: direction.ok_or("its node's transform has no direction (a zero scale?)")?,
+                cos_inner: Real::from(inner).cos(),
+                cos_outer: Real::from(outer).cos(),
+            }
+        }
+        ::gltf::json::validation::Checked::Invalid => {
+            return Err("its type is not point, spot or directional".into());
+        }
+    };
+    if !position.is_finite() {
+        return Err("its position is not finite".into());
+    }
+    Ok(Light { kind, power, shadows: true })
+}
+
+/// The file's JSON parsed and validated: by the `gltf` crate's own
+/// validation (every index in range, every enumeration value known, every
+/// required property present), and by the checks that validation lacks
+/// before something this loader calls would unwrap (gltf 1.4.1): a
+/// POSITION index (validated unchecked), a relative URI that is not
+/// percent-encoded UTF-8. What is wrong with an image, camera or light
+/// is checked where it is read.
+fn parse(bytes: &[u8]) -> Result<(::gltf::Gltf, Vec<CompressedView>), String> {
+    let ::gltf::Gltf { document, blob } =
+        ::gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| match e {
+            ::gltf::Error::Deserialize(e) => format!("its JSON is not a glTF 2.0 document: {e}"),
+            e => format!("it cannot be read as glTF ({e}): a truncated or damaged file?"),
+        })?;
+    let mut json = document.into_json();
+    for required in &json.extensions_required {
+        if COMPRESSION_EXTENSIONS.contains(&required.as_str()) {
+            return Err(format!(
+                "its meshes are compressed with {required}, which rt-view does not decode: \
+                 write it uncompressed (Blender: glTF export, Data > Compression off; or \
+                 `gltf-transform copy` / `gltfpack -noq` without compression)"
+            ));
+        }
+        if !KNOWN_EXTENSIONS.contains(&required.as_str()) {
+            return Err(format!("it requires the extension {required}, which rt-view does not support"));
+        }
+    }
+    // gltf 1.4.1 unwraps the percent-decoding of a relative URI: refuse one
+    // that does not decode to UTF-8 before it is read.
+    let buffers = json.buffers.iter().enumerate().map(|(k, b)| ("buffer", k, b.uri.as_deref()));
+    for (what, k, uri) in
+        buffers.chain(json.images.iter().enumerate().map(|(k, i)| ("image", k, i.uri.as_deref())))
+    {
+        if let Some(uri) = uri
+            && !uri.contains(':')
+            && percent_decode(uri).is_none()
+        {
+            return Err(format!("{what} {k}: its URI {uri:?} is not percent-encoded UTF-8"));
+        }
+    }
+    // Compressed buffer views read decoded data from buffers of their own.
+    let compressed = meshopt_views::redirect(&mut json)?;
+    // Every required extension is known here (checked above); the crate's
+    // validation would refuse those it has no feature for
+    // (KHR_mesh_quantization, whose data is only numbers read here).
+    json.extensions_required.clear();
+    // gltf-json's validation indexes the accessors with a POSITION
+    // attribute's index unchecked (1.4.1, `primitive_validate_hook`): check
+    // those first, then validate.
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (k, primitive) in mesh.primitives.iter().enumerate() {
+            let position = primitive
+                .attributes
+                .get(&::gltf::json::validation::Checked::Valid(::gltf::Semantic::Positions));
+            if position.is_some_and(|a| a.value() >= json.accessors.len()) {
+                return Err(format!("mesh {m} primitive {k}: its POSITION accessor does not exist"));
+            }
+        }
+    }
+    let document = ::gltf::Document::from_json(json).map_err(|e| match e {
+        ::gltf::Error::Validation(errors) => validation_message(&errors),
+        other => other.to_string(),
+    })?;
+    Ok((::gltf::Gltf { document, blob }, compressed))
+}
+
+/// The validation errors as a sentence: each JSON path with what is wrong
+/// there, the first few of them.
+fn validation_message(errors: &[(::gltf::json::Path, ::gltf::json::validation::Error)]) -> String {
+    use ::gltf::json::validation::Error;
+    const SHOWN: usize = 4;
+    let what = |e: &Error| match e {
+        Error::IndexOutOfBounds => "an index past the end of its list",
+        Error::Invalid => "an invalid value",
+        Error::Missing => "a required property is missing",
+        Error::Oversize => "a size beyond what can be held",
+        Error::Unsupported => "an unsupported extension",
+    };
+    let listed: Vec<String> = errors.iter().take(SHOWN).map(|(p, e)| format!("{p}: {}", what(e))).collect();
+    let more = errors.len().saturating_sub(SHOWN);
+    let tail = if more > 0 { format!(" (and {more} more)") } else { String::new() };
+    format!("it is not valid glTF 2.0: {}{tail}", listed.join("; "))
+}
+
+/// Visits every node instance of `scene` with its matrix, `root` times the
+/// transforms from the scene's root down (glTF 2.0 §3.5.3), parents before
+/// children; the depth and the instance count are bounded.
+fn walk<'a>(
+    scene: &::gltf::Scene<'a>,
+    root: DMat4,
+    mut visit: impl FnMut(&::gltf::Node<'a>, &DMat4) -> Result<(), String>,
+) -> Result<(), String> {
+    let mut stack: Vec<(::gltf::Node, DMat4, usize)> = scene.nodes().map(|n| (n, root, 1)).collect();
+    let mut visits = 0usize;
+    while let Some((node, parent, depth)) = stack.pop() {
+        if depth > MAX_NODE_DEPTH {
+            return Err(format!("its node hierarchy is deeper than {MAX_NODE_DEPTH} levels (a cycle?)"));
+        }
+        // A node may be reached along many paths (a child listed twice, or
+        // by several parents): each is an instance. Bound the work.
+        visits += 1;
+        if visits > MAX_NODE_INSTANCES {
+            return Err(format!("its node hierarchy places more than {MAX_NODE_INSTANCES} node instances"));
+        }
+        let matrix = parent * DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
+        visit(&node, &matrix)?;
+        stack.extend(node.children().map(|c| (c, matrix, depth + 1)));
+    }
+    Ok(())
 }
 
 /// The faces of one material, gathered over every primitive that uses it.
@@ -354,23 +688,20 @@ fn read_primitive(
         return Err(format!("its mode is {mode:?}: only triangles, strips and fans can be rendered"));
     }
     let position = primitive.get(&::gltf::Semantic::Positions).ok_or("it has no POSITION attribute")?;
-    check_accessor(&position, "POSITION", Dimensions::Vec3, &[DataType::F32], buffers)?;
+    // The component types glTF 2.0 allows (§3.7.2.1), with those
+    // `KHR_mesh_quantization` adds; every other combination is refused.
+    use DataType::{F32, I8, I16, U8, U16};
+    check_accessor(&position, "POSITION", Dimensions::Vec3, &[F32, I8, U8, I16, U16], buffers)?;
     let normal = primitive.get(&::gltf::Semantic::Normals);
     if let Some(a) = &normal {
-        check_accessor(a, "NORMAL", Dimensions::Vec3, &[DataType::F32], buffers)?;
+        check_accessor(a, "NORMAL", Dimensions::Vec3, &[F32, I8, I16], buffers)?;
+        if a.data_type() != F32 && !a.normalized() {
+            return Err("NORMAL of integers must be normalized".into());
+        }
     }
     let texcoord = primitive.get(&::gltf::Semantic::TexCoords(0));
     if let Some(a) = &texcoord {
-        check_accessor(
-            a,
-            "TEXCOORD_0",
-            Dimensions::Vec2,
-            &[DataType::F32, DataType::U8, DataType::U16],
-            buffers,
-        )?;
-        if a.data_type() != DataType::F32 && !a.normalized() {
-            return Err("TEXCOORD_0 of integers must be normalized".into());
-        }
+        check_accessor(a, "TEXCOORD_0", Dimensions::Vec2, &[F32, I8, U8, I16, U16], buffers)?;
     }
     if let Some(a) = primitive.indices() {
         check_accessor(
@@ -396,34 +727,36 @@ fn read_primitive(
     let flip = linear.determinant() < 0.0;
     let normal_matrix = linear.inverse().transpose();
     let t = crate::math::real::widen(translate);
-    for (i, p) in reader.read_positions().ok_or("POSITION cannot be read")?.enumerate() {
-        let q = matrix.transform_point3(DVec3::from_array(p.map(f64::from))) + t;
+    for (i, p) in read_vectors::<3>(&position, buffers).into_iter().enumerate() {
+        let q = matrix.transform_point3(DVec3::from_array(p)) + t;
         let q = narrow(q);
         if !q.is_finite() {
             return Err(format!("vertex {i} is not finite"));
         }
         group.positions.push(q);
     }
-    match reader.read_normals() {
-        Some(normals) => {
+    match &normal {
+        Some(a) => {
             if !group.has_normals {
                 group.normals.resize(base, Vec3::ZERO);
                 group.has_normals = true;
             }
-            group
-                .normals
-                .extend(normals.map(|n| narrow(normal_matrix * DVec3::from_array(n.map(f64::from)))));
+            group.normals.extend(
+                read_vectors::<3>(a, buffers)
+                    .into_iter()
+                    .map(|n| narrow(normal_matrix * DVec3::from_array(n))),
+            );
         }
         None if group.has_normals => group.normals.resize(base + count, Vec3::ZERO),
         None => {}
     }
-    match reader.read_tex_coords(0) {
-        Some(uvs) => {
+    match &texcoord {
+        Some(a) => {
             if !group.has_uvs {
                 group.uvs.resize(base, [0.0; 2]);
                 group.has_uvs = true;
             }
-            group.uvs.extend(uvs.into_f32());
+            group.uvs.extend(read_vectors::<2>(a, buffers).into_iter().map(|uv| uv.map(|x| x as f32)));
         }
         None if group.has_uvs => group.uvs.resize(base + count, [0.0; 2]),
         None => {}
@@ -458,6 +791,35 @@ fn read_primitive(
         corners.into_iter().map(|[x, y, z]| if flip { [b + x, b + z, b + y] } else { [b + x, b + y, b + z] }),
     );
     Ok(group.triangles.len() - before)
+}
+
+/// The `N`-vectors of accessor `a`, which [`check_accessor`] accepted (so
+/// every element lies inside its buffer), as numbers: floats as they are,
+/// integers as they are or, when `normalized`, mapped to [0, 1] (unsigned)
+/// or [−1, 1] (signed) as glTF 2.0 §3.11 specifies — `c/255`, `c/65535`,
+/// `max(c/127, −1)`, `max(c/32767, −1)` — which is how
+/// `KHR_mesh_quantization`'s attributes are read. (The `gltf` crate's
+/// readers take positions and normals as floats whatever their type.)
+fn read_vectors<const N: usize>(a: &::gltf::Accessor, buffers: &[&[u8]]) -> Vec<[f64; N]> {
+    let Some(view) = a.view() else { return Vec::new() };
+    let Some(data) = buffers.get(view.buffer().index()) else { return Vec::new() };
+    let (ty, normalized) = (a.data_type(), a.normalized());
+    let width = ty.size();
+    let stride = view.stride().unwrap_or(a.size());
+    let start = view.offset() + a.offset();
+    let component = |at: usize| -> f64 {
+        let Some(b) = data.get(at..at + width) else { return f64::NAN };
+        let (value, max) = match ty {
+            DataType::I8 => (f64::from(b[0] as i8), 127.0),
+            DataType::U8 => (f64::from(b[0]), 255.0),
+            DataType::I16 => (f64::from(i16::from_le_bytes([b[0], b[1]])), 32767.0),
+            DataType::U16 => (f64::from(u16::from_le_bytes([b[0], b[1]])), 65535.0),
+            DataType::U32 => (f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])), 4294967295.0),
+            DataType::F32 => return f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+        };
+        if normalized { (value / max).max(-1.0) } else { value }
+    };
+    (0..a.count()).map(|i| std::array::from_fn(|c| component(start + i * stride + c * width))).collect()
 }
 
 /// Checks that `a` has the expected shape and lies inside its buffer view
@@ -561,10 +923,28 @@ fn map_material(m: &::gltf::Material) -> (Material, Vec<String>) {
 /// The texture's image, decoded, with its sampler's wrap modes.
 fn read_texture(
     t: &::gltf::Texture,
+    document: &::gltf::json::Root,
     base: &Path,
     buffers: &[::gltf::buffer::Data],
 ) -> Result<Texture, String> {
     let image = t.source();
+    // `Image::source` unwraps a missing `mimeType` beside a `bufferView`,
+    // and a missing `uri` when there is no `bufferView` (gltf 1.4.1); its
+    // validation checks neither. glTF 2.0 §5.20 requires exactly one of
+    // the two, and the MIME type with a buffer view.
+    let Some(json) = document.images.get(image.index()) else {
+        return Err(format!("image {} does not exist", image.index()));
+    };
+    match (&json.buffer_view, &json.uri, &json.mime_type) {
+        (Some(_), None, Some(_)) | (None, Some(_), _) => {}
+        (Some(_), None, None) => {
+            return Err(format!("image {} is in a buffer view but has no mimeType", image.index()));
+        }
+        (Some(_), Some(_), _) => {
+            return Err(format!("image {} has both a uri and a bufferView", image.index()));
+        }
+        (None, None, _) => return Err(format!("image {} has neither a uri nor a bufferView", image.index())),
+    }
     if let ::gltf::image::Source::View { view, .. } = image.source() {
         let inside = view
             .offset()
@@ -636,6 +1016,8 @@ pub fn encode_glb(json: &str, bin: &[u8]) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::FRAC_1_SQRT_2;
+
     use proptest::prelude::*;
     use serde_json::{Value, json};
 
@@ -825,7 +1207,7 @@ mod tests {
         std::fs::write(&path, bytes).unwrap();
         let model = load(&path, 1.0, Vec3::ZERO).unwrap();
         assert_eq!(model.warnings.len(), 1);
-        let (mesh, files) = load_geometry(&path, 1.0, Vec3::ZERO).unwrap();
+        let (mesh, files, _) = load_geometry(&path, 1.0, Vec3::ZERO).unwrap();
         assert_eq!(mesh, model.parts[0].0);
         assert_eq!(files, model.files);
     }
@@ -845,8 +1227,11 @@ mod tests {
         assert!(e.contains("index 7 is out of range (3 vertices)"), "{e}");
         let e = error_of(|doc, _| doc["accessors"][0]["type"] = json!("VEC2"));
         assert!(e.contains("POSITION: accessor 0 is Vec2"), "{e}");
-        let e = error_of(|doc, _| doc["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]));
-        assert!(e.contains("requires the extension KHR_draco_mesh_compression"), "{e}");
+        let e = error_of(|doc, _| doc["extensionsRequired"] = json!(["EXT_mesh_gpu_instancing"]));
+        assert!(
+            e.contains("requires the extension EXT_mesh_gpu_instancing, which rt-view does not support"),
+            "{e}"
+        );
         let e = error_of(|doc, _| doc["nodes"] = json!([{ "mesh": 0, "children": [0] }]));
         assert!(e.starts_with("glTF file ") && e.contains("m.glb: "), "{e}");
         let e = error_of(|doc, _| doc["buffers"][0]["uri"] = json!("data%AA.bin"));
@@ -873,6 +1258,574 @@ mod tests {
         }
         let e = load(Path::new("/nonexistent/m.glb"), 1.0, Vec3::ZERO).unwrap_err().to_string();
         assert!(e.contains("cannot open it: No such file"), "{e}");
+    }
+
+    /// A 2×2 PNG (orange and blue checks), as Blender embeds its textures.
+    fn png() -> Vec<u8> {
+        let mut png = Vec::new();
+        image::RgbImage::from_fn(2, 2, |x, y| {
+            if (x + y) % 2 == 0 { image::Rgb([230, 120, 20]) } else { image::Rgb([20, 60, 200]) }
+        })
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+        png
+    }
+
+    /// [`triangle_glb`] as Blender's exporter writes a textured model: an
+    /// embedded PNG in a buffer view used by the base-colour,
+    /// metallic-roughness and normal textures with a sampler, a camera, a
+    /// light, a second node and the material extensions it writes.
+    fn blender_like(doc: &mut Value, bin: &mut Vec<u8>) {
+        let png = png();
+        let offset = bin.len();
+        bin.extend_from_slice(&png);
+        doc["bufferViews"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": png.len() }));
+        doc["buffers"][0]["byteLength"] = json!(bin.len());
+        doc["extensionsUsed"] = json!(["KHR_lights_punctual", "KHR_materials_ior", "KHR_materials_specular"]);
+        doc["images"] = json!([{ "bufferView": 4, "mimeType": "image/png", "name": "checker" }]);
+        doc["samplers"] = json!([{ "magFilter": 9729, "minFilter": 9987 }]);
+        doc["textures"] = json!([{ "source": 0, "sampler": 0 }]);
+        doc["materials"] = json!([{
+            "name": "pbr",
+            "pbrMetallicRoughness": {
+                "baseColorTexture": { "index": 0 },
+                "metallicRoughnessTexture": { "index": 0 },
+                "metallicFactor": 1.0
+            },
+            "normalTexture": { "index": 0 },
+            "extensions": { "KHR_materials_ior": { "ior": 1.45 }, "KHR_materials_specular": { "specularFactor": 0.5 } }
+        }]);
+        doc["cameras"] = json!([{ "name": "Camera", "type": "perspective", "perspective": { "yfov": 0.6911, "znear": 0.1, "zfar": 100.0, "aspectRatio": 1.7778 } }]);
+        doc["extensions"] = json!({ "KHR_lights_punctual": { "lights": [
+            { "name": "Spot", "type": "spot", "color": [1.0, 0.9, 0.8], "intensity": 500.0, "spot": { "innerConeAngle": 0.3, "outerConeAngle": 0.6 } }
+        ] } });
+        doc["nodes"] = json!([
+            { "name": "Suzanne", "mesh": 0 },
+            { "name": "Camera", "camera": 0, "translation": [0.0, 0.0, 5.0] },
+            { "name": "Light", "translation": [0.0, 4.0, 0.0], "rotation": [-FRAC_1_SQRT_2, 0.0, 0.0, FRAC_1_SQRT_2], "extensions": { "KHR_lights_punctual": { "light": 0 } } }
+        ]);
+        doc["scenes"] = json!([{ "name": "Scene", "nodes": [0, 1, 2] }]);
+    }
+
+    /// Loads `bytes` as a file named `name` in a folder that holds `extra`
+    /// files; whatever it returns, it must return.
+    fn load_named(
+        bytes: &[u8],
+        name: &str,
+        extra: &[(&str, &[u8])],
+    ) -> Result<(Model, Vec<Light>), ModelError> {
+        let dir = tempfile::tempdir().unwrap();
+        for (file, data) in extra {
+            std::fs::write(dir.path().join(file), data).unwrap();
+        }
+        let path = dir.path().join(name);
+        std::fs::write(&path, bytes).unwrap();
+        load_with_lights(&path, 1.0, Vec3::ZERO, true)
+    }
+
+    #[test]
+    fn an_image_in_a_buffer_view_without_a_mime_type_is_a_warning_naming_it_not_a_panic() {
+        // gltf 1.4.1's `Image::source` unwraps the missing mimeType.
+        for (image, says) in [
+            (json!({ "bufferView": 4 }), "image 0 is in a buffer view but has no mimeType"),
+            (json!({ "name": "nothing" }), "image 0 has neither a uri nor a bufferView"),
+            (
+                json!({ "bufferView": 4, "uri": "a.png", "mimeType": "image/png" }),
+                "image 0 has both a uri and a bufferView",
+            ),
+        ] {
+            let bytes = triangle_glb(|doc, bin| {
+                blender_like(doc, bin);
+                doc["images"][0] = image.clone();
+            });
+            let model = load_bytes(&bytes).unwrap();
+            assert_eq!(model.materials[0].1.texture, None);
+            assert!(
+                model.warnings.iter().any(|w| w.starts_with("texture 0: ") && w.contains(says)),
+                "{:?}",
+                model.warnings
+            );
+        }
+        // The well-formed file decodes its texture.
+        let model = load_bytes(&triangle_glb(blender_like)).unwrap();
+        assert_eq!(model.materials[0].1.texture, Some(0));
+    }
+
+    #[test]
+    fn the_crates_validation_errors_name_the_json_path_and_what_is_wrong() {
+        let e = error_of(|doc, _| doc["meshes"][0]["primitives"][0]["material"] = json!(3));
+        assert!(
+            e.contains("it is not valid glTF 2.0: meshes[0].primitives[0].material: an index past the end of its list"),
+            "{e}"
+        );
+        let e = error_of(|doc, _| doc["accessors"][1]["componentType"] = json!(1));
+        assert!(e.contains("accessors[1].componentType: an invalid value"), "{e}");
+    }
+
+    #[test]
+    fn draco_compressed_meshes_are_refused_naming_the_extension_and_a_way_out_unless_their_data_is_there() {
+        let ext = "KHR_draco_mesh_compression";
+        let e = error_of(|doc, _| {
+            doc["extensionsUsed"] = json!([ext]);
+            doc["extensionsRequired"] = json!([ext]);
+        });
+        assert!(
+            e.contains(&format!("its meshes are compressed with {ext}, which rt-view does not decode")),
+            "{e}"
+        );
+        assert!(e.contains("uncompressed"), "{e}");
+        let model = load_bytes(&triangle_glb(|doc, _| doc["extensionsUsed"] = json!([ext]))).unwrap();
+        assert_eq!(
+            model.warnings,
+            [format!("extension {ext} is not decoded: its uncompressed fallback data is read")]
+        );
+    }
+
+    /// [`triangle_glb`] as `gltfpack -cc` writes it (`EXT_meshopt_compression`):
+    /// the positions, octahedral-filtered normals and indices compressed in
+    /// the GLB's buffer, their views in a fallback buffer without data.
+    fn meshopt_compressed(doc: &mut Value, bin: &mut Vec<u8>) {
+        let positions: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let normals = meshopt::encode_filter_oct::<i8>(&[[0.0, 0.0, 1.0, 0.0]; 3], 8);
+        let streams = [
+            meshopt::encode_vertex_buffer(&positions).unwrap(),
+            meshopt::encode_vertex_buffer(&normals).unwrap(),
+            meshopt::encode_index_buffer(&[0, 1, 2], 3).unwrap(),
+        ];
+        bin.clear();
+        let mut at = Vec::new();
+        for s in &streams {
+            at.push(bin.len());
+            bin.extend(s);
+            bin.resize(bin.len().next_multiple_of(4), 0);
+        }
+        let ext = |k: usize, stride: usize, mode: &str, filter: &str| {
+            json!({ "EXT_meshopt_compression": {
+                "buffer": 0, "byteOffset": at[k], "byteLength": streams[k].len(),
+                "byteStride": stride, "count": 3, "mode": mode, "filter": filter
+            } })
+        };
+        doc["extensionsUsed"] = json!(["EXT_meshopt_compression", "KHR_mesh_quantization"]);
+        doc["extensionsRequired"] = json!(["EXT_meshopt_compression", "KHR_mesh_quantization"]);
+        doc["buffers"] = json!([
+            { "byteLength": bin.len() },
+            { "byteLength": 54, "extensions": { "EXT_meshopt_compression": { "fallback": true } } }
+        ]);
+        doc["bufferViews"] = json!([
+            { "buffer": 1, "byteOffset": 0, "byteLength": 36, "byteStride": 12, "extensions": ext(0, 12, "ATTRIBUTES", "NONE") },
+            { "buffer": 1, "byteOffset": 36, "byteLength": 12, "byteStride": 4, "extensions": ext(1, 4, "ATTRIBUTES", "OCTAHEDRAL") },
+            { "buffer": 1, "byteOffset": 48, "byteLength": 6, "extensions": ext(2, 2, "TRIANGLES", "NONE") }
+        ]);
+        doc["accessors"] = json!([
+            { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0] },
+            { "bufferView": 1, "componentType": 5120, "normalized": true, "count": 3, "type": "VEC3" },
+            { "bufferView": 2, "componentType": 5123, "count": 3, "type": "SCALAR" }
+        ]);
+        doc["meshes"][0]["primitives"][0]["attributes"] = json!({ "POSITION": 0, "NORMAL": 1 });
+        doc["meshes"][0]["primitives"][0]["indices"] = json!(2);
+    }
+
+    #[test]
+    fn meshopt_compressed_views_are_decoded_and_read_as_the_uncompressed_file() {
+        let model = load_bytes(&triangle_glb(meshopt_compressed)).unwrap();
+        assert!(model.warnings.is_empty(), "{:?}", model.warnings);
+        let mesh = &model.parts[0].0;
+        assert_eq!(mesh.triangle(0), [Vec3::ZERO, Vec3::Y, Vec3::X]);
+        let n = mesh.shading_normal(0, Vec3::new(0.2, 0.2, 0.0)).unwrap();
+        assert!((n - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-2, "{n}");
+        // What the specification forbids (and meshoptimizer would assert)
+        // is refused, naming the view; a stream that does not decode too.
+        for (edit, says) in [
+            (
+                json!({ "byteStride": 6 }),
+                "buffer view 0 (EXT_meshopt_compression): byteStride 6 is not allowed in mode Attributes",
+            ),
+            (json!({ "mode": "TRIANGLES" }), "byteStride 12 is not allowed in mode Triangles"),
+            (json!({ "filter": "QUATERNION" }), "filter Quaternion does not apply to byteStride 12"),
+            (json!({ "count": 4 }), "4 elements of 12 bytes do not fill the view's byteLength 36"),
+            (json!({ "buffer": 7 }), "its buffer 7 does not exist"),
+            (json!({ "mode": "POINTS" }), "its mode Some(\"POINTS\") is not ATTRIBUTES"),
+            (json!({ "byteLength": 100000 }), "its compressed data runs past the end of its buffer"),
+            (json!({ "byteLength": 3 }), "meshoptimizer cannot decode it"),
+        ] {
+            let e = error_of(|doc, bin| {
+                meshopt_compressed(doc, bin);
+                let ext =
+                    doc["bufferViews"][0]["extensions"]["EXT_meshopt_compression"].as_object_mut().unwrap();
+                for (k, v) in edit.as_object().unwrap() {
+                    ext.insert(k.clone(), v.clone());
+                }
+            });
+            assert!(e.contains(says), "{edit}: {e}");
+        }
+    }
+
+    /// Writes `values` with `write` each, padding each vertex to `stride` bytes.
+    fn packed<T: Copy>(
+        values: &[[T; 3]],
+        dims: usize,
+        stride: usize,
+        write: impl Fn(T) -> Vec<u8>,
+    ) -> Vec<u8> {
+        let mut out = Vec::new();
+        for v in values {
+            let start = out.len();
+            for c in &v[..dims] {
+                out.extend(write(*c));
+            }
+            out.resize(start + stride, 0);
+        }
+        out
+    }
+
+    /// [`triangle_glb`] quantized (`KHR_mesh_quantization`).
+    /// Positions as unnormalized i16 (stride 8), scaled back by the node
+    /// (1/1000) as gltfpack writes them; normals as normalized i8
+    /// (stride 4); texture coordinates as normalized i16.
+    fn quantized(doc: &mut Value, bin: &mut Vec<u8>) {
+        bin.clear();
+        bin.extend(packed(&[[0i16, 0, 0], [1000, 0, 0], [0, 1000, 0]], 3, 8, |c| c.to_le_bytes().to_vec())); // 0..24
+        bin.extend(packed(&[[0i8, 0, 127], [0, 0, 127], [0, -128, 0]], 3, 4, |c| vec![c as u8])); // 24..36
+        bin.extend(packed(&[[0i16, 0, 0], [32767, 0, 0], [0, -32768, 0]], 2, 4, |c| {
+            c.to_le_bytes().to_vec()
+        })); // 36..48
+        bin.extend([0u16, 1, 2, 0].iter().flat_map(|i| i.to_le_bytes())); // 48..56
+        doc["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+        doc["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+        doc["nodes"][0]["scale"] = json!([0.001, 0.001, 0.001]);
+        doc["accessors"] = json!([
+            { "bufferView": 0, "componentType": 5122, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1000, 1000, 0] },
+            { "bufferView": 1, "componentType": 5120, "normalized": true, "count": 3, "type": "VEC3" },
+            { "bufferView": 2, "componentType": 5122, "normalized": true, "count": 3, "type": "VEC2" },
+            { "bufferView": 3, "componentType": 5123, "count": 3, "type": "SCALAR" }
+        ]);
+        doc["bufferViews"] = json!([
+            { "buffer": 0, "byteOffset": 0, "byteLength": 24, "byteStride": 8 },
+            { "buffer": 0, "byteOffset": 24, "byteLength": 12, "byteStride": 4 },
+            { "buffer": 0, "byteOffset": 36, "byteLength": 12, "byteStride": 4 },
+            { "buffer": 0, "byteOffset": 48, "byteLength": 6 }
+        ]);
+        doc["buffers"][0]["byteLength"] = json!(bin.len());
+    }
+
+    #[test]
+    fn quantized_positions_normals_and_texture_coordinates_are_dequantized_as_the_extension_specifies() {
+        let bytes = triangle_glb(quantized);
+        let model = load_bytes(&bytes).unwrap();
+        assert!(model.warnings.is_empty(), "{:?}", model.warnings);
+        let mesh = &model.parts[0].0;
+        let near = |p: Vec3, q: Vec3| (p - q).length() < 1e-5;
+        let [a, b, c] = mesh.triangle(0);
+        assert!(near(a, Vec3::ZERO) && near(b, Vec3::Y) && near(c, Vec3::X), "{a} {b} {c}");
+        // At corner 0 (glTF's origin): normal 127/127 along +z, mirrored.
+        let n = mesh.shading_normal(0, Vec3::new(1e-4, 1e-4, 0.0)).unwrap();
+        assert!((n - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-2, "{n}");
+        // At glTF's (0, 1, 0): v = max(−32768/32767, −1) = −1; at (1, 0, 0): u = 1.
+        let (u, v) = mesh.uv(0, Vec3::new(0.0, 1.0, 0.0)).unwrap();
+        assert!(u.abs() < 1e-5 && (v + 1.0).abs() < 1e-6, "{u} {v}");
+        let (u, v) = mesh.uv(0, Vec3::new(1.0, 0.0, 0.0)).unwrap();
+        assert!((u - 1.0).abs() < 1e-6 && v.abs() < 1e-6, "{u} {v}");
+        // A NORMAL of integers that is not normalized is refused; texture
+        // coordinates that are not normalized are read as integers.
+        let e = error_of(|doc, _| {
+            doc["accessors"][1] =
+                json!({ "bufferView": 1, "componentType": 5120, "count": 3, "type": "VEC3" })
+        });
+        assert!(e.contains("mesh 0 primitive 0: NORMAL of integers must be normalized"), "{e}");
+        let bytes = triangle_glb(|doc, bin| {
+            quantized(doc, bin);
+            doc["accessors"][2]["normalized"] = json!(false);
+        });
+        let (u, _) = load_bytes(&bytes).unwrap().parts[0].0.uv(0, Vec3::new(1.0, 0.0, 0.0)).unwrap();
+        assert!((u - 32767.0).abs() < 1e-2, "{u}");
+    }
+
+    #[test]
+    fn punctual_lights_are_placed_by_their_nodes_in_watts_from_candela_and_lux() {
+        let bytes = triangle_glb(|doc, bin| {
+            blender_like(doc, bin);
+            doc["extensions"]["KHR_lights_punctual"]["lights"] = json!([
+                { "type": "spot", "color": [1.0, 0.5, 0.0], "intensity": 683.0, "spot": { "innerConeAngle": 0.25, "outerConeAngle": 0.5 } },
+                { "type": "point", "intensity": 1366.0 },
+                { "type": "directional", "color": [0.5, 0.5, 0.5], "intensity": 6830.0 }
+            ]);
+            // Each light's node turns −z (its shining direction) to −y, at (1, 4, 2).
+            let down = json!([-FRAC_1_SQRT_2, 0.0, 0.0, FRAC_1_SQRT_2]);
+            doc["nodes"] = json!([
+                { "mesh": 0 },
+                { "translation": [1.0, 4.0, 2.0], "rotation": down, "extensions": { "KHR_lights_punctual": { "light": 0 } } },
+                { "translation": [1.0, 4.0, 2.0], "extensions": { "KHR_lights_punctual": { "light": 1 } } },
+                { "rotation": down, "extensions": { "KHR_lights_punctual": { "light": 2 } } }
+            ]);
+            doc["scenes"] = json!([{ "nodes": [0, 1, 2, 3] }]);
+        });
+        let (model, lights) = load_named(&bytes, "m.glb", &[]).unwrap();
+        assert!(!model.warnings.iter().any(|w| w.contains("light")), "{:?}", model.warnings);
+        let mut kinds: Vec<Light> = lights;
+        kinds.sort_by_key(|l| match l.kind {
+            LightKind::Spot { .. } => 0,
+            LightKind::Point { .. } => 1,
+            _ => 2,
+        });
+        let close = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
+        // glTF (1, 4, 2) is rt-view's (1, 4, −2).
+        let LightKind::Spot { position, direction, cos_inner, cos_outer } = kinds[0].kind else {
+            panic!("{kinds:?}")
+        };
+        assert!(close(position, Vec3::new(1.0, 4.0, -2.0)) && close(direction, -Vec3::Y), "{kinds:?}");
+        assert!(
+            (cos_inner - (0.25 as Real).cos()).abs() < 1e-6 && (cos_outer - (0.5 as Real).cos()).abs() < 1e-6
+        );
+        assert!((kinds[0].power - Color::new(1.0, 0.5, 0.0)).abs().max_element() < 1e-6, "{:?}", kinds[0]);
+        assert!(
+            matches!(kinds[1].kind, LightKind::Point { position } if close(position, Vec3::new(1.0, 4.0, -2.0)))
+        );
+        assert!((kinds[1].power - Color::splat(2.0)).abs().max_element() < 1e-6);
+        assert!(
+            matches!(kinds[2].kind, LightKind::Directional { direction } if close(direction, -Vec3::Y)),
+            "{kinds:?}"
+        );
+        assert!((kinds[2].power - Color::splat(5.0)).abs().max_element() < 1e-5);
+        // Without `lights: true` they are a warning.
+        let model = load_bytes(&bytes).unwrap();
+        assert!(
+            model.warnings.iter().any(|w| w.contains("3 KHR_lights_punctual light(s) are not used")),
+            "{:?}",
+            model.warnings
+        );
+        // A spot cone the specification forbids is an error naming the light.
+        let e = error_of(|doc, bin| {
+            blender_like(doc, bin);
+            doc["extensions"]["KHR_lights_punctual"]["lights"][0]["spot"]["innerConeAngle"] = json!(0.9);
+        });
+        assert!(e.contains("light 0 (\"Spot\"): its cone angles must satisfy"), "{e}");
+    }
+
+    #[test]
+    fn a_files_camera_is_placed_by_its_node_looking_along_its_minus_z() {
+        let bytes = triangle_glb(blender_like);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.glb");
+        std::fs::write(&path, &bytes).unwrap();
+        // At glTF (0, 0, 5) looking at the origin: rt-view's (0, 0, −5)
+        // looking along +z, 5 from the model's origin; scaled by 2 and moved.
+        let c = camera(&path, 0, 2.0, Vec3::new(1.0, 0.0, 0.0)).unwrap();
+        let close = |a: Vec3, b: Vec3| (a - b).length() < 1e-4;
+        assert!(close(c.position(), Vec3::new(1.0, 0.0, -10.0)), "{}", c.position());
+        assert!(close(c.center_of_interest(), Vec3::new(1.0, 0.0, 0.0)), "{}", c.center_of_interest());
+        assert!(close(c.up(), Vec3::new(0.0, 2.0, 0.0)), "{}", c.up());
+        assert!((c.fov_y() - (0.6911 as Real).to_degrees()).abs() < 1e-3 && (c.near() - 0.2).abs() < 1e-6);
+        assert_eq!(c.projection(), Projection::Perspective);
+        // Orthographic: a view plane 2·ymag high.
+        let bytes = triangle_glb(|doc, bin| {
+            blender_like(doc, bin);
+            doc["cameras"][0] = json!({ "type": "orthographic", "orthographic": { "xmag": 3.0, "ymag": 2.0, "znear": 0.5, "zfar": 10.0 } });
+        });
+        std::fs::write(&path, &bytes).unwrap();
+        let c = camera(&path, 0, 1.0, Vec3::ZERO).unwrap();
+        assert_eq!(c.projection(), Projection::Orthographic);
+        let half = c.near() * (c.fov_y().to_radians() / 2.0).tan();
+        assert!((half - 2.0).abs() < 1e-4 && (c.fov_y() - 90.0).abs() < 1e-4, "{half}");
+        // Its rays start where glTF's do: 0.5 in front of the node, at z = −4.5.
+        let start = c.position() + c.near() * Vec3::Z;
+        assert!((start - Vec3::new(0.0, 0.0, -4.5)).length() < 1e-5, "{start}");
+        // A near plane farther than the half height: the eye stays, the view narrows.
+        let bytes = triangle_glb(|doc, bin| {
+            blender_like(doc, bin);
+            doc["cameras"][0] = json!({ "type": "orthographic", "orthographic": { "xmag": 1.0, "ymag": 1.0, "znear": 2.0, "zfar": 10.0 } });
+        });
+        std::fs::write(&path, &bytes).unwrap();
+        let c = camera(&path, 0, 1.0, Vec3::ZERO).unwrap();
+        assert!((c.position() - Vec3::new(0.0, 0.0, -5.0)).length() < 1e-5 && (c.near() - 2.0).abs() < 1e-6);
+        let half = c.near() * (c.fov_y().to_radians() / 2.0).tan();
+        assert!((half - 1.0).abs() < 1e-4, "{half}");
+        // A type without its properties, a camera that is not there, one no node holds.
+        for (edit, says) in [
+            (
+                json!({ "type": "orthographic", "perspective": { "yfov": 1.0, "znear": 0.1 } }),
+                "camera 0: its type is Orthographic but it has no Orthographic properties",
+            ),
+            (
+                json!({ "type": "perspective", "perspective": { "yfov": 4.0, "znear": 0.1 } }),
+                "camera 0: camera.fov_y must be strictly between 0 and 180",
+            ),
+        ] {
+            let bytes = triangle_glb(|doc, bin| {
+                blender_like(doc, bin);
+                doc["cameras"][0] = edit.clone();
+            });
+            std::fs::write(&path, &bytes).unwrap();
+            let e = camera(&path, 0, 1.0, Vec3::ZERO).unwrap_err().to_string();
+            assert!(e.contains(says), "{e}");
+        }
+        let e = camera(&path, 1, 1.0, Vec3::ZERO).unwrap_err().to_string();
+        assert!(e.contains("it has no camera 1 (it has 1)"), "{e}");
+        let bytes = triangle_glb(|doc, bin| {
+            blender_like(doc, bin);
+            doc["scenes"][0]["nodes"] = json!([0]);
+        });
+        std::fs::write(&path, &bytes).unwrap();
+        let e = camera(&path, 0, 1.0, Vec3::ZERO).unwrap_err().to_string();
+        assert!(e.contains("camera 0 (\"Camera\"): no node of its scene holds it"), "{e}");
+    }
+
+    #[test]
+    fn what_the_file_holds_and_is_not_used_is_named() {
+        let bytes = triangle_glb(|doc, bin| {
+            blender_like(doc, bin);
+            doc["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = json!(0);
+            doc["meshes"][0]["primitives"][0]["targets"] = json!([{ "POSITION": 0 }]);
+            doc["animations"] = json!([{ "channels": [], "samplers": [] }]);
+        });
+        let w = load_bytes(&bytes).unwrap().warnings;
+        for says in [
+            "extension KHR_materials_specular is not used",
+            "1 animation(s) not used",
+            "1 primitive(s) with morph targets not used",
+            "vertex attributes not used: COLOR_0",
+            "its 1 camera(s) are used only where a scene's camera names one",
+            "1 KHR_lights_punctual light(s) are not used",
+        ] {
+            assert!(w.iter().any(|x| x.contains(says)), "{says}: {w:?}");
+        }
+    }
+
+    /// The `.gltf` text of [`blender_like`] with its buffer in `m.bin`
+    /// beside it, and that buffer.
+    fn blender_like_text() -> (Value, Vec<u8>) {
+        let mut doc = Value::Null;
+        let mut bin = Vec::new();
+        let _ = triangle_glb(|d, b| {
+            blender_like(d, b);
+            d["buffers"][0]["uri"] = json!("m.bin");
+            doc = d.clone();
+            bin = b.clone();
+        });
+        (doc, bin)
+    }
+
+    /// The JSON chunk of a `.glb`.
+    fn json_of(glb: &[u8]) -> Value {
+        let length = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+        serde_json::from_slice(&glb[20..20 + length]).unwrap()
+    }
+
+    /// The BIN chunk of a `.glb` made by [`encode_glb`].
+    fn bin_of(glb: &[u8]) -> Vec<u8> {
+        let length = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+        glb[28 + length..].to_vec()
+    }
+
+    #[test]
+    fn thousands_of_damaged_json_documents_never_panic() {
+        // Each mutant: 1 to 4 structure-aware changes (numbers, dropped
+        // keys, swapped types, indices past the end) of a Blender-like file,
+        // as .glb and as .gltf text with an external buffer, or of a
+        // meshopt-compressed one. The mutants
+        // that load must be consistent. A longer run by hand:
+        // RT_GLTF_MUTANTS=200000 cargo test -p rt-core --lib thousands_of_damaged
+        use crate::files::gltf_mutation::{Choices, mutate};
+        let runs: u64 = std::env::var("RT_GLTF_MUTANTS").ok().and_then(|n| n.parse().ok()).unwrap_or(3000);
+        let glb = triangle_glb(blender_like);
+        let (glb_doc, glb_bin) = (json_of(&glb), bin_of(&glb));
+        let (text_doc, text_bin) = blender_like_text();
+        let packed = triangle_glb(meshopt_compressed);
+        let (packed_doc, packed_bin) = (json_of(&packed), bin_of(&packed));
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("m.bin"), &text_bin).unwrap();
+        let (mut loaded, mut refused) = (0, 0);
+        for seed in 0..runs {
+            let mut choices = Choices::Seeded(seed);
+            let as_text = seed % 3 == 1;
+            let (mut doc, bin) = match seed % 3 {
+                0 => (glb_doc.clone(), &glb_bin),
+                1 => (text_doc.clone(), &glb_bin),
+                _ => (packed_doc.clone(), &packed_bin),
+            };
+            let count = 1 + choices.below(4);
+            mutate(&mut doc, count, &mut choices);
+            let (bytes, name) = if as_text {
+                (doc.to_string().into_bytes(), "m.gltf")
+            } else {
+                (encode_glb(&doc.to_string(), bin), "m.glb")
+            };
+            let path = dir.path().join(name);
+            let result = std::panic::catch_unwind(|| {
+                let model = from_slice(&bytes, &path, 1.0, Vec3::ZERO);
+                let camera = std::fs::write(&path, &bytes).map(|()| camera(&path, 0, 1.0, Vec3::ZERO));
+                let lights = load_with_lights(&path, 1.0, Vec3::ZERO, true);
+                (model, camera, lights)
+            });
+            let Ok((model, _, _)) = result else {
+                std::fs::write(dir.path().join("panicked.json"), doc.to_string()).unwrap();
+                panic!("seed {seed} ({name}) panicked: {doc}");
+            };
+            match model {
+                Ok(model) => {
+                    loaded += 1;
+                    for (mesh, material) in &model.parts {
+                        assert!(
+                            mesh.bounds().min().is_finite() && mesh.bounds().max().is_finite(),
+                            "seed {seed}"
+                        );
+                        assert!(material.is_none_or(|m| m < model.materials.len()), "seed {seed}");
+                    }
+                }
+                Err(e) => {
+                    refused += 1;
+                    if std::env::var("RT_GLTF_SHOW").is_ok() {
+                        eprintln!("{seed} {name}: {e}");
+                    }
+                }
+            }
+        }
+        // Some mutants still load (the damage is local); most are refused,
+        // by the JSON schema or by validation. (RT_GLTF_SHOW=1 lists why.)
+        assert!(loaded > runs / 20 && refused > runs / 2, "{loaded} loaded, {refused} refused");
+    }
+
+    #[test]
+    fn the_fuzz_corpus_and_its_regressions_load_or_are_refused_without_a_panic() {
+        let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/corpus/gltf");
+        let mut seen = 0;
+        for entry in std::fs::read_dir(&corpus).unwrap() {
+            let path = entry.unwrap().path();
+            let bytes = std::fs::read(&path).unwrap();
+            let name = Path::new("/nonexistent-fuzz-dir").join(path.file_name().unwrap());
+            let _ = from_slice(&bytes, &name, 1.0, Vec3::ZERO);
+            seen += 1;
+        }
+        assert!(seen >= 4, "{seen} files in {}", corpus.display());
+        // The two files the issue's panics came from: a texture's image in a
+        // buffer view with no mimeType.
+        let bytes = std::fs::read(corpus.join("image-view-without-mime-type.glb")).unwrap();
+        let model = from_slice(&bytes, Path::new("/nonexistent-fuzz-dir/m.glb"), 1.0, Vec3::ZERO).unwrap();
+        assert!(model.warnings.iter().any(|w| w.contains("has no mimeType")), "{:?}", model.warnings);
+    }
+
+    /// Writes the regression corpus's generated files (run by hand when
+    /// they need to change: `cargo test -p rt-core --lib write_gltf_corpus -- --ignored`).
+    #[test]
+    #[ignore]
+    fn write_gltf_corpus() {
+        let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/corpus/gltf");
+        std::fs::write(corpus.join("blender-like.glb"), triangle_glb(blender_like)).unwrap();
+        let bytes = triangle_glb(|doc, bin| {
+            blender_like(doc, bin);
+            doc["images"][0] = json!({ "bufferView": 4 });
+        });
+        std::fs::write(corpus.join("image-view-without-mime-type.glb"), bytes).unwrap();
+        let bytes = triangle_glb(|doc, bin| {
+            blender_like(doc, bin);
+            doc["images"][0] = json!({ "name": "neither uri nor view" });
+        });
+        std::fs::write(corpus.join("image-without-source.glb"), bytes).unwrap();
+        let (doc, _) = blender_like_text();
+        std::fs::write(corpus.join("blender-like.gltf"), doc.to_string()).unwrap();
+        std::fs::write(corpus.join("meshopt.glb"), triangle_glb(meshopt_compressed)).unwrap();
     }
 
     proptest! {

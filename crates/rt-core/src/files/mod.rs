@@ -4,6 +4,9 @@
 //! `cast` command's input ([`ray_text`]).
 
 pub mod gltf_model;
+#[cfg(test)]
+mod gltf_mutation;
+pub mod meshopt_views;
 pub mod model;
 pub mod mtl;
 pub mod obj_model;

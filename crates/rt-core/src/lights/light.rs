@@ -1,4 +1,4 @@
-//! Lights: point, directional and spherical area lights.
+//! Lights: point, spot, directional and spherical area lights.
 //!
 //! A light is not geometry: rays never hit it, and the camera does not see
 //! it. Each one says, for a shaded point, from which direction and distance
@@ -11,10 +11,12 @@
 //! gives irradiance E = `color·intensity` in W/m²; a sphere light of radius
 //! R is a sphere of uniform radiance `I/(π·R²)`, whose intensity seen from
 //! far away is I in every direction, like the point light it becomes as R
-//! shrinks.
+//! shrinks. A spot light is a point light of axial intensity I whose
+//! intensity falls off away from its axis as glTF's `KHR_lights_punctual`
+//! defines it ([`spot_falloff`]).
 
 use crate::math::color::Color;
-use crate::math::real::{Real, Vec3, to_f32};
+use crate::math::real::{Real, SPOT_CONE_MIN_WIDTH, Vec3, to_f32};
 use crate::sampling::sampler::stratified;
 
 /// One light of a scene.
@@ -36,6 +38,18 @@ pub enum LightKind {
     Point {
         /// World position.
         position: Vec3,
+    },
+    /// A point light shining into a cone: intensity `power·`[`spot_falloff`]
+    /// at angle θ from its axis (glTF's `KHR_lights_punctual` spot light).
+    Spot {
+        /// World position.
+        position: Vec3,
+        /// Unit direction of the cone's axis (the way the light shines).
+        direction: Vec3,
+        /// cos of the angle out to which the intensity is full.
+        cos_inner: Real,
+        /// cos of the angle beyond which there is no light, `< cos_inner`.
+        cos_outer: Real,
     },
     /// Parallel light from infinitely far away.
     Directional {
@@ -73,12 +87,20 @@ impl Light {
     /// The power it gives off, for choosing among lights (the mean of the
     /// colour channels): `4π·I` for a point or sphere light of intensity I,
     /// `π·R²·E` for a directional light of irradiance E falling on a scene
-    /// that fits in a sphere of radius `radius`.
+    /// that fits in a sphere of radius `radius`; for a spot light the
+    /// integral of its falloff over the sphere, `2π·I·(1 − cos θₒ − 2w/3)`
+    /// with w = cos θᵢ − cos θₒ (at least [`SPOT_CONE_MIN_WIDTH`]): full from
+    /// cos θₒ + w to 1, and the squared ramp over the width w below that
+    /// integrates to w/3.
     pub fn power(&self, radius: Real) -> Real {
         let pi = std::f64::consts::PI as Real;
         let mean = (self.power.element_sum() / 3.0) as Real;
         match self.kind {
             LightKind::Point { .. } | LightKind::Sphere { .. } => 4.0 * pi * mean,
+            LightKind::Spot { cos_inner, cos_outer, .. } => {
+                let w = (cos_inner - cos_outer).max(SPOT_CONE_MIN_WIDTH);
+                2.0 * pi * mean * (1.0 - cos_outer - 2.0 * w / 3.0)
+            }
             LightKind::Directional { .. } => pi * radius * radius * mean,
         }
     }
@@ -115,6 +137,11 @@ impl Light {
         };
         match self.kind {
             LightKind::Point { position } => towards(position, 1.0),
+            LightKind::Spot { position, direction, cos_inner, cos_outer } => {
+                let v = p - position;
+                let cos_theta = direction.dot(v) / v.length();
+                towards(position, spot_falloff(cos_theta, cos_inner, cos_outer))
+            }
             LightKind::Directional { direction } => {
                 Some(LightSample { to_light: -direction, distance: Real::INFINITY, irradiance: self.power })
             }
@@ -139,6 +166,19 @@ impl Light {
             }
         }
     }
+}
+
+/// A spot light's intensity at angle θ from its axis, relative to the
+/// axis's: `clamp((cos θ − cos θₒ)/(cos θᵢ − cos θₒ), 0, 1)²`, full inside
+/// the inner cone θᵢ and nothing outside the outer one θₒ. This is the
+/// falloff the `KHR_lights_punctual` specification gives in its
+/// implementation note (`lightAngleScale`/`lightAngleOffset`, squared), with
+/// its floor of 0.001 on `cos θᵢ − cos θₒ` so equal cones do not divide by
+/// zero. A NaN `cos_theta` (a point at the light) gives 0.
+pub fn spot_falloff(cos_theta: Real, cos_inner: Real, cos_outer: Real) -> f32 {
+    let scale = 1.0 / (cos_inner - cos_outer).max(SPOT_CONE_MIN_WIDTH);
+    let t = ((cos_theta - cos_outer) * scale).clamp(0.0, 1.0);
+    if t.is_nan() { 0.0 } else { to_f32(t * t) }
 }
 
 /// The cone of directions a sphere of radius `r` subtends from a point at
@@ -222,6 +262,71 @@ mod tests {
         assert!((s.irradiance - Color::new(1.0, 2.0, 3.0) / 25.0).abs().max_element() < 1e-6, "{s:?}");
         // At the light itself there is no direction: no sample, never NaN.
         assert_eq!(light.sample_one(Vec3::new(1.0, 5.0, -2.0), (0.3, 0.7)), None);
+    }
+
+    #[test]
+    fn a_spot_light_is_full_inside_its_inner_cone_dark_outside_its_outer_and_squared_linear_in_cos_between() {
+        // Inner 20°, outer 40°, shining down −y from (0, 4, 0).
+        let (ci, co) = ((20.0 as Real).to_radians().cos(), (40.0 as Real).to_radians().cos());
+        let light = Light {
+            kind: LightKind::Spot {
+                position: Vec3::new(0.0, 4.0, 0.0),
+                direction: -Vec3::Y,
+                cos_inner: ci,
+                cos_outer: co,
+            },
+            power: Color::new(2.0, 4.0, 8.0),
+            shadows: true,
+        };
+        let at = |degrees: Real| {
+            let t = degrees.to_radians();
+            // 2 away from the light at angle t from its axis.
+            let p = Vec3::new(0.0, 4.0, 0.0) + 2.0 * Vec3::new(t.sin(), -t.cos(), 0.0);
+            light.sample_one(p, (0.5, 0.5)).unwrap()
+        };
+        let s = at(0.0);
+        assert!(close(s.to_light, Vec3::Y) && (s.distance - 2.0).abs() < 1e-5, "{s:?}");
+        assert!((s.irradiance - Color::new(0.5, 1.0, 2.0)).abs().max_element() < 1e-5, "{s:?}");
+        assert!((at(19.0).irradiance - Color::new(0.5, 1.0, 2.0)).abs().max_element() < 1e-5);
+        assert_eq!(at(41.0).irradiance, Color::ZERO);
+        assert_eq!(at(150.0).irradiance, Color::ZERO);
+        // Halfway in cos between the cones: a quarter.
+        let half = ((ci + co) / 2.0).acos().to_degrees();
+        assert!((at(half).irradiance - Color::new(0.5, 1.0, 2.0) / 4.0).abs().max_element() < 1e-4);
+        // Equal cones: a hard edge, never a division by zero.
+        assert_eq!(spot_falloff(0.9, 0.8, 0.8), 1.0);
+        assert_eq!(spot_falloff(0.7, 0.8, 0.8), 0.0);
+        assert_eq!(spot_falloff(Real::NAN, 0.9, 0.8), 0.0);
+    }
+
+    #[test]
+    fn a_spot_lights_power_is_its_falloff_integrated_over_the_sphere() {
+        // Midpoint rule over cos θ in 10⁵ steps against the closed form.
+        for (inner, outer) in [(0.0 as Real, 45.0 as Real), (10.0, 30.0), (30.0, 30.0), (60.0, 120.0)] {
+            let (ci, co) = (inner.to_radians().cos(), outer.to_radians().cos());
+            let light = Light {
+                kind: LightKind::Spot {
+                    position: Vec3::ZERO,
+                    direction: Vec3::Z,
+                    cos_inner: ci,
+                    cos_outer: co,
+                },
+                power: Color::ONE,
+                shadows: true,
+            };
+            let n = 100_000;
+            let numeric: f64 = (0..n)
+                .map(|k| {
+                    let c = -1.0 + 2.0 * (k as f64 + 0.5) / n as f64;
+                    2.0 * std::f64::consts::PI * f64::from(spot_falloff(c as Real, ci, co)) * 2.0 / n as f64
+                })
+                .sum();
+            let closed = to_f64(light.power(1.0));
+            assert!(
+                (closed - numeric).abs() < 1e-3 * numeric.max(1e-3),
+                "{inner}°/{outer}°: {closed} vs {numeric}"
+            );
+        }
     }
 
     #[test]

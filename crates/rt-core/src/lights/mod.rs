@@ -1,5 +1,5 @@
 //! Where light comes from, all through one interface
-//! ([`light_source::LightSource`]): the scene file's point, directional and
+//! ([`light_source::LightSource`]): the scene file's point, spot, directional and
 //! sphere [`light`]s, emissive objects ([`emitter`]), the [`environment`];
 //! and the choice of one to sample ([`light_sampler`]).
 

@@ -83,6 +83,13 @@ pub fn cast_min_t(origin: Vec3, dir: Vec3) -> Real {
 /// so the images' bits.
 pub const SHADOW_SHORTEN: Real = 1e-4;
 
+/// The narrowest `cos θᵢ − cos θₒ` a spot light's falloff divides by
+/// ([`crate::lights::light::spot_falloff`]): the `KHR_lights_punctual`
+/// specification's own floor of 0.001 in its implementation note, so equal
+/// inner and outer cones make a hard edge instead of a division by zero, and
+/// rt-view's spot lights fall off as a glTF viewer's do.
+pub const SPOT_CONE_MIN_WIDTH: Real = 0.001;
+
 /// `v / |v|`, or `None` for a zero or non-finite `v`, for any finite `v`:
 /// `v` is first divided by its largest absolute component, so `|v|²` can
 /// neither overflow (components near 10³⁸ in f32) nor underflow (near 10⁻²⁰).

@@ -126,6 +126,17 @@ enum ObjectJson {
 enum LightJson {
     /// Intensity `power` (W/sr) from a point.
     Point { position: [f64; 3], power: [f32; 3], shadows: bool },
+    /// Axial intensity `power` (W/sr) from a point, into the cone about
+    /// `direction`: full out to the angle whose cosine is `cos_inner`, falling
+    /// as the square of a ramp in cos θ to nothing at `cos_outer`.
+    Spot {
+        position: [f64; 3],
+        direction: [f64; 3],
+        cos_inner: f64,
+        cos_outer: f64,
+        power: [f32; 3],
+        shadows: bool,
+    },
     /// Irradiance `power` (W/m²) travelling along `direction`.
     Directional { direction: [f64; 3], power: [f32; 3], shadows: bool },
     /// A sphere of radiance `power/(π·radius²)`.
@@ -198,6 +209,14 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
             let (power, shadows) = (c3(l.power), l.shadows);
             match l.kind {
                 LightKind::Point { position } => LightJson::Point { position: v3(position), power, shadows },
+                LightKind::Spot { position, direction, cos_inner, cos_outer } => LightJson::Spot {
+                    position: v3(position),
+                    direction: v3(direction),
+                    cos_inner: to_f64(cos_inner),
+                    cos_outer: to_f64(cos_outer),
+                    power,
+                    shadows,
+                },
                 LightKind::Directional { direction } => {
                     LightJson::Directional { direction: v3(direction), power, shadows }
                 }

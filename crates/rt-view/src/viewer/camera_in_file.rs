@@ -37,14 +37,24 @@ fn error(message: impl Into<String>) -> CameraFileError {
 /// The camera's fields in the order they are written.
 const FIELDS: [&str; 6] = ["position", "center_of_interest", "up", "fov_y", "near", "projection"];
 
+/// The fields of a camera taken from a glTF file, `(gltf: FILE, index: N,
+/// scale: S, translate: T)`, which a saved camera replaces.
+const GLTF_FIELDS: [&str; 4] = ["gltf", "index", "scale", "translate"];
+
 /// `camera` as the scene file's `camera: ( … )` entry, on one line.
 pub fn camera_ron(camera: &CameraSettings) -> String {
+    format!("camera: ({}),", field_list(camera))
+}
+
+/// `camera`'s fields as RON, `position: …, …`, `projection` only when it is
+/// not the default.
+fn field_list(camera: &CameraSettings) -> String {
     let fields: Vec<String> = FIELDS
         .iter()
         .filter(|&&name| name != "projection" || camera.projection != Projection::Perspective)
         .map(|&name| format!("{name}: {}", value_text(camera, name)))
         .collect();
-    format!("camera: ({}),", fields.join(", "))
+    fields.join(", ")
 }
 
 /// Writes `camera` into the scene file at `path` (see the module's
@@ -68,7 +78,13 @@ pub fn save_camera(path: &Path, camera: &CameraSettings) -> Result<bool, CameraF
 pub fn with_camera(text: &str, camera: &CameraSettings) -> Result<String, CameraFileError> {
     let block = CameraBlock::find(text)?;
     let mut edits: Vec<(Range<usize>, String)> = Vec::new();
-    for name in FIELDS {
+    // A camera taken from a glTF file is saved as the camera it now is:
+    // its fields give way to the camera's own, all of them.
+    let from_gltf = block.fields.iter().any(|f| GLTF_FIELDS.contains(&f.name.as_str()));
+    if from_gltf && let (Some(first), Some(last)) = (block.fields.first(), block.fields.last()) {
+        edits.push((first.start..last.value.end, field_list(camera)));
+    }
+    for name in FIELDS.iter().copied().filter(|_| !from_gltf) {
         let wanted = value_text(camera, name);
         match block.fields.iter().find(|f| f.name == name) {
             Some(field) => {
@@ -547,6 +563,25 @@ Scene(
         let text = "Scene(camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1), objects: [])";
         let edited = with_camera(text, &settings(Projection::Orthographic)).unwrap();
         assert!(edited.contains("near: 0.5, projection: Orthographic), objects: [])"), "{edited}");
+    }
+
+    #[test]
+    fn a_camera_taken_from_a_gltf_file_is_saved_as_the_camera_it_now_is() {
+        let text =
+            "(\n    camera: (gltf: \"m.glb\", index: 1, scale: 2),\n    image: (width: 8, height: 6),\n)";
+        let camera = CameraSettings {
+            position: Vec3::new(0.0, 1.0, -5.0),
+            center_of_interest: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y: 30.0,
+            near: 0.5,
+            projection: Projection::Perspective,
+        };
+        let edited = with_camera(text, &camera).unwrap();
+        assert_eq!(
+            edited,
+            "(\n    camera: (position: (0, 1, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 30, near: 0.5),\n    image: (width: 8, height: 6),\n)"
+        );
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! The `lights` list: point, directional and sphere lights.
+//! The `lights` list: point, spot, directional and sphere lights.
 
 use serde::Deserialize;
 
@@ -13,6 +13,20 @@ use crate::scene::effects::MAX_EFFECT_SAMPLES;
 pub(super) enum LightFields {
     Point {
         position: V3,
+        #[serde(default = "white")]
+        color: ColorDesc,
+        #[serde(default = "unit_scale")]
+        intensity: Finite,
+        #[serde(default = "yes")]
+        shadows: bool,
+    },
+    Spot {
+        position: V3,
+        direction: V3,
+        #[serde(default = "zero")]
+        inner_angle: Finite,
+        #[serde(default = "forty_five")]
+        outer_angle: Finite,
         #[serde(default = "white")]
         color: ColorDesc,
         #[serde(default = "unit_scale")]
@@ -47,6 +61,16 @@ pub(super) fn sixteen() -> u32 {
     16
 }
 
+/// A spot light's inner cone angle when none is given: glTF's default, 0.
+fn zero() -> Finite {
+    Finite(0.0)
+}
+
+/// A spot light's outer cone angle when none is given: glTF's default, π/4.
+fn forty_five() -> Finite {
+    Finite(45.0)
+}
+
 #[derive(Deserialize)]
 #[serde(try_from = "LightFields")]
 pub(super) struct LightDesc(pub(super) Light);
@@ -67,6 +91,34 @@ impl TryFrom<LightFields> for LightDesc {
                 power: power(color, intensity)?,
                 shadows,
             },
+            LightFields::Spot {
+                position,
+                direction,
+                inner_angle,
+                outer_angle,
+                color,
+                intensity,
+                shadows,
+            } => {
+                let direction =
+                    normalize_robust(direction.into()).ok_or("spot light direction must not be zero")?;
+                let (inner, outer) = (inner_angle.0, outer_angle.0);
+                if !(0.0 <= inner && inner < outer && outer <= 90.0) {
+                    return Err(format!(
+                        "spot light angles must satisfy 0 <= inner_angle < outer_angle <= 90 (degrees), got {inner} and {outer}"
+                    ));
+                }
+                Light {
+                    kind: LightKind::Spot {
+                        position: position.into(),
+                        direction,
+                        cos_inner: inner.to_radians().cos(),
+                        cos_outer: outer.to_radians().cos(),
+                    },
+                    power: power(color, intensity)?,
+                    shadows,
+                }
+            }
             LightFields::Directional { direction, color, intensity, shadows } => {
                 let direction = normalize_robust(direction.into())
                     .ok_or("directional light direction must not be zero")?;

@@ -70,6 +70,14 @@ pub enum SceneError {
         /// What is wrong (in the message, so not also a `source()`).
         reason: SceneBuildError,
     },
+    /// The glTF file the camera is taken from cannot be used.
+    #[error("{file}: camera: {reason}")]
+    Camera {
+        /// The scene file.
+        file: String,
+        /// Why the camera failed (in the message, so not also a `source()`).
+        reason: ModelError,
+    },
     /// A mesh's OBJ or glTF file cannot be used.
     #[error("{file}: objects[{index}] (Mesh): {reason}")]
     Model {
@@ -141,17 +149,27 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<LoadedScen
     for (index, entry) in desc.objects.into_iter().enumerate() {
         match entry.0 {
             Shape::Ready { primitive, material } => scene = scene.object(primitive, material),
-            Shape::Mesh { file: obj, scale, translate, material } => {
+            Shape::Mesh { file: obj, scale, translate, material, lights } => {
                 let path = base_dir.join(&obj);
                 let written = obj.display().to_string();
                 let added;
-                (scene, added) = model::add_model(scene, &path, &written, scale, translate, material)
-                    .map_err(|reason| SceneError::Model { file: file.to_owned(), index, reason })?;
+                (scene, added) =
+                    model::add_model(scene, &path, &written, (scale, translate), material, lights)
+                        .map_err(|reason| SceneError::Model { file: file.to_owned(), index, reason })?;
                 entry_of.extend(std::iter::repeat_n(index, added.saturating_sub(1)));
             }
         }
         entry_of.push(index);
     }
+    let camera = match desc.camera {
+        CameraDesc::Ready(camera) => camera,
+        CameraDesc::Gltf { file: gltf, index, scale, translate } => {
+            let path = base_dir.join(&gltf);
+            scene = scene.source_file(&path);
+            crate::files::gltf_model::camera(&path, index, scale, translate)
+                .map_err(|reason| SceneError::Camera { file: file.to_owned(), reason })?
+        }
+    };
     let invalid = |reason: SceneBuildError| SceneError::Invalid {
         file: file.to_owned(),
         reason: reason.with_object_index(|k| entry_of.get(k).copied().unwrap_or(k)),
@@ -172,7 +190,7 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<LoadedScen
             ),
         }));
     }
-    Ok(LoadedScene { scene, camera: desc.camera.0, settings })
+    Ok(LoadedScene { scene, camera, settings })
 }
 
 #[derive(Deserialize)]
@@ -439,6 +457,7 @@ mod tests {
                     Point(position: (0, 5, 0)),
                     Directional(direction: (0, -2, 0), color: (1, 0.5, 0), intensity: 2, shadows: false),
                     Sphere(center: (1, 2, 3), radius: 0.5, samples: 9),
+                    Spot(position: (0, 3, 0), direction: (0, -3, 0), outer_angle: 60),
                 ],
                 effects: (max_depth: 3, ambient_occlusion: (samples: 8, radius: 2)),
                 objects: [",
@@ -462,6 +481,11 @@ mod tests {
         assert_eq!(lights[1].kind, LightKind::Directional { direction: -Vec3::Y });
         assert_eq!((lights[1].power, lights[1].shadows), (Color::new(2.0, 1.0, 0.0), false));
         assert_eq!(lights[2].sample_count(), 9);
+        let LightKind::Spot { direction, cos_inner, cos_outer, .. } = lights[3].kind else {
+            panic!("{lights:?}")
+        };
+        assert_eq!((direction, cos_inner), (-Vec3::Y, 1.0));
+        assert!((cos_outer - 0.5).abs() < 1e-6, "{cos_outer}");
         let effects = loaded.settings.effects;
         assert_eq!(effects.max_depth, 3);
         assert_eq!(effects.ambient_occlusion, Some(AmbientOcclusion { samples: 8, radius: 2.0 }));
@@ -499,7 +523,12 @@ mod tests {
         assert!(
             lights("Sphere(center: (0, 0, 0), radius: 1, samples: 0)").contains("samples must be 1 to 4096")
         );
-        assert!(lights("Spot(position: (0, 0, 0))").contains("Unexpected variant named `Spot`"));
+        assert!(lights("Cone(position: (0, 0, 0))").contains("Unexpected variant named `Cone`"));
+        let e = lights("Spot(position: (0, 0, 0), direction: (0, -1, 0), inner_angle: 50, outer_angle: 40)");
+        assert!(e.contains("0 <= inner_angle < outer_angle <= 90 (degrees), got 50 and 40"), "{e}");
+        assert!(
+            lights("Spot(position: (0, 0, 0), direction: (0, 0, 0))").contains("direction must not be zero")
+        );
         let effects = |e: &str| error_after("objects: [", &format!("effects: ({e}), objects: ["));
         let e = effects("max_depth: 100");
         assert!(

@@ -52,6 +52,9 @@ pub(super) enum ObjectDesc {
         scale: Finite,
         #[serde(default)]
         translate: V3,
+        // A glTF file's KHR_lights_punctual lights, added to the scene's.
+        #[serde(default)]
+        lights: bool,
     },
 }
 
@@ -68,7 +71,7 @@ pub(super) struct ObjectEntry(pub(super) Shape);
 /// be read, whose own materials are used when it names none.
 pub(super) enum Shape {
     Ready { primitive: Primitive, material: String },
-    Mesh { file: PathBuf, scale: Real, translate: Vec3, material: Option<String> },
+    Mesh { file: PathBuf, scale: Real, translate: Vec3, material: Option<String>, lights: bool },
 }
 
 impl TryFrom<ObjectDesc> for ObjectEntry {
@@ -94,11 +97,11 @@ impl TryFrom<ObjectDesc> for ObjectEntry {
                 let points = points.into_iter().map(Vec3::from).collect();
                 ready(Polygon::new(points).map(Primitive::Polygon), material)
             }
-            ObjectDesc::Mesh { file, material, scale, translate } => {
+            ObjectDesc::Mesh { file, material, scale, translate, lights } => {
                 if scale.0 <= 0.0 {
                     return Err(format!("mesh scale must be positive, got {}", scale.0));
                 }
-                Ok(Self(Shape::Mesh { file, scale: scale.0, translate: translate.into(), material }))
+                Ok(Self(Shape::Mesh { file, scale: scale.0, translate: translate.into(), material, lights }))
             }
         }
     }
