@@ -4,7 +4,7 @@
 use serde::Deserialize;
 
 use super::values::{Finite, V3};
-use crate::camera::{Camera, CameraBasis, CameraError, Projection};
+use crate::camera::{Camera, CameraBasis, CameraError, Lens, Projection};
 use crate::math::real::Vec3;
 use crate::render::settings::{ImageSize, SamplesPerPixel, SettingsError};
 
@@ -24,9 +24,12 @@ enum Field {
     FovY,
     Near,
     Projection,
+    Aperture,
+    FocusDistance,
 }
 
-const FIELDS: &[&str] = &["position", "center_of_interest", "up", "fov_y", "near", "projection"];
+const FIELDS: &[&str] =
+    &["position", "center_of_interest", "up", "fov_y", "near", "projection", "aperture", "focus_distance"];
 
 impl<'de> Deserialize<'de> for CameraDesc {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
@@ -40,13 +43,16 @@ impl<'de> serde::de::Visitor<'de> for CameraVisitor {
     type Value = CameraDesc;
 
     fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        f.write_str("a camera: (position, center_of_interest, up, fov_y, near, projection)")
+        f.write_str(
+            "a camera: (position, center_of_interest, up, fov_y, near, projection, aperture, focus_distance)",
+        )
     }
 
     fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<CameraDesc, A::Error> {
         use serde::de::Error;
         let (mut position, mut center, mut up) = (None, None, None);
         let (mut fov_y, mut near, mut projection) = (None, None, None);
+        let (mut aperture, mut focus_distance) = (None, None);
         while let Some(field) = map.next_key::<Field>()? {
             let duplicate = |name| A::Error::duplicate_field(name);
             match field {
@@ -56,6 +62,8 @@ impl<'de> serde::de::Visitor<'de> for CameraVisitor {
                 Field::FovY if fov_y.is_some() => return Err(duplicate("fov_y")),
                 Field::Near if near.is_some() => return Err(duplicate("near")),
                 Field::Projection if projection.is_some() => return Err(duplicate("projection")),
+                Field::Aperture if aperture.is_some() => return Err(duplicate("aperture")),
+                Field::FocusDistance if focus_distance.is_some() => return Err(duplicate("focus_distance")),
                 Field::Position => position = Some(Vec3::from(map.next_value::<V3>()?)),
                 Field::CenterOfInterest => center = Some(Vec3::from(map.next_value::<V3>()?)),
                 Field::Up => up = Some(Vec3::from(map.next_value::<V3>()?)),
@@ -74,6 +82,20 @@ impl<'de> serde::de::Visitor<'de> for CameraVisitor {
                     near = Some(v);
                 }
                 Field::Projection => projection = Some(map.next_value::<Projection>()?),
+                Field::Aperture => {
+                    let v = map.next_value::<Finite>()?.0;
+                    if v < 0.0 {
+                        return Err(A::Error::custom(CameraError::ApertureNotValid(v)));
+                    }
+                    aperture = Some(v);
+                }
+                Field::FocusDistance => {
+                    let v = map.next_value::<Finite>()?.0;
+                    if v <= 0.0 {
+                        return Err(A::Error::custom(CameraError::FocusDistanceNotPositive(v)));
+                    }
+                    focus_distance = Some(v);
+                }
             }
             // As soon as the three points are known, check that they make a
             // camera: the error then points at the one just read.
@@ -90,6 +112,17 @@ impl<'de> serde::de::Visitor<'de> for CameraVisitor {
         let near = near.ok_or_else(|| A::Error::missing_field("near"))?;
         let camera = Camera::new(position, center, up, fov_y, near, projection.unwrap_or_default())
             .map_err(A::Error::custom)?;
+        // The lens: a pinhole unless `aperture` (its radius) is above 0; in
+        // focus at the centre of interest unless `focus_distance` is given
+        // (C to COI lies along cam_z, so its length is that distance).
+        let lens = match aperture {
+            Some(radius) if radius > 0.0 => {
+                let focus = focus_distance.unwrap_or_else(|| (center - position).length());
+                Lens::new(radius, focus).map_err(A::Error::custom)?
+            }
+            _ => Lens { focus_distance: focus_distance.unwrap_or(1.0), ..Lens::PINHOLE },
+        };
+        let camera = camera.with_lens(lens);
         Ok(CameraDesc(camera))
     }
 }
@@ -121,5 +154,45 @@ impl TryFrom<u32> for SamplesDesc {
     type Error = SettingsError;
     fn try_from(n: u32) -> Result<Self, SettingsError> {
         SamplesPerPixel::new(n).map(Self)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use crate::files::scene_file::parse_scene;
+
+    const SCENE: &str = r#"(
+    camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1LENS),
+    image: (width: 8, height: 6),
+    materials: {},
+    objects: [],
+)"#;
+
+    fn parse(lens: &str) -> Result<crate::files::scene_file::LoadedScene, String> {
+        parse_scene(&SCENE.replace("LENS", lens), "lens.ron", Path::new(".")).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn a_camera_without_an_aperture_is_a_pinhole() {
+        assert!(!parse("").unwrap().camera.lens().is_thin_lens());
+        assert!(!parse(", aperture: 0").unwrap().camera.lens().is_thin_lens());
+    }
+
+    #[test]
+    fn a_lens_focuses_on_the_centre_of_interest_unless_told_otherwise() {
+        let lens = parse(", aperture: 0.2").unwrap().camera.lens();
+        assert_eq!((lens.radius, lens.focus_distance), (0.2, 5.0));
+        let lens = parse(", aperture: 0.2, focus_distance: 3.5").unwrap().camera.lens();
+        assert_eq!((lens.radius, lens.focus_distance), (0.2, 3.5));
+    }
+
+    #[test]
+    fn a_negative_aperture_or_a_focus_distance_not_above_zero_is_refused_by_name() {
+        let e = parse(", aperture: -0.1").unwrap_err();
+        assert!(e.contains("camera.aperture") && e.contains("-0.1"), "{e}");
+        let e = parse(", aperture: 0.1, focus_distance: 0").unwrap_err();
+        assert!(e.contains("camera.focus_distance"), "{e}");
     }
 }
