@@ -10,4 +10,5 @@ pub mod environment_map;
 pub mod light;
 pub mod light_sampler;
 pub mod light_source;
+pub mod sky;
 pub mod sun;

@@ -93,6 +93,12 @@ pub const SHADOW_SHORTEN: Real = 1e-4;
 /// a thousand sun hits, far below the noise of any render.
 pub const SUN_RIM_SLACK: Real = 1e-3;
 
+/// The least cos θ the Perez sky formula is evaluated at
+/// ([`crate::lights::sky`]): `e^(B/cos θ)`, with B < 0 at every accepted
+/// turbidity, vanishes at the horizon, and this keeps the division finite
+/// there (e^(−0.11/10⁻³) ≈ 10⁻⁴⁹ at the mildest B, nothing next to 1).
+pub const PEREZ_MIN_COS: f64 = 1e-3;
+
 /// `v / |v|`, or `None` for a zero or non-finite `v`, for any finite `v`:
 /// `v` is first divided by its largest absolute component, so `|v|²` can
 /// neither overflow (components near 10³⁸ in f32) nor underflow (near 10⁻²⁰).
