@@ -118,12 +118,22 @@ pub fn read_environment_image(path: &Path) -> Result<EnvironmentImage, Environme
     Ok(EnvironmentImage { width: width as usize, height: height as usize, texels, warnings })
 }
 
-/// Writes `texels` (`width × height`, row by row from the top) as a Radiance
-/// `.hdr` file: for the scripts and tests that make maps.
-pub fn write_hdr(path: &Path, width: usize, height: usize, texels: &[Color]) -> std::io::Result<()> {
+/// Writes `texels` (`width × height`, row by row from the top) to `out` as
+/// a Radiance `.hdr` image.
+pub fn encode_hdr(
+    out: impl std::io::Write,
+    width: usize,
+    height: usize,
+    texels: &[Color],
+) -> std::io::Result<()> {
     let pixels: Vec<image::Rgb<f32>> = texels.iter().map(|c| image::Rgb(c.to_array())).collect();
-    let file = std::io::BufWriter::new(std::fs::File::create(path)?);
-    image::codecs::hdr::HdrEncoder::new(file).encode(&pixels, width, height).map_err(std::io::Error::other)
+    image::codecs::hdr::HdrEncoder::new(out).encode(&pixels, width, height).map_err(std::io::Error::other)
+}
+
+/// [`encode_hdr`] into a new file at `path`: for tests and the scripts that
+/// make maps (the `export` command writes atomically instead).
+pub fn write_hdr(path: &Path, width: usize, height: usize, texels: &[Color]) -> std::io::Result<()> {
+    encode_hdr(std::io::BufWriter::new(std::fs::File::create(path)?), width, height, texels)
 }
 
 #[cfg(test)]

@@ -9,6 +9,7 @@
 //! the order rows finish in, bit for bit.
 
 pub mod settings;
+pub mod view_transform;
 
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};

@@ -1,12 +1,13 @@
-//! The `camera`, `image` and `samples_per_pixel` fields: what is seen, and
-//! at what resolution.
+//! The `camera`, `image`, `samples_per_pixel` and `exposure` fields: what
+//! is seen, at what resolution, and how brightly.
 
 use serde::Deserialize;
 
 use super::values::{Finite, V3};
 use crate::camera::{Camera, CameraBasis, CameraError, Lens, Projection};
-use crate::math::real::Vec3;
+use crate::math::real::{Vec3, to_f32};
 use crate::render::settings::{ImageSize, SamplesPerPixel, SettingsError};
+use crate::render::view_transform::MAX_EXPOSURE_STOPS;
 
 /// The camera as written, validated field by field as it is read, so that an
 /// error points at the field that makes the camera degenerate: `fov_y` and
@@ -157,6 +158,23 @@ impl TryFrom<u32> for SamplesDesc {
     }
 }
 
+/// Exposure in stops, within ±[`MAX_EXPOSURE_STOPS`]; 0 when absent.
+#[derive(Default, Deserialize)]
+#[serde(try_from = "Finite")]
+pub(super) struct ExposureDesc(pub(super) f32);
+
+impl TryFrom<Finite> for ExposureDesc {
+    type Error = String;
+    fn try_from(v: Finite) -> Result<Self, String> {
+        let stops = to_f32(v.0);
+        if stops.abs() <= MAX_EXPOSURE_STOPS {
+            Ok(Self(stops))
+        } else {
+            Err(format!("exposure must be -{MAX_EXPOSURE_STOPS} to {MAX_EXPOSURE_STOPS} stops, got {stops}"))
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use std::path::Path;
@@ -194,5 +212,17 @@ mod tests {
         assert!(e.contains("camera.aperture") && e.contains("-0.1"), "{e}");
         let e = parse(", aperture: 0.1, focus_distance: 0").unwrap_err();
         assert!(e.contains("camera.focus_distance"), "{e}");
+    }
+
+    #[test]
+    fn exposure_and_view_transform_are_read_and_an_absurd_exposure_refused() {
+        use crate::render::view_transform::{Display, ViewTransform};
+        let text =
+            SCENE.replace("LENS", "").replace("image:", "exposure: -1.5, view_transform: AgX,\n    image:");
+        let loaded = parse_scene(&text, "x.ron", Path::new(".")).unwrap();
+        assert_eq!(loaded.settings.display, Display { exposure: -1.5, view_transform: ViewTransform::AgX });
+        let text = SCENE.replace("LENS", "").replace("image:", "exposure: 100,\n    image:");
+        let e = parse_scene(&text, "x.ron", Path::new(".")).unwrap_err().to_string();
+        assert!(e.contains("exposure must be"), "{e}");
     }
 }

@@ -29,9 +29,10 @@ use crate::files::model::ModelError;
 use crate::geometry::method::Methods;
 use crate::math::color::ColorSpace;
 use crate::render::settings::RenderSettings;
+use crate::render::view_transform::{Display, ViewTransform};
 use crate::scene::effects::Effects;
 use crate::scene::{Scene, SceneBuildError, SceneBuilder};
-use camera::{CameraDesc, ImageDesc, SamplesDesc};
+use camera::{CameraDesc, ExposureDesc, ImageDesc, SamplesDesc};
 use effects::EffectsDesc;
 use environment::EnvironmentDesc;
 use light::LightDesc;
@@ -136,6 +137,7 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<LoadedScen
         samples: desc.samples_per_pixel.0,
         color_space: desc.color_space,
         effects,
+        display: Display { exposure: desc.exposure.0, view_transform: desc.view_transform },
         ..RenderSettings::default()
     };
     let mut scene = SceneBuilder::new()
@@ -211,6 +213,10 @@ struct SceneDesc {
     samples_per_pixel: SamplesDesc,
     #[serde(default)]
     color_space: ColorSpace,
+    #[serde(default)]
+    exposure: ExposureDesc,
+    #[serde(default)]
+    view_transform: ViewTransform,
     #[serde(deserialize_with = "unique_materials")]
     materials: BTreeMap<String, MaterialDesc>,
     objects: Vec<ObjectEntry>,
