@@ -32,9 +32,10 @@
 //! (`((i + ½)/W, (j + ½)/H)`), wrapping around in u and clamped at the
 //! poles in v. Directions are sampled from a piecewise-constant density
 //! over the texels ([`Distribution2D`]) proportional to `f_ij · sin θ_j`,
-//! where f is the texel's largest channel mean over itself and its eight
-//! neighbours (so every direction whose bilinear radiance is not zero has
-//! a density above zero) and `sin θ_j`, at the row's centre, accounts for
+//! where f is the mean over the texel's cell of the bilinear radiance's
+//! channel mean (9/16 of the texel, 3/32 of each edge neighbour, 1/64 of
+//! each corner one: every direction whose radiance is not zero has a
+//! density above zero) and `sin θ_j`, at the row's centre, accounts for
 //! the rows' shrinking solid angle. The Jacobian of (u, v) → ω is
 //! `dω = 2π² sin θ du dv`, so `p(ω) = p(u, v) / (2π² sin θ)`.
 
@@ -91,15 +92,22 @@ impl EnvironmentMap {
         for j in 0..height {
             let sin_theta = (pi * (j as f64 + 0.5) / height as f64).sin();
             for i in 0..width {
-                let mut largest: f64 = 0.0;
+                // ∫ of the bilinear radiance over the texel's cell, over its
+                // area: 9/16 of the texel, 3/32 of each edge neighbour, 1/64
+                // of each corner one (rows clamped at the poles, as the
+                // lookup does). Every weight is positive, so the density is
+                // above 0 wherever the radiance is.
+                let mut cell = 0.0;
                 for dj in -1..=1i64 {
                     let jj = (j as i64 + dj).clamp(0, height as i64 - 1) as usize;
                     for di in -1..=1i64 {
                         let ii = (i as i64 + di).rem_euclid(width as i64) as usize;
-                        largest = largest.max(mean(texels[jj * width + ii]));
+                        let weight =
+                            [0.25, 0.75, 0.25][(di + 1) as usize] * [0.25, 0.75, 0.25][(dj + 1) as usize];
+                        cell += weight * mean(texels[jj * width + ii]);
                     }
                 }
-                weights.push(largest * sin_theta);
+                weights.push(cell * sin_theta);
                 map_integral += mean(texels[j * width + i]) * sin_theta;
             }
         }
@@ -348,7 +356,8 @@ mod tests {
         let draw = |rng: &mut SampleRng| match map.sample(rng.next_pair()) {
             Some((d, _)) => {
                 let ((u, v), _) = map.direction_to_uv(d);
-                Draw::At((to_f64(u), to_f64(v)))
+                // Straight down rounds to v = 1 exactly: the last row's.
+                Draw::At((to_f64(u), to_f64(v).min(1.0 - 1e-12)))
             }
             None => Draw::Nothing,
         };
@@ -387,5 +396,54 @@ mod tests {
             let (d, _) = map.uv_to_direction(((i as Real + 0.5) / 8.0, (j as Real + 0.5) / 4.0));
             assert!((map.radiance(d) - texels[k] * 3.0).abs().max_element() < 1e-4, "texel {i},{j}");
         }
+    }
+
+    #[test]
+    fn importance_sampling_finds_a_small_bright_source_far_sooner_than_cosine_sampling() {
+        // The irradiance on an upward surface under a dim map with one small
+        // bright patch (2 × 1 texels of 64 × 32, 2000 times the rest): the
+        // estimate `L cos θ / p` from the map's own samples against
+        // `π L` from cosine-weighted (diffuse BSDF) samples, each RMSE over
+        // 200 runs of 64 samples against a fine numerical reference.
+        // Importance sampling must be at least 10 times closer (it is about
+        // 17 times: 280 times fewer samples for the same error;
+        // `docs/environment-and-lens.md` has the time per sample).
+        let (w, h) = (64, 32);
+        let mut texels = vec![Color::splat(0.05); w * h];
+        texels[9 * w + 40] = Color::splat(2000.0);
+        texels[9 * w + 41] = Color::splat(2000.0);
+        let map = EnvironmentMap::new(w, h, texels, 1.0, 0.0);
+        let (nt, np) = (1500, 3000);
+        let mut reference = 0.0;
+        for a in 0..nt {
+            let cos = (a as f64 + 0.5) / nt as f64; // upper hemisphere, uniform in cos θ
+            let sin = (1.0 - cos * cos).sqrt();
+            for b in 0..np {
+                let phi = 2.0 * std::f64::consts::PI * (b as f64 + 0.5) / np as f64;
+                let d = narrow(DVec3::new(sin * phi.cos(), cos, sin * phi.sin()));
+                reference += map.radiance(d).x as f64 * cos;
+            }
+        }
+        reference *= 2.0 * std::f64::consts::PI / (nt * np) as f64;
+        let (runs, n) = (200, 64);
+        let (mut se_is, mut se_cos) = (0.0, 0.0);
+        let mut rng = SampleRng::new(9, 9, 9);
+        for _ in 0..runs {
+            let (mut e_is, mut e_cos) = (0.0, 0.0);
+            for _ in 0..n {
+                if let Some((d, pdf)) = map.sample(rng.next_pair()) {
+                    e_is += map.radiance(d).x as f64 * to_f64(d.y.max(0.0)) / to_f64(pdf);
+                }
+                let d = crate::sampling::sampler::cosine_hemisphere(Vec3::Y, rng.next_pair());
+                e_cos += std::f64::consts::PI * map.radiance(d).x as f64;
+            }
+            se_is += (e_is / n as f64 - reference).powi(2);
+            se_cos += (e_cos / n as f64 - reference).powi(2);
+        }
+        let (rmse_is, rmse_cos) = ((se_is / runs as f64).sqrt(), (se_cos / runs as f64).sqrt());
+        println!(
+            "irradiance {reference:.4}: RMSE importance {rmse_is:.5}, cosine {rmse_cos:.5} at {n} samples"
+        );
+        assert!(rmse_cos > 10.0 * rmse_is, "importance {rmse_is} against cosine {rmse_cos}");
     }
 }
