@@ -9,7 +9,7 @@
 //! over rows times each row's conditional density over its cells:
 //! `p(u, v) = p(v) · p(u | v) = f(u, v) / ∫∫f`.
 
-use crate::math::real::Real;
+use crate::math::real::{Real, to_f64};
 
 /// A piecewise-constant density over [0,1) in equal cells.
 #[derive(Clone, Debug, PartialEq)]
@@ -113,8 +113,8 @@ impl Distribution2D {
     /// A point (u, v) ∈ [0,1)² for `sample` ∈ [0,1)² and its density:
     /// v from the marginal, then u from row v's conditional.
     pub fn sample(&self, sample: (Real, Real)) -> ((f64, f64), f64) {
-        let (v, row, pv) = self.marginal.sample(sample.1 as f64);
-        let (u, _, pu) = self.rows[row].sample(sample.0 as f64);
+        let (v, row, pv) = self.marginal.sample(to_f64(sample.1));
+        let (u, _, pu) = self.rows[row].sample(to_f64(sample.0));
         ((u, v), pv * pu)
     }
 

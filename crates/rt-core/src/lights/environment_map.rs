@@ -42,7 +42,7 @@
 use crate::lights::distribution::Distribution2D;
 use crate::lights::sun::Sun;
 use crate::math::color::Color;
-use crate::math::real::{Real, Vec3};
+use crate::math::real::{Real, Vec3, to_f32, to_f64};
 
 /// The largest accepted map side, in texels (a 16K × 8K panorama).
 pub const MAX_MAP_SIDE: u32 = 1 << 14;
@@ -200,7 +200,7 @@ impl EnvironmentMap {
         let (w, h) = (self.width as Real, self.height as Real);
         let (x, y) = (u * w - 0.5, v * h - 0.5);
         let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
+        let (fx, fy) = (to_f32(x - x0), to_f32(y - y0));
         let col = |i: Real| (i as i64).rem_euclid(self.width as i64) as usize;
         let row = |j: Real| (j as i64).clamp(0, self.height as i64 - 1) as usize;
         let at = |i: Real, j: Real| self.texels[row(j) * self.width + col(i)];
@@ -226,9 +226,9 @@ impl EnvironmentMap {
         if sin_theta <= 0.0 {
             return 0.0;
         }
-        let p = self.distribution.pdf((u as f64, v as f64));
+        let p = self.distribution.pdf((to_f64(u), to_f64(v)));
         let pi = std::f64::consts::PI;
-        (p / (2.0 * pi * pi * sin_theta as f64)) as Real
+        (p / (2.0 * pi * pi * to_f64(sin_theta))) as Real
     }
 
     /// A unit direction for `u` ∈ [0,1)² and its density over solid angle,
@@ -391,10 +391,10 @@ mod tests {
     fn the_radiance_at_a_texel_centre_is_the_texel_times_the_strength() {
         let texels = studio(8, 4);
         let map = EnvironmentMap::new(8, 4, texels.clone(), 3.0, 0.0);
-        for k in 0..32 {
+        for (k, texel) in texels.iter().enumerate() {
             let (i, j) = (k % 8, k / 8);
             let (d, _) = map.uv_to_direction(((i as Real + 0.5) / 8.0, (j as Real + 0.5) / 4.0));
-            assert!((map.radiance(d) - texels[k] * 3.0).abs().max_element() < 1e-4, "texel {i},{j}");
+            assert!((map.radiance(d) - *texel * 3.0).abs().max_element() < 1e-4, "texel {i},{j}");
         }
     }
 

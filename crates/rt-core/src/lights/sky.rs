@@ -45,7 +45,7 @@
 use crate::lights::environment_map::EnvironmentMap;
 use crate::lights::sun::{SUN_ANGULAR_RADIUS_DEGREES, Sun};
 use crate::math::color::Color;
-use crate::math::real::{PEREZ_MIN_COS, Real, Vec3};
+use crate::math::real::{PEREZ_MIN_COS, Real, Vec3, to_f32, to_f64};
 
 /// The baked sky's width in texels (its height is half): the model is
 /// smooth, and 512 × 256 texels (0.7° each) resolve the glow around the sun.
@@ -113,7 +113,7 @@ impl PreethamSky {
     /// The sky for a sun towards unit `sun` (above the horizon) at turbidity `t`.
     pub fn new(sun: Vec3, t: f64) -> Self {
         let sun = sun.normalize();
-        let theta_s = (sun.y as f64).clamp(-1.0, 1.0).acos();
+        let theta_s = to_f64(sun.y).clamp(-1.0, 1.0).acos();
         let coefficients = PEREZ.map(|row| row.map(|(a, b)| a * t + b));
         let chi = (4.0 / 9.0 - t / 120.0) * (std::f64::consts::PI - 2.0 * theta_s);
         let y_zenith = (4.0453 * t - 4.9710) * chi.tan() - 0.2155 * t + 2.4192;
@@ -129,8 +129,8 @@ impl PreethamSky {
 
     /// Y (kcd/m²), x, y towards unit `dir` above the horizon.
     pub fn xyy(&self, dir: Vec3) -> [f64; 3] {
-        let cos_theta = (dir.y as f64).clamp(0.0, 1.0);
-        let gamma = (dir.dot(self.sun) as f64).clamp(-1.0, 1.0).acos();
+        let cos_theta = to_f64(dir.y).clamp(0.0, 1.0);
+        let gamma = to_f64(dir.dot(self.sun)).clamp(-1.0, 1.0).acos();
         [0, 1, 2].map(|k| self.zenith_over_f0[k] * perez(&self.coefficients[k], cos_theta, gamma))
     }
 
@@ -159,7 +159,7 @@ pub fn xyy_to_linear_srgb(lum: f64, x: f64, y: f64) -> Color {
 /// half that texels, with its sun (see the module's documentation).
 pub fn sky_map(p: &SkyParameters) -> EnvironmentMap {
     let (w, h) = (SKY_MAP_WIDTH, SKY_MAP_WIDTH / 2);
-    let sky = PreethamSky::new(p.sun_direction, p.turbidity as f64);
+    let sky = PreethamSky::new(p.sun_direction, to_f64(p.turbidity));
     let probe = EnvironmentMap::new(1, 1, vec![Color::ZERO], 1.0, 0.0);
     let mut texels = vec![Color::ZERO; w * h];
     // E_sky on the ground: ∫ L cos θ dω over the upper rows.
@@ -170,12 +170,12 @@ pub fn sky_map(p: &SkyParameters) -> EnvironmentMap {
             let (d, sin_theta) = probe.uv_to_direction(uv);
             let l = sky.radiance(d) * p.strength;
             texels[j * w + i] = l;
-            let d_omega = 2.0 * std::f32::consts::PI.powi(2) * sin_theta as f32 / (w * h) as f32;
-            e_sky += l * d.y.max(0.0) as f32 * d_omega;
+            let d_omega = 2.0 * std::f32::consts::PI.powi(2) * to_f32(sin_theta) / (w * h) as f32;
+            e_sky += l * to_f32(d.y.max(0.0)) * d_omega;
         }
     }
     let sun_dir = p.sun_direction.normalize();
-    let e_sun = p.sun_irradiance * sun_dir.y.max(0.0) as f32;
+    let e_sun = p.sun_irradiance * to_f32(sun_dir.y.max(0.0));
     let ground = (e_sky + e_sun) * (p.ground_albedo / std::f32::consts::PI);
     texels[w * h / 2..].fill(ground);
     let map = EnvironmentMap::new(w, h, texels, 1.0, 0.0);
@@ -229,7 +229,7 @@ mod tests {
         assert!((sun.direction() - p.sun_direction.normalize()).length() < 1e-6);
         // Straight down is the ground: ρ/π (E_sky + E_sun cos θs), at least the sun's part.
         let down = map.radiance(-Vec3::Y);
-        let sun_part = 0.3 / std::f32::consts::PI * 10.0 * p.sun_direction.normalize().y as f32;
+        let sun_part = 0.3 / std::f32::consts::PI * 10.0 * to_f32(p.sun_direction.normalize().y);
         assert!(down.x > sun_part && down.x < 2.0 * sun_part, "{down}");
         // No sun: nothing bright to sample.
         let dark = sky_map(&SkyParameters { sun_irradiance: Color::ZERO, ..p });

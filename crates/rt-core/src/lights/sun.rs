@@ -8,7 +8,7 @@
 //! 0.2667° (half of its 0.533° diameter as seen from the Earth).
 
 use crate::math::color::Color;
-use crate::math::real::{Real, SUN_RIM_SLACK, Vec3, to_f32};
+use crate::math::real::{Real, SUN_RIM_SLACK, Vec3, to_f32, to_f64};
 
 /// The real sun's angular radius in degrees.
 pub const SUN_ANGULAR_RADIUS_DEGREES: Real = 0.2667;
@@ -101,7 +101,7 @@ impl Sun {
     /// `∫ L̄ dω = 2π(1 − cos α)·L̄` over the disc, L̄ the mean of the colour
     /// channels: for choosing between the sun and the sky.
     pub fn radiance_integral(&self) -> f64 {
-        2.0 * std::f64::consts::PI * self.one_minus_cos as f64 * (self.radiance.element_sum() / 3.0) as f64
+        2.0 * std::f64::consts::PI * to_f64(self.one_minus_cos) * (self.radiance.element_sum() / 3.0) as f64
     }
 }
 

@@ -61,7 +61,7 @@ pub fn display_of(
     view_transform: Option<ViewTransform>,
 ) -> anyhow::Result<Display> {
     let exposure = exposure.unwrap_or(settings.exposure);
-    if !(exposure.abs() <= MAX_EXPOSURE_STOPS) {
+    if exposure.is_nan() || exposure.abs() > MAX_EXPOSURE_STOPS {
         anyhow::bail!(
             "--exposure must be -{MAX_EXPOSURE_STOPS} to {MAX_EXPOSURE_STOPS} stops, got {exposure}"
         );
