@@ -81,7 +81,7 @@ impl Distribution1D {
         (x, i, self.density(i))
     }
 
-    /// The cell that x ∈ [0,1] falls in (1 in the last).
+    /// The cell that x ∈ [0, 1] falls in (1 in the last).
     pub fn cell(&self, x: f64) -> usize {
         ((x * self.func.len() as f64) as usize).min(self.func.len() - 1)
     }
@@ -118,7 +118,7 @@ impl Distribution2D {
         ((u, v), pv * pu)
     }
 
-    /// The density at (u, v) ∈ [0,1]²: `f(u, v) / ∫∫f`.
+    /// The density at (u, v) ∈ [0, 1]²: `f(u, v) / ∫∫f`.
     pub fn pdf(&self, (u, v): (f64, f64)) -> f64 {
         let row = self.marginal.cell(v);
         self.marginal.density(row) * self.rows[row].density(self.rows[row].cell(u))

@@ -183,7 +183,7 @@ impl EnvironmentMap {
         ((u, v), sin_theta)
     }
 
-    /// The unit world direction of the map's (u, v) ∈ [0,1]², and `sin θ`.
+    /// The unit world direction of the map's (u, v) ∈ [0, 1]², and `sin θ`.
     #[inline]
     pub fn uv_to_direction(&self, (u, v): (Real, Real)) -> (Vec3, Real) {
         let pi = std::f64::consts::PI as Real;

@@ -22,7 +22,7 @@
 //! white instead of a clipped hue), encoded as log₂ between −12.47393 and
 //! +4.026069 stops around 1 (mid grey 0.18 lands at 10/16.5 of the way),
 //! shaped by a 6th-order polynomial fit of AgX's default contrast curve
-//! (the author gives its mean squared error over [0,1] as 3.67·10⁻⁶),
+//! (the author gives its mean squared error over [0, 1] as 3.67·10⁻⁶),
 //! taken back by the inverse inset matrix, and raised to 2.2 to give
 //! display-linear light, which is then sRGB-encoded. Mid grey 0.18 becomes
 //! 0.2145 display-linear, pixel value 128; 1.0 becomes 0.590 (202); the
