@@ -27,7 +27,11 @@ objects as OBJ files) and converted to a Mitsuba 3 scene:
   two-sided, so they are wrapped in `twosided`.
 - an emissive object gets an `area` emitter of the same radiance (one-sided,
   on the side its normal points to, as in rt-view); the background becomes a
-  `constant` emitter; point and directional lights become `point` and
+  `constant` emitter; an environment map becomes an `envmap` emitter of the
+  same image with `scale` = strength and a rotation about +y by minus
+  rt-view's (the x mirror turns rt-view's map convention into Mitsuba's; a
+  map with a sun is refused); a thin lens becomes the `thinlens` sensor with
+  the same `aperture_radius` and `focus_distance`; point and directional lights become `point` and
   `directional` emitters with the same intensity and irradiance.
 - infinite planes become rectangles `--plane-size` units wide centred below
   the centre of interest (Mitsuba's rectangles are float32: a huge one makes
@@ -232,6 +236,24 @@ def mitsuba_scene(mi, desc, folder, width, height, plane_size):
     }
     if max(desc["background"]) > 0:
         scene["background"] = {"type": "constant", "radiance": rgb(mi, desc["background"])}
+    environment = desc.get("environment")
+    if environment:
+        if environment.get("sun"):
+            sys.exit("the environment has a sun disc, which Mitsuba's envmap cannot hold (its sunsky is another model)")
+        # rt-view's map convention is Mitsuba's envmap after the x mirror;
+        # rt-view's rotation ρ about +y is Mitsuba's rotation by −ρ.
+        scene["environment"] = {
+            "type": "envmap",
+            "filename": os.path.join(folder, environment["file"]),
+            "scale": environment["strength"],
+            "to_world": T().rotate([0, 1, 0], -environment["rotation_degrees"]),
+        }
+    if cam.get("aperture", 0) > 0:
+        # The same thin lens: Mitsuba's aperture_radius and focus_distance
+        # (from the lens along the view direction) are rt-view's.
+        scene["sensor"]["type"] = "thinlens"
+        scene["sensor"]["aperture_radius"] = cam["aperture"]
+        scene["sensor"]["focus_distance"] = cam["focus_distance"]
     coi = np.array(cam["center_of_interest"])
     unexported = [m["name"] for m in desc["materials"] if m.get("textured")]
     unexported += [f"object {i}" for i, o in enumerate(desc["objects"]) if o.get("smooth")]

@@ -1,8 +1,10 @@
 //! Writing files atomically: a temporary file in the target's directory,
 //! renamed over the target only once it is complete and flushed to disk.
 //!
-//! PNG holds 8-bit pixels encoded in the scene's colour space; OpenEXR holds
-//! the linear colours themselves as 32-bit floats (HDR: nothing is clamped).
+//! PNG holds 8-bit pixels encoded in the scene's colour space, after the
+//! exposure and view transform ([`rt_core::render::view_transform`]);
+//! OpenEXR holds the linear colours themselves as 32-bit floats (HDR:
+//! nothing is clamped, exposed or transformed).
 //!
 //! # Temporary files
 //!
@@ -31,6 +33,7 @@ use image::codecs::openexr::OpenExrEncoder;
 use image::codecs::png::PngEncoder;
 use rt_core::Frame;
 use rt_core::render::Rgb8;
+use rt_core::render::view_transform::Display;
 
 /// The file formats images can be written in, by extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -199,11 +202,17 @@ impl PendingImage {
         self.format
     }
 
-    /// Writes a rendered frame: encoded to 8 bits in its colour space for
-    /// PNG, linear floats for EXR.
-    pub fn write_frame(self, frame: &Frame) -> anyhow::Result<()> {
+    /// Writes a rendered frame: for PNG exposed, through the view
+    /// transform and encoded to 8 bits in its colour space (`display`;
+    /// the default is the plain encoding), for EXR the linear floats as
+    /// they are (scene-referred: no exposure, no view transform).
+    pub fn write_frame(self, frame: &Frame, display: &Display) -> anyhow::Result<()> {
         match self.format {
-            Format::Png => self.write_rgb8(frame.width, frame.height, &frame.to_rgb8()),
+            Format::Png => {
+                let pixels: Vec<Rgb8> =
+                    frame.pixels.iter().map(|&c| display.encode(c, frame.color_space)).collect();
+                self.write_rgb8(frame.width, frame.height, &pixels)
+            }
             Format::Exr => {
                 let pixels: Vec<[f32; 3]> = frame.pixels.iter().map(|c| c.to_array()).collect();
                 self.write_linear(frame.width, frame.height, &pixels)

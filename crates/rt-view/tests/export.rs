@@ -423,3 +423,31 @@ fn every_object_is_exported_with_its_geometry_and_triangles_with_their_vertices_
         "{moved:?} not exported"
     );
 }
+
+#[test]
+fn an_environment_map_its_sun_and_the_lens_are_exported_for_outside_tools() {
+    let dir = tempfile::tempdir().unwrap();
+    // The studio map: the .hdr beside the JSON reads back as the scene's map.
+    let json = export(&scenes_dir().join("depth_of_field.ron"), dir.path(), "dof");
+    let env = &json["environment"];
+    assert_eq!((env["width"].as_u64(), env["height"].as_u64()), (Some(256), Some(128)));
+    assert_eq!((env["strength"].as_f64(), env["rotation_degrees"].as_f64()), (Some(1.0), Some(0.0)));
+    assert!(env.get("sun").is_none());
+    let written = rt_core::files::environment_image::read_environment_image(
+        &dir.path().join(env["file"].as_str().unwrap()),
+    )
+    .unwrap();
+    let original =
+        rt_core::files::environment_image::read_environment_image(&scenes_dir().join("studio.hdr")).unwrap();
+    assert_eq!(written.texels, original.texels);
+    assert_eq!(colour(&json["background"]), [0.0; 3]);
+    let (aperture, focus) =
+        (json["camera"]["aperture"].as_f64().unwrap(), json["camera"]["focus_distance"].as_f64().unwrap());
+    assert!((aperture - 0.12).abs() < 1e-6 && (focus - 6.22).abs() < 1e-5, "{aperture}, {focus}");
+    // The sky: a baked map with its sun.
+    let json = export(&scenes_dir().join("outdoor.ron"), dir.path(), "outdoor");
+    let sun = &json["environment"]["sun"];
+    assert_eq!(colour(&sun["irradiance"]), [10.0, 9.5, 8.5]);
+    assert!((sun["angular_radius_degrees"].as_f64().unwrap() - 0.2667).abs() < 1e-3);
+    assert_eq!(json["camera"]["aperture"].as_f64(), Some(0.0));
+}

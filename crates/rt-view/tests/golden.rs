@@ -108,6 +108,18 @@ fn docs_model_pictures_are_current_renders() {
     compare_render("models", &docs.join("models.png"), &[]);
 }
 
+/// And for the environment, sky and lens pictures of docs/scene-format.md,
+/// docs/environment/SCENE.png (AgX, as the scenes ask), with the studio
+/// once more through the standard transform.
+#[test]
+fn docs_environment_pictures_are_current_renders() {
+    let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/environment");
+    for scene in ["studio", "outdoor", "depth_of_field"] {
+        compare_render(scene, &docs.join(format!("{scene}.png")), &[]);
+    }
+    compare_render("studio", &docs.join("studio_standard.png"), &["--view-transform", "standard"]);
+}
+
 /// Whether the references are to be overwritten, from `RT_BLESS`: unset
 /// compares, `1` blesses, any other value is an error (see the module's
 /// documentation).

@@ -574,3 +574,100 @@ fn seeds_give_independent_images_and_seed_zero_is_the_default() {
     assert_eq!(default, render("b.png", &["--seed", "0"]));
     assert_ne!(default, render("c.png", &["--seed", "1"]));
 }
+
+#[test]
+fn exposure_and_view_transform_change_the_png_and_leave_the_exr_linear() {
+    // sphere.ron's centre pixel is (0.9, 0.15, 0.1), encoded linearly as
+    // (230, 38, 26). One stop down halves it; AgX maps it through its curve
+    // (sRGB-encoded); the EXR holds the linear colour whatever the flags.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scenes_dir().join("sphere.ron");
+    let render = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--width",
+            "64",
+            "--height",
+            "48",
+        ];
+        args.extend_from_slice(extra);
+        let o = rt_view(&args, "");
+        assert!(o.status.success(), "{}", stderr(&o));
+        out
+    };
+    let plain = read_png(&render("plain.png", &[]));
+    let same = read_png(&render("same.png", &["--exposure", "0", "--view-transform", "standard"]));
+    assert_eq!(plain, same, "exposure 0 with the standard transform is the plain encoding");
+    let darker = read_png(&render("darker.png", &["--exposure", "-1"]));
+    assert_eq!(darker.get_pixel(32, 24).0, [115, 19, 13]);
+    let agx = read_png(&render("agx.png", &["--view-transform", "agx"]));
+    let expected = rt_core::render::view_transform::Display {
+        exposure: 0.0,
+        view_transform: rt_core::render::view_transform::ViewTransform::AgX,
+    }
+    .encode(rt_core::Color::new(0.9, 0.15, 0.1), rt_core::math::color::ColorSpace::Linear);
+    assert_eq!(agx.get_pixel(32, 24).0, expected);
+    assert_ne!(expected, [230, 38, 26]);
+    let exr_plain = std::fs::read(render("plain.exr", &[])).unwrap();
+    let exr_flags =
+        std::fs::read(render("flags.exr", &["--exposure", "3", "--view-transform", "agx"])).unwrap();
+    assert_eq!(exr_plain, exr_flags, "EXR is scene-referred");
+}
+
+#[test]
+fn a_bad_exposure_or_view_transform_is_refused_before_rendering() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.png");
+    let scene = scenes_dir().join("sphere.ron");
+    for (flags, says) in
+        [(["--exposure", "100"], "--exposure must be"), (["--view-transform", "filmic"], "standard or agx")]
+    {
+        let mut args = vec!["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()];
+        args.extend_from_slice(&flags);
+        let o = rt_view(&args, "");
+        assert!(!o.status.success() && stderr(&o).contains(says), "{flags:?}: {}", stderr(&o));
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn the_environment_scenes_render_and_a_missing_map_is_an_error_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["studio", "outdoor", "depth_of_field"] {
+        let out = dir.path().join(format!("{name}.png"));
+        let scene = scenes_dir().join(format!("{name}.ron"));
+        let o = rt_view(
+            &[
+                "render",
+                scene.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+                "--width",
+                "32",
+                "--height",
+                "20",
+                "--spp",
+                "2",
+            ],
+            "",
+        );
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        // Lit: not a black image.
+        assert!(read_png(&out).pixels().any(|p| p.0.iter().any(|&c| c > 40)), "{name} is dark");
+    }
+    let text = std::fs::read_to_string(scenes_dir().join("depth_of_field.ron")).unwrap();
+    let bad = dir.path().join("bad.ron");
+    std::fs::write(&bad, text.replace("studio.hdr", "gone.hdr")).unwrap();
+    let out = dir.path().join("bad.png");
+    let o = rt_view(&["render", bad.to_str().unwrap(), "-o", out.to_str().unwrap()], "");
+    assert!(
+        !o.status.success() && stderr(&o).contains("gone.hdr") && stderr(&o).contains("cannot read"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+}

@@ -53,6 +53,12 @@ pub enum CameraError {
     /// `near` is not a positive finite number.
     #[error("camera.near must be a positive finite number, got {0}")]
     NearNotPositive(Real),
+    /// `aperture` is negative or not finite.
+    #[error("camera.aperture (the lens radius, world units) must be 0 or a positive finite number, got {0}")]
+    ApertureNotValid(Real),
+    /// `focus_distance` is not a positive finite number.
+    #[error("camera.focus_distance must be a positive finite number, got {0}")]
+    FocusDistanceNotPositive(Real),
     /// The view plane would be too small or too large to represent.
     #[error(
         "camera.fov_y = {fov_y} with camera.near = {near} gives a view plane of height {height}, which cannot be represented"
@@ -124,6 +130,56 @@ pub struct Camera {
     near: Real,
     projection: Projection,
     basis: CameraBasis,
+    lens: Lens,
+}
+
+/// A thin lens (pbrt-v4 §5.2.3; Kolb, Mitchell and Hanrahan, "A Realistic
+/// Camera Model for Computer Graphics", 1995): a disc of radius `radius`
+/// (world units, the scene file's `aperture`) centred on the eye C across
+/// cam_z, that brings the plane at `focus_distance` along cam_z into focus.
+/// Radius 0 is the pinhole.
+///
+/// A point at distance d along cam_z is seen, through a lens of radius A
+/// focused at f, as a disc on the view plane (at `near`) of diameter
+/// `c = 2A · near · |d − f| / (f · d)`: the thin-lens circle of confusion
+/// with `near` as the image distance ([`Lens::circle_of_confusion`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lens {
+    /// Lens radius A, world units, ≥ 0 (0: a pinhole).
+    pub radius: Real,
+    /// Distance f along cam_z of the plane in focus, world units, > 0.
+    pub focus_distance: Real,
+}
+
+impl Lens {
+    /// The pinhole: no lens; its focus distance (1) is never used.
+    pub const PINHOLE: Self = Self { radius: 0.0, focus_distance: 1.0 };
+
+    /// A lens of radius `radius` focused at `focus_distance`, or which of
+    /// the two is out of range.
+    pub fn new(radius: Real, focus_distance: Real) -> Result<Self, CameraError> {
+        if !(radius >= 0.0 && radius.is_finite()) {
+            return Err(CameraError::ApertureNotValid(radius));
+        }
+        if !(focus_distance > 0.0 && focus_distance.is_finite()) {
+            return Err(CameraError::FocusDistanceNotPositive(focus_distance));
+        }
+        Ok(Self { radius, focus_distance })
+    }
+
+    /// Whether rays depend on the lens position (radius > 0).
+    pub fn is_thin_lens(&self) -> bool {
+        self.radius > 0.0
+    }
+
+    /// The diameter, on a view plane at distance `near`, of the image of a
+    /// point at distance `depth` along cam_z: `2A · near · |d − f| / (f · d)`
+    /// (similar triangles through the lens: the cone of rays from the lens
+    /// disc to the focused point, cut at `depth` and projected through C).
+    pub fn circle_of_confusion(&self, depth: Real, near: Real) -> Real {
+        let f = self.focus_distance;
+        2.0 * self.radius * near * (depth - f).abs() / (f * depth)
+    }
 }
 
 impl Camera {
@@ -148,7 +204,8 @@ impl Camera {
         if !(near > 0.0 && near.is_finite()) {
             return Err(CameraError::NearNotPositive(near));
         }
-        let camera = Self { position, center_of_interest, up, fov_y, near, projection, basis };
+        let camera =
+            Self { position, center_of_interest, up, fov_y, near, projection, basis, lens: Lens::PINHOLE };
         let height = camera.view_plane_height();
         // tan of an angle that rounds to π/2 is huge or negative; tiny angles underflow.
         if !(height.is_normal() && height > 0.0) {
@@ -188,6 +245,17 @@ impl Camera {
     /// `plane_h = 2 · near · tan(fov_y / 2)`, world units.
     pub fn view_plane_height(&self) -> Real {
         2.0 * self.near * (0.5 * self.fov_y).to_radians().tan()
+    }
+
+    /// The lens (radius 0: the pinhole).
+    pub fn lens(&self) -> Lens {
+        self.lens
+    }
+
+    /// The same camera seen through `lens`.
+    pub fn with_lens(mut self, lens: Lens) -> Self {
+        self.lens = lens;
+        self
     }
 
     /// The same camera with another projection.

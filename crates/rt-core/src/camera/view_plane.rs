@@ -18,6 +18,7 @@ use thiserror::Error;
 use crate::camera::{Camera, Projection};
 use crate::math::ray::Ray;
 use crate::math::real::{Real, Vec3};
+use crate::sampling::sampler::concentric_disk;
 
 /// Largest accepted image side, in pixels.
 pub const MAX_IMAGE_SIDE: u32 = 1 << 15;
@@ -167,19 +168,50 @@ impl ViewPlane {
     }
 
     /// The camera's ray for film position `film` in pixel (ix, iy) and lens
-    /// position `lens`, both in [0,1)²: what every camera answers (a thin
-    /// lens will use `lens`; the pinhole perspective and orthographic
-    /// projections have none and ignore it). It is
-    /// [`ViewPlane::primary_ray`] at sub-pixel offset `film`.
+    /// position `lens`, both in [0,1)²: what every camera answers. Without
+    /// a lens (radius 0) it is [`ViewPlane::primary_ray`] at sub-pixel
+    /// offset `film`, bit for bit, and `lens` is ignored.
+    ///
+    /// Through a thin lens of radius A focused at f ([`crate::camera::Lens`];
+    /// pbrt-v4 §5.2.3), `lens` goes to the disc by Shirley and Chiu's
+    /// concentric map ([`concentric_disk`]), `(dx, dy)` in the unit disc:
+    ///
+    /// ```text
+    /// perspective:   origin C + A·(dx·cam_x + dy·cam_y)
+    ///                direction (P − C)·f/near − A·(dx·cam_x + dy·cam_y)
+    ///                (towards P − C scaled to the plane in focus, f from C)
+    /// orthographic:  origin P + A·(dx·cam_x + dy·cam_y)
+    ///                direction f·cam_z − A·(dx·cam_x + dy·cam_y)
+    ///                (the plane in focus is f beyond the view plane, where
+    ///                orthographic rays start: pbrt-v4's OrthographicCamera)
+    /// ```
+    ///
+    /// so every ray of a pixel meets the others on the plane in focus, and
+    /// a point off it spreads over a circle of confusion
+    /// ([`crate::camera::Lens::circle_of_confusion`]).
     #[inline(always)]
-    pub fn camera_ray(&self, ix: u32, iy: u32, film: (Real, Real), _lens: (Real, Real)) -> Ray {
-        self.primary_ray(ix, iy, film.0, film.1)
+    pub fn camera_ray(&self, ix: u32, iy: u32, film: (Real, Real), lens: (Real, Real)) -> Ray {
+        let thin = self.camera.lens();
+        if !thin.is_thin_lens() {
+            return self.primary_ray(ix, iy, film.0, film.1);
+        }
+        let offset = self.offset_from_eye(ix, iy, film.0, film.1);
+        let b = self.camera.basis();
+        let (dx, dy) = concentric_disk(lens);
+        let on_lens = thin.radius * (dx * b.x + dy * b.y);
+        let eye = self.camera.position();
+        match self.camera.projection() {
+            Projection::Perspective => {
+                Ray::new(eye + on_lens, offset * (thin.focus_distance / self.camera.near()) - on_lens)
+            }
+            Projection::Orthographic => Ray::new(eye + offset + on_lens, thin.focus_distance * b.z - on_lens),
+        }
     }
 
-    /// Whether the camera's rays depend on the lens position: false for
-    /// both pinhole projections.
+    /// Whether the camera's rays depend on the lens position: only through
+    /// a thin lens of radius > 0, not for either pinhole projection.
     pub fn has_lens(&self) -> bool {
-        false
+        self.camera.lens().is_thin_lens()
     }
 
     /// The primary ray through the centre of pixel (ix, iy): the camera's
@@ -342,5 +374,72 @@ mod tests {
         let v = last_ok.unwrap();
         assert_ne!(v.center_ray(0, 0).dir, v.center_ray(1, 0).dir);
         assert_ne!(v.center_ray(0, 0).dir, v.center_ray(0, 1).dir);
+    }
+
+    fn lens_plane(radius: Real, focus: Real, projection: Projection) -> ViewPlane {
+        let cam = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 60.0, 1.0, projection).unwrap();
+        ViewPlane::new(cam.with_lens(crate::camera::Lens::new(radius, focus).unwrap()), 64, 48).unwrap()
+    }
+
+    #[test]
+    fn a_lens_of_radius_zero_is_the_pinhole_bit_for_bit() {
+        for projection in [Projection::Perspective, Projection::Orthographic] {
+            let v = lens_plane(0.0, 3.0, projection);
+            assert!(!v.has_lens());
+            for (x, y, film, lens) in [(0, 0, (0.5, 0.5), (0.0, 0.0)), (13, 40, (0.1, 0.9), (0.99, 0.3))] {
+                let (a, b) = (v.camera_ray(x, y, film, lens), v.primary_ray(x, y, film.0, film.1));
+                assert_eq!((a.origin, a.dir), (b.origin, b.dir));
+            }
+        }
+    }
+
+    #[test]
+    fn every_ray_of_a_film_point_starts_on_the_lens_and_meets_the_others_on_the_plane_in_focus() {
+        // Perspective: focus 5 from the eye; orthographic: 5 beyond the view plane.
+        for (projection, plane_z) in [(Projection::Perspective, 5.0), (Projection::Orthographic, 6.0)] {
+            let v = lens_plane(0.25, 5.0, projection);
+            assert!(v.has_lens());
+            let pinhole = v.camera_ray(20, 7, (0.3, 0.6), (0.5, 0.5));
+            let sharp = pinhole.origin + pinhole.dir * ((plane_z - pinhole.origin.z) / pinhole.dir.z);
+            let start = if projection == Projection::Perspective { Vec3::ZERO } else { pinhole.origin };
+            for k in 0..64 {
+                let lens = ((k % 8) as Real / 8.0 + 0.05, (k / 8) as Real / 8.0 + 0.05);
+                let r = v.camera_ray(20, 7, (0.3, 0.6), lens);
+                let across = r.origin - start;
+                assert!(across.z.abs() < 1e-6 && across.length() <= 0.25 + 1e-6, "{across}");
+                let at = r.origin + r.dir * ((plane_z - r.origin.z) / r.dir.z);
+                assert_close(at, sharp, 1e-5);
+            }
+        }
+    }
+
+    #[test]
+    fn a_point_off_the_plane_in_focus_spreads_over_the_thin_lens_circle_of_confusion() {
+        // Lens radius A = 0.1 focused at f = 5, view plane at near = 1; a
+        // point Q at depth d on the axis. The centre film point's rays
+        // through the lens rim cross depth d on a circle of radius
+        // A·|d − f|/f; projected through the eye onto the view plane (×
+        // near/d) that is the circle of confusion's radius, half of
+        // 2A·near·|d − f|/(f·d) (so for d = 10: 0.01 on the plane, 0.1 at Q).
+        let v = lens_plane(0.1, 5.0, Projection::Perspective);
+        let lens = v.camera().lens();
+        for d in [2.0, 10.0, 40.0] {
+            let mut widest: Real = 0.0;
+            for k in 0..256 {
+                // The rim: u on the square's edge maps to the disc's edge.
+                let t = k as Real / 256.0;
+                let rim = [(t, 0.0), (t, 1.0 - 1e-7), (0.0, t), (1.0 - 1e-7, t)][k % 4];
+                let r = v.camera_ray(32, 24, (0.0, 0.0), rim);
+                let at = r.origin + r.dir * ((d - r.origin.z) / r.dir.z);
+                widest = widest.max(Vec3::new(at.x, at.y, 0.0).length());
+            }
+            let on_plane = 2.0 * widest * v.camera().near() / d;
+            let expected = 2.0 * 0.1 * 1.0 * (d - 5.0).abs() / (5.0 * d);
+            assert!((lens.circle_of_confusion(d, 1.0) - expected).abs() < 1e-6);
+            assert!(
+                (on_plane - expected).abs() < 1e-4 * expected.max(1.0),
+                "d {d}: {on_plane} against {expected}"
+            );
+        }
     }
 }

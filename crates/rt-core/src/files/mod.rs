@@ -1,8 +1,10 @@
 //! Reading what is written in files: scene files ([`scene_file`]), the
 //! models they load (OBJ with its MTL materials, glTF 2.0; [`model`]
-//! splits a model into meshes and materials), and rays written as text, the
-//! `cast` command's input ([`ray_text`]).
+//! splits a model into meshes and materials), environment maps
+//! ([`environment_image`]), and rays written as text, the `cast` command's
+//! input ([`ray_text`]).
 
+pub mod environment_image;
 pub mod gltf_model;
 #[cfg(test)]
 mod gltf_mutation;

@@ -72,7 +72,7 @@ impl LightSource<'_> {
                 Some(LightSample { wi: s.wi, distance, weight, pdf: Some(s.pdf), shadows: true })
             }
             Self::Environment(env) => {
-                let (wi, pdf) = env.sample(u);
+                let (wi, pdf) = env.sample(u)?;
                 let weight = env.radiance(wi) / to_f32(pdf);
                 Some(LightSample { wi, distance: Real::INFINITY, weight, pdf: Some(pdf), shadows: true })
             }

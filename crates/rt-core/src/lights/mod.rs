@@ -3,8 +3,12 @@
 //! sphere [`light`]s, emissive objects ([`emitter`]), the [`environment`];
 //! and the choice of one to sample ([`light_sampler`]).
 
+pub mod distribution;
 pub mod emitter;
 pub mod environment;
+pub mod environment_map;
 pub mod light;
 pub mod light_sampler;
 pub mod light_source;
+pub mod sky;
+pub mod sun;

@@ -90,6 +90,22 @@ pub const SHADOW_SHORTEN: Real = 1e-4;
 /// rt-view's spot lights fall off as a glTF viewer's do.
 pub const SPOT_CONE_MIN_WIDTH: Real = 0.001;
 
+/// How much wider (relative, in sin²θ) the sun's disc counts for what a ray
+/// finds and the density than for where samples go
+/// ([`crate::lights::sun::Sun`]): a sample on the rim of a 0.27° disc,
+/// normalised in f32, lands a relative 10⁻⁵ or so outside it (the
+/// direction's components are off by an ulp each, 6·10⁻⁸, against
+/// sin α ≈ 4.7·10⁻³). 10⁻³ of sin²α covers that with room; it adds 0.1 %
+/// to the sun's found radiance integral only in a ring a ray finds once in
+/// a thousand sun hits, far below the noise of any render.
+pub const SUN_RIM_SLACK: Real = 1e-3;
+
+/// The least cos θ the Perez sky formula is evaluated at
+/// ([`crate::lights::sky`]): `e^(B/cos θ)`, with B < 0 at every accepted
+/// turbidity, vanishes at the horizon, and this keeps the division finite
+/// there (e^(−0.11/10⁻³) ≈ 10⁻⁴⁹ at the mildest B, nothing next to 1).
+pub const PEREZ_MIN_COS: f64 = 1e-3;
+
 /// `v / |v|`, or `None` for a zero or non-finite `v`, for any finite `v`:
 /// `v` is first divided by its largest absolute component, so `|v|²` can
 /// neither overflow (components near 10³⁸ in f32) nor underflow (near 10⁻²⁰).

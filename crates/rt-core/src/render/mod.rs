@@ -9,6 +9,7 @@
 //! the order rows finish in, bit for bit.
 
 pub mod settings;
+pub mod view_transform;
 
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -143,7 +144,8 @@ impl<'s> Renderer<'s> {
     #[inline(always)]
     fn primary_ray(&self, x: u32, y: u32, k: u32) -> Ray {
         let film = self.sampler.film_position(x, y, k);
-        let lens = self.sampler.lens_position(x, y, k);
+        // A pinhole ignores the lens position: no hash for it.
+        let lens = if self.view.has_lens() { self.sampler.lens_position(x, y, k) } else { (0.5, 0.5) };
         self.view.camera_ray(x, y, film, lens)
     }
 

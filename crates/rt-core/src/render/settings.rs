@@ -8,6 +8,7 @@ use thiserror::Error;
 
 use crate::camera::view_plane::{MAX_IMAGE_SIDE, MAX_PIXELS, check_image_size};
 use crate::math::color::ColorSpace;
+use crate::render::view_transform::Display;
 use crate::sampling::sampler::MAX_SAMPLES_PER_PIXEL;
 use crate::scene::effects::{EffectToggles, Effects};
 
@@ -111,6 +112,8 @@ pub struct RenderSettings {
     /// Effects switched off by the user (the viewer's toggles); a render
     /// never simulates what neither the scene nor `effects` asks for.
     pub toggles: EffectToggles,
+    /// The exposure and view transform of 8-bit output (not of EXR).
+    pub display: Display,
 }
 
 impl RenderSettings {

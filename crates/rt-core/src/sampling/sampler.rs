@@ -263,12 +263,18 @@ impl Sampler {
         }
     }
 
-    /// The lens position of sample `k` of pixel (`x`, `y`), in [0,1)²: the
-    /// lens centre, as long as no camera has a lens
-    /// ([`crate::camera::view_plane::ViewPlane::has_lens`]).
+    /// The lens position of sample `k` of pixel (`x`, `y`), in [0,1)²,
+    /// for a camera with a lens
+    /// ([`crate::camera::view_plane::ViewPlane::has_lens`]; a pinhole
+    /// ignores it and the renderer does not ask): uniform and independent
+    /// of the film position (a hash of the sample other than the film
+    /// jitter's), not stratified, since pairing film cell k with lens cell
+    /// k would tie the two together. Like the film position it uses up no
+    /// dimension of the path.
     #[inline(always)]
-    pub fn lens_position(&self, _x: u32, _y: u32, _k: u32) -> (Real, Real) {
-        (0.5, 0.5)
+    pub fn lens_position(&self, x: u32, y: u32, k: u32) -> (Real, Real) {
+        let h = mix(hash(x, y, k) ^ LENS_SALT ^ seed_bits(self.seed));
+        (unit_float(h as u32), unit_float((h >> 32) as u32))
     }
 
     /// The next dimension's value in [0, 1).
@@ -309,6 +315,10 @@ impl SampleRng {
         (unit_float(h as u32), unit_float((h >> 32) as u32))
     }
 }
+
+/// What sets the lens position's hash apart from the film jitter's and the
+/// path's streams (any odd constant; these are the first digits of √2).
+const LENS_SALT: u64 = 0x6A09_E667_F3BC_C909;
 
 /// A float in [0, 1) from the top 24 bits of `bits`.
 fn unit_float(bits: u32) -> Real {

@@ -11,14 +11,20 @@
 //! reader's job. Materials and lights are in the units of `docs/effects.md`.
 //! What the export leaves out is said in the JSON: `textured` on a material
 //! with a texture (its `color` is the untextured factor) and `smooth` on a
-//! mesh with vertex normals (written with its flat faces).
+//! mesh with vertex normals (written with its flat faces). An environment
+//! map, or a sky baked into one, is written as a Radiance `.hdr` beside the
+//! JSON (`OUT.environment.hdr`) with its strength, rotation and sun; the
+//! camera's thin lens as its `aperture` (radius) and `focus_distance`.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Args;
+use rt_core::files::environment_image::encode_hdr;
 use rt_core::lights::emitter::Emitter;
+use rt_core::lights::environment::Environment;
+use rt_core::lights::environment_map::EnvironmentMap;
 use rt_core::lights::light::LightKind;
 use rt_core::math::real::to_f64;
 use rt_core::{Color, Primitive, Vec3};
@@ -42,7 +48,11 @@ struct SceneJson {
     width: u32,
     height: u32,
     samples_per_pixel: u32,
+    /// The constant environment; black when there is a map.
     background: [f32; 3],
+    /// An environment map (or a baked sky) with its sun, if there is one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    environment: Option<EnvironmentJson>,
     color_space: &'static str,
     ambient: [f32; 3],
     max_depth: u32,
@@ -60,6 +70,36 @@ struct CameraJson {
     fov_y: f64,
     near: f64,
     projection: &'static str,
+    /// Thin-lens radius, world units (0: a pinhole).
+    aperture: f64,
+    /// Distance along the view direction of the plane in focus (from the
+    /// eye; for an orthographic camera, from the view plane).
+    focus_distance: f64,
+}
+
+/// An equirectangular map in rt-view's convention (`docs/scene-format.md`:
+/// u = 1/2 is +z, u = 1/4 is −x, the top row +y; Mitsuba's `envmap` after
+/// the x mirror, with its rotation about +y by −`rotation_degrees`).
+#[derive(Serialize)]
+struct EnvironmentJson {
+    /// A Radiance `.hdr` beside the JSON, texels as the scene gives them
+    /// (`strength` not applied).
+    file: String,
+    width: usize,
+    height: usize,
+    strength: f32,
+    rotation_degrees: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    sun: Option<SunJson>,
+}
+
+/// A disc light at infinity, in the map's world frame (not rotated with it).
+#[derive(Serialize)]
+struct SunJson {
+    direction: [f64; 3],
+    angular_radius_degrees: f64,
+    /// At normal incidence; the disc's radiance is this over π sin²α.
+    irradiance: [f32; 3],
 }
 
 #[derive(Serialize)]
@@ -226,6 +266,10 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
             }
         })
         .collect();
+    let environment = match scene.environment() {
+        Environment::Constant(_) => None,
+        Environment::Map(map) => Some(export_map(map, &dir.join(format!("{stem}.environment.hdr")), &stem)?),
+    };
     let c = &loaded.camera;
     let out = SceneJson {
         camera: CameraJson {
@@ -238,13 +282,17 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
                 rt_core::Projection::Perspective => "Perspective",
                 rt_core::Projection::Orthographic => "Orthographic",
             },
+            aperture: to_f64(c.lens().radius),
+            focus_distance: to_f64(c.lens().focus_distance),
         },
         width: settings.image.width(),
         height: settings.image.height(),
         samples_per_pixel: settings.samples.get(),
         background: c3(match scene.environment() {
-            rt_core::lights::environment::Environment::Constant(c) => *c,
+            Environment::Constant(c) => *c,
+            Environment::Map(_) => Color::ZERO,
         }),
+        environment,
         color_space: match settings.color_space {
             rt_core::math::color::ColorSpace::Linear => "Linear",
             rt_core::math::color::ColorSpace::Srgb => "Srgb",
@@ -264,6 +312,29 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
     json.write_bytes(text.as_bytes())?;
     eprintln!("wrote {}", args.output.display());
     Ok(())
+}
+
+/// Writes `map`'s image (its texels over its strength) to `path` and says
+/// what the JSON holds about it; `stem` names the file beside the JSON.
+fn export_map(map: &EnvironmentMap, path: &Path, stem: &str) -> anyhow::Result<EnvironmentJson> {
+    let (width, height) = map.size();
+    let unscale = if map.strength() > 0.0 { 1.0 / map.strength() } else { 0.0 };
+    let texels: Vec<Color> = map.texels().iter().map(|t| *t * unscale).collect();
+    let mut bytes = Vec::new();
+    encode_hdr(&mut bytes, width, height, &texels).context("cannot encode the environment map")?;
+    PendingFile::create(path)?.write_bytes(&bytes)?;
+    Ok(EnvironmentJson {
+        file: format!("{stem}.environment.hdr"),
+        width,
+        height,
+        strength: map.strength(),
+        rotation_degrees: to_f64(map.rotation_degrees()),
+        sun: map.sun().map(|s| SunJson {
+            direction: v3(s.direction()),
+            angular_radius_degrees: to_f64(s.radius_degrees()),
+            irradiance: c3(s.irradiance()),
+        }),
+    })
 }
 
 /// The triangles of a bounded, flat-faced primitive, wound like its normals.

@@ -9,6 +9,7 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rt_core::Renderer;
+use rt_core::render::view_transform::{Display, MAX_EXPOSURE_STOPS, ViewTransform};
 use rt_core::scene::effects::{EffectPlan, RayCounts};
 
 use crate::image_out::PendingImage;
@@ -40,6 +41,32 @@ pub struct RenderArgs {
     /// and next-event rays), tracing time and Mrays/s (all rays).
     #[arg(long)]
     pub stats: bool,
+    /// Exposure of the PNG in stops, each +1 doubling the light (default:
+    /// the scene's `exposure`, else 0). Not applied to EXR, which stays
+    /// linear scene radiance.
+    #[arg(long, value_name = "STOPS", allow_negative_numbers = true)]
+    pub exposure: Option<f32>,
+    /// View transform of the PNG: `standard` (clamp, then the scene's
+    /// colour space) or `agx` (rolls highlights off; sRGB) (default: the
+    /// scene's `view_transform`, else standard). Not applied to EXR.
+    #[arg(long, value_name = "standard|agx")]
+    pub view_transform: Option<ViewTransform>,
+}
+
+/// The display settings of `settings`, with the command line's `exposure`
+/// and `view_transform` where given, or why the exposure is refused.
+pub fn display_of(
+    settings: Display,
+    exposure: Option<f32>,
+    view_transform: Option<ViewTransform>,
+) -> anyhow::Result<Display> {
+    let exposure = exposure.unwrap_or(settings.exposure);
+    if exposure.is_nan() || exposure.abs() > MAX_EXPOSURE_STOPS {
+        anyhow::bail!(
+            "--exposure must be -{MAX_EXPOSURE_STOPS} to {MAX_EXPOSURE_STOPS} stops, got {exposure}"
+        );
+    }
+    Ok(Display { exposure, view_transform: view_transform.unwrap_or(settings.view_transform) })
 }
 
 /// The render was stopped by Ctrl-C (SIGINT); nothing was written. `main`
@@ -65,6 +92,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .overridden(args.width, args.height, args.spp)
         .with_context(|| format!("{}: cannot render", args.scene.display()))?
         .with_seed(args.seed);
+    let display = display_of(settings.display, args.exposure, args.view_transform)?;
     let (width, height, spp) = (settings.image.width(), settings.image.height(), settings.samples.get());
     let renderer = Renderer::new(scene, loaded.camera, &settings)
         .with_context(|| format!("{}: cannot render", args.scene.display()))?;
@@ -86,7 +114,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     bar.finish_and_clear();
     let frame = frame.ok_or(Interrupted)?;
 
-    output.write_frame(&frame)?;
+    output.write_frame(&frame, &display)?;
     eprintln!(
         "wrote {} ({width}x{height}, {spp} spp) in {:.3} s",
         args.output.display(),

@@ -1,14 +1,15 @@
-//! The `camera`, `image` and `samples_per_pixel` fields: what is seen, and
-//! at what resolution.
+//! The `camera`, `image`, `samples_per_pixel` and `exposure` fields: what
+//! is seen, at what resolution, and how brightly.
 
 use std::path::PathBuf;
 
 use serde::Deserialize;
 
 use super::values::{Finite, V3};
-use crate::camera::{Camera, CameraBasis, CameraError, Projection};
-use crate::math::real::{Real, Vec3};
+use crate::camera::{Camera, CameraBasis, CameraError, Lens, Projection};
+use crate::math::real::{Real, Vec3, to_f32};
 use crate::render::settings::{ImageSize, SamplesPerPixel, SettingsError};
+use crate::render::view_transform::MAX_EXPOSURE_STOPS;
 
 /// The camera as written, validated field by field as it is read, so that an
 /// error points at the field that makes the camera degenerate: `fov_y` and
@@ -38,6 +39,8 @@ enum Field {
     Index,
     Scale,
     Translate,
+    Aperture,
+    FocusDistance,
 }
 
 const FIELDS: &[&str] = &[
@@ -51,6 +54,8 @@ const FIELDS: &[&str] = &[
     "index",
     "scale",
     "translate",
+    "aperture",
+    "focus_distance",
 ];
 
 impl<'de> Deserialize<'de> for CameraDesc {
@@ -66,7 +71,8 @@ impl<'de> serde::de::Visitor<'de> for CameraVisitor {
 
     fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
         f.write_str(
-            "a camera: (position, center_of_interest, up, fov_y, near, projection) or (gltf, index, scale, translate)",
+            "a camera: (position, center_of_interest, up, fov_y, near, projection, aperture, focus_distance) \
+             or (gltf, index, scale, translate)",
         )
     }
 
@@ -75,6 +81,7 @@ impl<'de> serde::de::Visitor<'de> for CameraVisitor {
         let (mut position, mut center, mut up) = (None, None, None);
         let (mut fov_y, mut near, mut projection) = (None, None, None);
         let (mut gltf, mut index, mut scale, mut translate) = (None, None, None, None);
+        let (mut aperture, mut focus_distance) = (None, None);
         while let Some(field) = map.next_key::<Field>()? {
             let duplicate = |name| A::Error::duplicate_field(name);
             match field {
@@ -84,6 +91,8 @@ impl<'de> serde::de::Visitor<'de> for CameraVisitor {
                 Field::FovY if fov_y.is_some() => return Err(duplicate("fov_y")),
                 Field::Near if near.is_some() => return Err(duplicate("near")),
                 Field::Projection if projection.is_some() => return Err(duplicate("projection")),
+                Field::Aperture if aperture.is_some() => return Err(duplicate("aperture")),
+                Field::FocusDistance if focus_distance.is_some() => return Err(duplicate("focus_distance")),
                 Field::Position => position = Some(Vec3::from(map.next_value::<V3>()?)),
                 Field::CenterOfInterest => center = Some(Vec3::from(map.next_value::<V3>()?)),
                 Field::Up => up = Some(Vec3::from(map.next_value::<V3>()?)),
@@ -102,6 +111,22 @@ impl<'de> serde::de::Visitor<'de> for CameraVisitor {
                     near = Some(v);
                 }
                 Field::Projection => projection = Some(map.next_value::<Projection>()?),
+                Field::Aperture if aperture.is_some() => return Err(duplicate("aperture")),
+                Field::FocusDistance if focus_distance.is_some() => return Err(duplicate("focus_distance")),
+                Field::Aperture => {
+                    let v = map.next_value::<Finite>()?.0;
+                    if v < 0.0 {
+                        return Err(A::Error::custom(CameraError::ApertureNotValid(v)));
+                    }
+                    aperture = Some(v);
+                }
+                Field::FocusDistance => {
+                    let v = map.next_value::<Finite>()?.0;
+                    if v <= 0.0 {
+                        return Err(A::Error::custom(CameraError::FocusDistanceNotPositive(v)));
+                    }
+                    focus_distance = Some(v);
+                }
                 Field::Gltf if gltf.is_some() => return Err(duplicate("gltf")),
                 Field::Index if index.is_some() => return Err(duplicate("index")),
                 Field::Scale if scale.is_some() => return Err(duplicate("scale")),
@@ -119,12 +144,13 @@ impl<'de> serde::de::Visitor<'de> for CameraVisitor {
             }
             // A glTF camera has none of the fields that describe one here.
             let own = [position.is_some(), center.is_some(), up.is_some(), fov_y.is_some(), near.is_some()];
+            let lens = aperture.is_some() || focus_distance.is_some();
             if (gltf.is_some() || index.is_some() || scale.is_some() || translate.is_some())
-                && (own.contains(&true) || projection.is_some())
+                && (own.contains(&true) || projection.is_some() || lens)
             {
                 return Err(A::Error::custom(
-                    "a camera is either described (position, center_of_interest, up, fov_y, near, projection) \
-                     or taken from a glTF file (gltf, index, scale, translate), not both",
+                    "a camera is either described (position, center_of_interest, up, fov_y, near, projection, \
+                     aperture, focus_distance) or taken from a glTF file (gltf, index, scale, translate), not both",
                 ));
             }
             // As soon as the three points are known, check that they make a
@@ -153,6 +179,17 @@ impl<'de> serde::de::Visitor<'de> for CameraVisitor {
         let near = near.ok_or_else(|| A::Error::missing_field("near"))?;
         let camera = Camera::new(position, center, up, fov_y, near, projection.unwrap_or_default())
             .map_err(A::Error::custom)?;
+        // The lens: a pinhole unless `aperture` (its radius) is above 0; in
+        // focus at the centre of interest unless `focus_distance` is given
+        // (C to COI lies along cam_z, so its length is that distance).
+        let lens = match aperture {
+            Some(radius) if radius > 0.0 => {
+                let focus = focus_distance.unwrap_or_else(|| (center - position).length());
+                Lens::new(radius, focus).map_err(A::Error::custom)?
+            }
+            _ => Lens { focus_distance: focus_distance.unwrap_or(1.0), ..Lens::PINHOLE },
+        };
+        let camera = camera.with_lens(lens);
         Ok(CameraDesc::Ready(camera))
     }
 }
@@ -184,5 +221,74 @@ impl TryFrom<u32> for SamplesDesc {
     type Error = SettingsError;
     fn try_from(n: u32) -> Result<Self, SettingsError> {
         SamplesPerPixel::new(n).map(Self)
+    }
+}
+
+/// Exposure in stops, within ±[`MAX_EXPOSURE_STOPS`]; 0 when absent.
+#[derive(Default, Deserialize)]
+#[serde(try_from = "Finite")]
+pub(super) struct ExposureDesc(pub(super) f32);
+
+impl TryFrom<Finite> for ExposureDesc {
+    type Error = String;
+    fn try_from(v: Finite) -> Result<Self, String> {
+        let stops = to_f32(v.0);
+        if stops.abs() <= MAX_EXPOSURE_STOPS {
+            Ok(Self(stops))
+        } else {
+            Err(format!("exposure must be -{MAX_EXPOSURE_STOPS} to {MAX_EXPOSURE_STOPS} stops, got {stops}"))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use crate::files::scene_file::parse_scene;
+
+    const SCENE: &str = r#"(
+    camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1LENS),
+    image: (width: 8, height: 6),
+    materials: {},
+    objects: [],
+)"#;
+
+    fn parse(lens: &str) -> Result<crate::files::scene_file::LoadedScene, String> {
+        parse_scene(&SCENE.replace("LENS", lens), "lens.ron", Path::new(".")).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn a_camera_without_an_aperture_is_a_pinhole() {
+        assert!(!parse("").unwrap().camera.lens().is_thin_lens());
+        assert!(!parse(", aperture: 0").unwrap().camera.lens().is_thin_lens());
+    }
+
+    #[test]
+    fn a_lens_focuses_on_the_centre_of_interest_unless_told_otherwise() {
+        let lens = parse(", aperture: 0.2").unwrap().camera.lens();
+        assert_eq!((lens.radius, lens.focus_distance), (0.2, 5.0));
+        let lens = parse(", aperture: 0.2, focus_distance: 3.5").unwrap().camera.lens();
+        assert_eq!((lens.radius, lens.focus_distance), (0.2, 3.5));
+    }
+
+    #[test]
+    fn a_negative_aperture_or_a_focus_distance_not_above_zero_is_refused_by_name() {
+        let e = parse(", aperture: -0.1").unwrap_err();
+        assert!(e.contains("camera.aperture") && e.contains("-0.1"), "{e}");
+        let e = parse(", aperture: 0.1, focus_distance: 0").unwrap_err();
+        assert!(e.contains("camera.focus_distance"), "{e}");
+    }
+
+    #[test]
+    fn exposure_and_view_transform_are_read_and_an_absurd_exposure_refused() {
+        use crate::render::view_transform::{Display, ViewTransform};
+        let text =
+            SCENE.replace("LENS", "").replace("image:", "exposure: -1.5, view_transform: AgX,\n    image:");
+        let loaded = parse_scene(&text, "x.ron", Path::new(".")).unwrap();
+        assert_eq!(loaded.settings.display, Display { exposure: -1.5, view_transform: ViewTransform::AgX });
+        let text = SCENE.replace("LENS", "").replace("image:", "exposure: 100,\n    image:");
+        let e = parse_scene(&text, "x.ron", Path::new(".")).unwrap_err().to_string();
+        assert!(e.contains("exposure must be"), "{e}");
     }
 }

@@ -11,6 +11,7 @@
 
 mod camera;
 mod effects;
+mod environment;
 mod light;
 mod material;
 mod model;
@@ -28,10 +29,12 @@ use crate::files::model::ModelError;
 use crate::geometry::method::Methods;
 use crate::math::color::ColorSpace;
 use crate::render::settings::RenderSettings;
+use crate::render::view_transform::{Display, ViewTransform};
 use crate::scene::effects::Effects;
 use crate::scene::{Scene, SceneBuildError, SceneBuilder};
-use camera::{CameraDesc, ImageDesc, SamplesDesc};
+use camera::{CameraDesc, ExposureDesc, ImageDesc, SamplesDesc};
 use effects::EffectsDesc;
+use environment::EnvironmentDesc;
 use light::LightDesc;
 use material::MaterialDesc;
 use object::{ObjectEntry, Shape};
@@ -88,6 +91,15 @@ pub enum SceneError {
         /// Why the model failed (in the message, so not also a `source()`).
         reason: ModelError,
     },
+    /// The environment cannot be made: its image cannot be read or used,
+    /// or it is given together with a `background`.
+    #[error("{file}: {reason}")]
+    Environment {
+        /// The scene file.
+        file: String,
+        /// What is wrong, naming the image file where there is one.
+        reason: String,
+    },
 }
 
 /// What a scene file holds: the world, the camera it is seen through, and
@@ -133,10 +145,23 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<LoadedScen
         samples: desc.samples_per_pixel.0,
         color_space: desc.color_space,
         effects,
+        display: Display { exposure: desc.exposure.0, view_transform: desc.view_transform },
         ..RenderSettings::default()
     };
-    let mut scene =
-        SceneBuilder::new().background(desc.background.0).ambient(desc.ambient.0).methods(desc.methods);
+    let mut scene = SceneBuilder::new()
+        .background(desc.background.unwrap_or_default().0)
+        .ambient(desc.ambient.0)
+        .methods(desc.methods);
+    if let Some(environment) = &desc.environment {
+        let fail = |reason: String| SceneError::Environment { file: file.to_owned(), reason };
+        if desc.background.is_some() {
+            return Err(fail(String::from(
+                "give either background (a constant colour) or environment, not both",
+            )));
+        }
+        let (environment, warnings) = environment.build(base_dir).map_err(fail)?;
+        scene = warnings.into_iter().fold(scene.environment(environment), SceneBuilder::warning);
+    }
     for light in desc.lights {
         scene = scene.light(light.0);
     }
@@ -198,12 +223,18 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<LoadedScen
 struct SceneDesc {
     camera: CameraDesc,
     image: ImageDesc,
-    #[serde(default)]
-    background: ColorDesc,
+    #[serde(default, deserialize_with = "environment::present")]
+    background: Option<ColorDesc>,
+    #[serde(default, deserialize_with = "environment::present")]
+    environment: Option<EnvironmentDesc>,
     #[serde(default)]
     samples_per_pixel: SamplesDesc,
     #[serde(default)]
     color_space: ColorSpace,
+    #[serde(default)]
+    exposure: ExposureDesc,
+    #[serde(default)]
+    view_transform: ViewTransform,
     #[serde(deserialize_with = "unique_materials")]
     materials: BTreeMap<String, MaterialDesc>,
     objects: Vec<ObjectEntry>,
