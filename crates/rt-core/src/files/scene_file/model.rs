@@ -156,7 +156,8 @@ mod tests {
             ("(gltf: \"gone.glb\")", "gone.glb: cannot open it"),
             (
                 "(gltf: \"m.glb\", fov_y: 30)",
-                "either described (position, center_of_interest, up, fov_y, near, projection) or taken from a glTF file",
+                "either described (position, center_of_interest, up, fov_y, near, projection, aperture, \
+                 focus_distance) or taken from a glTF file",
             ),
             ("(index: 0)", "missing field named `gltf`"),
             ("(gltf: \"m.glb\", scale: 0)", "camera.scale must be positive, got 0"),
