@@ -828,6 +828,18 @@ mod tests {
                     emission: if e > 0.7 { Color::splat(e * 5.0) } else { Color::ZERO },
                     subsurface: None,
                     texture: textured[i].then_some(0),
+                    // Half the materials physically based, from the same numbers.
+                    physical: (ks > 0.5).then_some(crate::materials::principled::Principled {
+                        metallic: kd,
+                        roughness: s,
+                        transmission: kt,
+                        attenuation_color: Color::new(c, 0.5, 1.0).max(Color::splat(0.01)),
+                        attenuation_distance: 0.1 + e,
+                        clearcoat: kr,
+                        clearcoat_roughness: s * 0.5,
+                        specular: ior,
+                        specular_color: Color::new(1.0, c, 0.5),
+                    }),
                 };
                 let (_, albedo, mfp, g) = media[i];
                 let medium = Subsurface { albedo: Color::from_array(albedo), mean_free_path: Color::from_array(mfp), anisotropy: g };

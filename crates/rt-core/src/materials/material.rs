@@ -2,9 +2,17 @@
 //! ([`crate::math::color`]).
 
 use crate::materials::medium::Subsurface;
+use crate::materials::principled::Principled;
 use crate::math::color::Color;
 
 /// A surface's appearance.
+///
+/// Two models: the physically based one (glTF 2.0's metallic-roughness
+/// BSDF, [`crate::materials::principled`]) when `physical` is set — then
+/// `color` is its base colour, `ior` its index of refraction, `emission`
+/// its emission, and the weights `diffuse` … `transparency` and
+/// `specular_color` are unused — or else the weights of the older model
+/// below.
 ///
 /// Without lights (pure ray casting) a hit shows `color` flat and every other
 /// field is unused. With lights it is shaded by its BSDF ([`crate::materials::bsdf`]),
@@ -52,6 +60,9 @@ pub struct Material {
     /// coordinates, the texture's colour multiplies `color` (as `map_Kd`
     /// multiplies `Kd`, and glTF's `baseColorTexture` its factor).
     pub texture: Option<u32>,
+    /// The physically based parameters ([`Principled`]): when set, the
+    /// surface is shaded by the glTF 2.0 BSDF instead of the weights.
+    pub physical: Option<Principled>,
 }
 
 impl Material {
@@ -69,7 +80,13 @@ impl Material {
             emission: Color::ZERO,
             subsurface: None,
             texture: None,
+            physical: None,
         }
+    }
+
+    /// A physically based material of base colour `color` and parameters `p`.
+    pub const fn principled(color: Color, p: Principled) -> Self {
+        Self { physical: Some(p), ..Self::flat(color) }
     }
 
     /// The GGX roughness α of the glossy lobe, from the Blinn–Phong exponent
@@ -83,7 +100,14 @@ impl Material {
     /// The surface of a subsurface material: a clear, smooth dielectric of
     /// its `ior` (the medium inside does the colouring), with its emission.
     pub fn boundary(&self) -> Material {
-        Material { color: Color::ONE, transparency: 1.0, reflectivity: 0.0, subsurface: None, ..*self }
+        Material {
+            color: Color::ONE,
+            transparency: 1.0,
+            reflectivity: 0.0,
+            subsurface: None,
+            physical: None,
+            ..*self
+        }
     }
 
     /// Whether the surface gives off light.
