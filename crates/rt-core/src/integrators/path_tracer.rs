@@ -126,6 +126,14 @@ impl<'s> PathTracer<'s> {
                 &*si.material
             };
 
+            // A path inside a physically based object with an absorbing
+            // volume keeps e^(−σ·distance) (Beer–Lambert).
+            if !si.front()
+                && let Some(p) = m.physical
+            {
+                beta *= p.transmittance(to_f32(h.t * ray.dir.length()));
+            }
+
             // 1. Emission found by this ray.
             if m.is_emissive() && si.front() {
                 let w = found_light_weight(previous, |p| match scene.emitter_index(h.object) {

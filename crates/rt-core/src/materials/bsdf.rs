@@ -241,6 +241,14 @@ impl Bsdf {
         self.diffuse
     }
 
+    /// For the physically based model, the weights of its δ lobes
+    /// `(reflection, transmission)` as seen from `wo` (the transmission
+    /// without its 1/η²); `None` for the weights model, whose δ lobes are
+    /// its `reflectivity` and `transparency`.
+    pub fn delta_weights(&self, wo: Vec3) -> Option<(Color, Color)> {
+        self.principled.map(|p| p.delta_weights(self.n.dot(wo).max(0.0)))
+    }
+
     /// Whether the BSDF has a smooth (non-δ) part, which light sampling can reach.
     pub fn has_smooth_lobes(&self) -> bool {
         if let Some(p) = &self.principled {

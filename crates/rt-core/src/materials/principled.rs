@@ -145,6 +145,18 @@ impl Principled {
         let c = self.attenuation_color.max(Color::splat(f32::MIN_POSITIVE));
         Some(Color::new(-c.x.ln(), -c.y.ln(), -c.z.ln()) / self.attenuation_distance)
     }
+
+    /// The fraction of light kept after `distance` inside: `e^(−σ·distance)`
+    /// per channel (1 for a clear inside).
+    pub fn transmittance(&self, distance: f32) -> Color {
+        match self.attenuation() {
+            Some(sigma) => {
+                let t = -sigma * distance;
+                Color::new(t.x.exp(), t.y.exp(), t.z.exp())
+            }
+            None => Color::ONE,
+        }
+    }
 }
 
 /// Which of the lobes a sample came from.
@@ -342,6 +354,29 @@ impl Lobes {
 
     fn coat_smooth(&self) -> bool {
         self.coat_alpha < SMOOTH_ALPHA
+    }
+
+    /// The weights of the δ lobes, `(reflection, transmission)`, for
+    /// `cos θ_o`: what a mirror-reflected and a refracted ray carry (the
+    /// refraction without its 1/η², which cancels along a path through an
+    /// object); zero for lobes that are rough. For the direct-lighting tracer.
+    pub fn delta_weights(&self, cos_o: Real) -> (Color, Color) {
+        let keep = 1.0 - self.coat;
+        let fd = self.dielectric_fresnel(cos_o) * self.weight;
+        let mut reflected = Color::ZERO;
+        if self.smooth() {
+            let fm = self.base + (Color::ONE - self.base) * schlick_weight(cos_o);
+            reflected = (fd * (1.0 - self.metallic) + fm * self.metallic) * keep;
+        }
+        if self.coat_smooth() {
+            reflected += Color::splat(self.coat);
+        }
+        let mut transmitted = Color::ZERO;
+        if self.transmission_smooth() {
+            transmitted =
+                self.base * (keep * (1.0 - self.metallic) * self.transmission * (1.0 - fd.max_element()));
+        }
+        (reflected, transmitted)
     }
 
     /// Whether the BSDF has a lobe with a density (light sampling can reach it).
