@@ -11,7 +11,7 @@
 //! specular_brdf(α)  = D(h)·G₂(ω_o, ω_i)/(4·|cos θ_o|·|cos θ_i|)       (Fresnel outside)
 //! diffuse_brdf      = base/π
 //! specular_btdf(α)  = rough dielectric transmission (Walter et al. 2007) · base
-//! dielectric        = (1 − w·max(F_d))·mix(diffuse_brdf, specular_btdf, transmission) + w·F_d·specular_brdf
+//! dielectric        = mix(b·diffuse_brdf, (1 − w·max(F_d))·specular_btdf, transmission) + w·F_d·specular_brdf
 //! metal             = F_m·specular_brdf,          F_m = base + (1 − base)·(1 − |ω_o·h|)⁵
 //! material          = mix(dielectric, metal, metallic)
 //! f                 = (1 − c·F_c(cos θ_o))·material + c·F_c(cos θ_o)·specular_brdf(α_c)
@@ -55,6 +55,21 @@
 //! Fresnel weights at `cos θ_o`), not a numerically degenerate GGX.
 //!
 //! # Energy and reciprocity
+//!
+//! One departure from Appendix B: glTF weights the diffuse base by
+//! `1 − w·max(F_d(|ω_o·h|))`, which is not energy conserving — a white
+//! dielectric reflects up to 8 % more light than arrives at 80° from the
+//! normal and 86 % more at 89° when smooth (measured by this module's
+//! tests). Here the base is weighted by the reciprocal, energy-conserving
+//! form of Ashikhmin and Shirley ("An Anisotropic Phong BRDF Model", 2000,
+//! eq. 5) and Kelemen and Szirmay-Kalos (2001), with the same Fresnel term:
+//! `b = (1 − w·max F_d(cos θ_o))·(1 − w·max F_d(cos θ_i))/(1 − F̄)`, with
+//! `F̄` the cosine-weighted mean of `w·max F_d` over the hemisphere
+//! (closed form: `w·(f₀ + (1 − f₀)/21)`). The base then reflects
+//! exactly `(1 − w·max F_d(cos θ_o))·base` of light from everywhere, what
+//! the specular layer leaves at the view: the same as glTF's within 0.1 %
+//! up to 45° from the normal (0.958 and 0.9583 at 45°, 0.960 and 0.9599 at
+//! 0°, for ior 1.5) and less towards grazing, where glTF's exceeds 1.
 //!
 //! The reflection part without clearcoat is reciprocal (every factor is
 //! symmetric in ω_o and ω_i: `|ω_o·h| = |ω_i·h|` for the reflection half
@@ -208,6 +223,9 @@ pub(crate) struct Lobes {
     choose: [f32; 4],
     /// The diffuse base's albedo at the view (Fresnel at `cos θ_o`).
     diffuse_albedo: Color,
+    /// `F̄ = 2∫ w·max F(μ)·μ dμ = w·(f₀ + (1 − f₀)/21)` (f₀ the largest
+    /// channel's): the cosine-weighted mean of the dielectric Fresnel.
+    fresnel_average: f32,
 }
 
 /// `(1 − c)⁵`.
@@ -306,7 +324,10 @@ impl Lobes {
             coat,
             choose: [0.0; 4],
             diffuse_albedo: Color::ZERO,
+            fresnel_average: 0.0,
         };
+        let f0_max = lobes.f0.max_element();
+        lobes.fresnel_average = lobes.weight * (f0_max + (1.0 - f0_max) / 21.0);
         let keep = 1.0 - coat;
         let fd = lobes.weight * lobes.dielectric_fresnel(cos_o).max_element();
         let (m, t) = (lobes.metallic, lobes.transmission);
@@ -401,10 +422,15 @@ impl Lobes {
             let Some(h) = (wo + wi).try_normalize() else { return Color::ZERO };
             let c = wo.dot(h);
             let fd = self.dielectric_fresnel(c) * self.weight;
-            // The base's Fresnel weight at the more grazing of the two
-            // directions (see "Energy and reciprocity").
-            let fb = self.weight * self.dielectric_fresnel(wo.z.min(wi.z)).max_element();
-            let mut f = self.base * ((1.0 - fb) * (1.0 - self.transmission) * std::f32::consts::FRAC_1_PI);
+            // The base's Fresnel weight (see "Energy and reciprocity").
+            let fo = self.weight * self.dielectric_fresnel(wo.z).max_element();
+            let fi = self.weight * self.dielectric_fresnel(wi.z).max_element();
+            let fb = if self.fresnel_average < 1.0 {
+                (1.0 - fo) * (1.0 - fi) / (1.0 - self.fresnel_average)
+            } else {
+                0.0
+            };
+            let mut f = self.base * (fb * (1.0 - self.transmission) * std::f32::consts::FRAC_1_PI);
             if !self.smooth() {
                 let spec = to_f32(specular_brdf(wo, wi, h, self.alpha));
                 f = f * (1.0 - self.metallic) + fd * ((1.0 - self.metallic) * spec);
@@ -691,7 +717,7 @@ mod tests {
         // White base colour, every lobe at its strongest; from outside and,
         // for transmission, from inside (past the critical angle too).
         // Smooth lobes integrated on 600² cells, δ lobes by their sampled
-        // weights (exact: they are value/probability).
+        // weights (value/probability) over stratified lobe choices.
         let white = |f: fn(&mut Principled)| pbr(Color::ONE, f);
         let cases = [
             ("white dielectric", white(|p| p.roughness = 0.5)),
@@ -719,11 +745,12 @@ mod tests {
                 let eta = if outside { to_f64(m.ior as Real) } else { 1.0 / to_f64(m.ior as Real) };
                 let smooth = albedo(&b, wo, eta * eta, 600);
                 let mut delta = DVec3::ZERO;
-                let mut rng = SampleRng::new(7, 7, 7);
+                // The lobe is chosen by u alone: stratified u gives each δ
+                // lobe its probability to 1/n.
                 let n = 20_000;
-                for _ in 0..n {
-                    let (u, _) = rng.next_pair();
-                    if let Some(s) = b.sample(wo, u, rng.next_pair()).filter(|s| s.lobe.is_delta()) {
+                for k in 0..n {
+                    let u = (k as Real + 0.5) / n as Real;
+                    if let Some(s) = b.sample(wo, u, (0.5, 0.5)).filter(|s| s.lobe.is_delta()) {
                         let w = s.weight.as_dvec3();
                         delta += if s.lobe.is_transmission() { w * eta * eta } else { w };
                     }
@@ -936,6 +963,24 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    #[test]
+    fn the_diffuse_base_reflects_what_the_specular_layer_leaves_at_the_view() {
+        // A smooth dielectric: its smooth part is the base alone, whose
+        // albedo is (1 − F(cos θ_o))·base at every angle (glTF's
+        // `1 − F(ω_o·h)` weight would give 0.944 at 80°, above the 0.592
+        // left by the specular layer's 0.408).
+        let base = Color::new(0.9, 0.5, 0.2);
+        let m = pbr(base, |p| p.roughness = 0.0);
+        for degrees in [0.0, 45.0, 80.0] {
+            let wo = at(degrees);
+            let b = Bsdf::new(&m, Vec3::Y, wo);
+            let got = albedo(&b, wo, 1.0, 800);
+            let fresnel = 0.04 + 0.96 * schlick_weight(wo.y) as f64;
+            let expected = base.as_dvec3() * (1.0 - fresnel);
+            assert!((got - expected).abs().max_element() < 1e-3, "{degrees}°: {got} vs {expected}");
         }
     }
 
