@@ -352,7 +352,7 @@ impl Bsdf {
         if self.shaded && !lobe.is_delta() {
             // The terminator term and the facet's sides: as `eval` and `pdf` say.
             let pdf = self.pdf(wo, wi);
-            if !(pdf > 0.0) {
+            if pdf.is_nan() || pdf <= 0.0 {
                 return None;
             }
             let weight = self.eval(wo, wi) * to_f32(self.cosine(wi) / pdf);
