@@ -91,7 +91,7 @@
 //! share one GGX of α: visible normals, Heitz, "Sampling the GGX
 //! Distribution of Visible Normals", JCGT 2018), transmission (a visible
 //! normal refracted) and the clearcoat (visible normals of α_c). The density
-//! is the mixture of the four, which [`Lobes::pdf`] returns.
+//! is the mixture of the four, which [`crate::materials::bsdf::Bsdf::pdf`] returns.
 //!
 //! All directions are local (the shading normal is +z) and `ω_o` is above
 //! the surface (`cos θ_o > 0`): [`crate::materials::bsdf::Bsdf`] turns the
