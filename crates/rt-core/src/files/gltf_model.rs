@@ -558,7 +558,7 @@ fn map_material(m: &::gltf::Material) -> (Material, Vec<String>) {
     if let Some(s) = m.specular() {
         p.specular = factor("specularFactor", s.specular_factor(), 1.0, 0.0..=1.0);
         let [r, g, b] = s.specular_color_factor();
-        let c = |v: f32| factor("specularColorFactor", v, 1.0, 0.0..=f32::MAX);
+        let c = |v: f32| factor("specularColorFactor", v, 1.0, 0.0..=100.0);
         p.specular_color = Color::new(c(r), c(g), c(b));
     }
     if let Some(coat) = m.extension_value("KHR_materials_clearcoat") {

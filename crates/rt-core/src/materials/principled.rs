@@ -126,8 +126,9 @@ pub struct Principled {
     /// `KHR_materials_specular`'s specular factor w in [0, 1]: scales the
     /// dielectric's Fresnel reflectance (0: no specular reflection).
     pub specular: f32,
-    /// `KHR_materials_specular`'s colour s, each component in [0, 1] (may
-    /// be above 1 in glTF; clamped there): tints the dielectric's f₀.
+    /// `KHR_materials_specular`'s colour s, each component ≥ 0 (at most 1
+    /// in scene files, up to 100 from glTF, which allows more): tints the
+    /// dielectric's f₀, `min(f₀·s, 1)`.
     pub specular_color: Color,
 }
 
