@@ -105,8 +105,35 @@ def mirrored_obj(src, dst):
         f.write("\n".join(out) + "\n")
 
 
+def principled_bsdf(m):
+    """Mitsuba's `principled` for a physically based rt-view material.
+
+    Mitsuba's principled is Disney's 2015 BSDF, not glTF's; the two coincide
+    for a metal (metallic 1: GGX with α = roughness², Schlick's Fresnel with
+    f0 = base colour) except for the masking-shadowing term (Mitsuba:
+    separable Smith G₁·G₁, rt-view: height-correlated), and differ for a
+    dielectric (Disney's retro-reflective diffuse, its own Fresnel mix) and
+    in the clearcoat (Disney's GTR1 of fixed strength). See docs/models.md.
+    """
+    p = m["physical"]
+    bsdf = {
+        "type": "principled",
+        "base_color": {"type": "rgb", "value": m["color"]},
+        "metallic": p["metallic"],
+        "roughness": p["roughness"],
+        "spec_tint": 0.0,
+        "spec_trans": p["transmission"],
+        "eta": max(m["ior"], 1.0001),
+        "clearcoat": p["clearcoat"],
+        "clearcoat_gloss": 1.0 - p["clearcoat_roughness"],
+    }
+    return bsdf if p["transmission"] > 0 else {"type": "twosided", "bsdf": bsdf}
+
+
 def bsdf(m):
     """The Mitsuba BSDF of an rt-view material (see the module comment)."""
+    if m.get("physical"):
+        return principled_bsdf(m)
     kr, kt, ks, kd = m["reflectivity"], m["transparency"], m["specular"], m["diffuse"]
     color = m["color"]
     tint = m.get("specular_color", [1.0, 1.0, 1.0])  # the glossy and mirror lobes' tint

@@ -30,20 +30,26 @@
 //! `scale` and `translate` apply last. Texture coordinates keep glTF's
 //! convention, `v` down the image, which is [`crate::materials::texture`]'s.
 //!
-//! **Materials** (metallic-roughness, glTF 2.0 §3.9), onto
-//! [`Material`]'s lobes:
+//! **Materials** (metallic-roughness, glTF 2.0 §3.9) become physically
+//! based materials ([`crate::materials::principled`], the BSDF glTF's
+//! Appendix B defines), factor for factor:
 //!
 //! | glTF | rt-view |
 //! |---|---|
-//! | `baseColorFactor` (RGB) | `color`, clamped to [0, 1] |
+//! | `baseColorFactor` (RGB) | `color` (the base colour) |
 //! | `baseColorTexture` | `texture` (sRGB, bilinear, the sampler's wrap modes), multiplying `color` |
-//! | `metallicFactor` m, `roughnessFactor` r | with α = r² (glTF's GGX roughness): the glossy lobe with `specular` k = m + 0.04·(1 − m), `specular_color` (m·base + 0.04·(1 − m))/k (a metal reflects in its colour; a dielectric's 4 % reflection is white) and `shininess` 2/α² − 2 (the inverse of [`Material::roughness`]); when α < 0.01 the metal part is a mirror of weight m instead |
+//! | `metallicFactor`, `roughnessFactor` | `metallic`, `roughness` (α = roughness²) |
 //! | `emissiveFactor` × `KHR_materials_emissive_strength` | `emission` |
-//! | `KHR_materials_transmission` | `transparency` (times 1 − m) |
+//! | `KHR_materials_transmission` | `transmission` |
+//! | `KHR_materials_volume` | `attenuation_color`, `attenuation_distance` (the thickness is not needed: rays measure it) |
 //! | `KHR_materials_ior` | `ior` (default 1.5) |
+//! | `KHR_materials_specular` | `specular`, `specular_color` |
+//! | `KHR_materials_clearcoat` | `clearcoat`, `clearcoat_roughness` |
 //!
-//! Not used, and named in the model's warnings: the metallic-roughness,
-//! normal, occlusion and emissive textures, a base-colour texture on
+//! A factor that is not a number or out of its range is replaced by its
+//! default or clamped, and named in the warnings. Not used, and named in
+//! the model's warnings: the metallic-roughness,
+//! normal, occlusion and emissive textures (and the extensions' textures), a base-colour texture on
 //! another coordinate set than 0, alpha (`alphaMode` is treated as
 //! `OPAQUE`), and every other extension the file uses. An extension the file
 //! *requires* and rt-view does not know is an error. Samplers' filters are
@@ -73,6 +79,7 @@ use crate::files::model::{Model, ModelError};
 use crate::geometry::mesh::{MAX_MESH_TRIANGLES, Mesh};
 use crate::lights::light::{Light, LightKind};
 use crate::materials::material::Material;
+use crate::materials::principled::Principled;
 use crate::materials::texture::{Texture, Wrap};
 use crate::math::color::Color;
 use crate::math::real::{Real, Vec3, narrow, to_f64};
@@ -86,13 +93,16 @@ pub const MAX_NODE_DEPTH: usize = 64;
 pub const MAX_NODE_INSTANCES: usize = 1 << 20;
 
 /// The extensions whose data is used.
-const KNOWN_EXTENSIONS: [&str; 6] = [
+const KNOWN_EXTENSIONS: [&str; 9] = [
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_materials_emissive_strength",
     "KHR_mesh_quantization",
     "KHR_lights_punctual",
     meshopt_views::EXTENSION,
+    "KHR_materials_specular",
+    "KHR_materials_volume",
+    "KHR_materials_clearcoat",
 ];
 
 /// The mesh-compression extensions rt-view does not decode: Draco, for
@@ -864,41 +874,74 @@ fn check_accessor(
     }
 }
 
-/// The material's lobes (see the table in the module documentation), and
-/// what of it is not used.
+/// The material's physically based parameters (see the table in the
+/// module documentation), and what of it is not used.
 fn map_material(m: &::gltf::Material) -> (Material, Vec<String>) {
+    let notes = std::cell::RefCell::new(Vec::new());
+    // A factor that is not a number, or out of its range, is named and
+    // replaced (by its default, or clamped into the range).
+    let factor = |name: &str, v: f32, default: f32, range: std::ops::RangeInclusive<f32>| {
+        if !v.is_finite() {
+            notes.borrow_mut().push(format!("{name} {v} (not a number: {default} instead)"));
+            default
+        } else if !range.contains(&v) {
+            let c = v.clamp(*range.start(), *range.end());
+            notes.borrow_mut().push(format!("{name} {v} (out of range: {c} instead)"));
+            c
+        } else {
+            v
+        }
+    };
     let pbr = m.pbr_metallic_roughness();
-    let clamp01 = |v: f32| if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 };
-    let [r, g, b, _] = pbr.base_color_factor().map(clamp01);
-    let metallic = clamp01(pbr.metallic_factor());
-    let roughness = clamp01(pbr.roughness_factor());
-    let alpha = roughness * roughness;
-    let base = Color::new(r, g, b);
-    let mut material = Material::flat(base);
-    if alpha < 0.01 {
-        material.reflectivity = metallic;
-        material.specular_color = base;
-        material.specular = 0.04;
-        material.shininess = 1e4;
-    } else {
-        let k = metallic + 0.04 * (1.0 - metallic);
-        material.specular = k;
-        material.specular_color =
-            ((metallic * base + Color::splat(0.04 * (1.0 - metallic))) / k).min(Color::ONE);
-        material.shininess = (2.0 / (alpha * alpha) - 2.0).clamp(0.0, 1e4);
-    }
-    let emission =
-        Color::from_array(m.emissive_factor().map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 }));
-    let strength = m.emissive_strength().filter(|s| s.is_finite() && *s >= 0.0).unwrap_or(1.0);
-    material.emission = emission * strength;
+    let [r, g, b, _] = pbr.base_color_factor();
+    let base = Color::new(
+        factor("baseColorFactor", r, 1.0, 0.0..=1.0),
+        factor("baseColorFactor", g, 1.0, 0.0..=1.0),
+        factor("baseColorFactor", b, 1.0, 0.0..=1.0),
+    );
+    let mut p = Principled {
+        metallic: factor("metallicFactor", pbr.metallic_factor(), 1.0, 0.0..=1.0),
+        roughness: factor("roughnessFactor", pbr.roughness_factor(), 1.0, 0.0..=1.0),
+        ..Principled::DIELECTRIC
+    };
     if let Some(t) = m.transmission() {
-        material.transparency =
-            (clamp01(t.transmission_factor()) * (1.0 - metallic)).min(1.0 - material.reflectivity);
+        p.transmission = factor("transmissionFactor", t.transmission_factor(), 0.0, 0.0..=1.0);
     }
-    if let Some(ior) = m.ior().filter(|i| i.is_finite() && *i > 0.0 && *i <= 100.0) {
-        material.ior = ior;
+    if let Some(v) = m.volume() {
+        let [r, g, b] = v.attenuation_color();
+        let c = |v: f32| factor("attenuationColor", v, 1.0, f32::MIN_POSITIVE..=1.0);
+        p.attenuation_color = Color::new(c(r), c(g), c(b));
+        let d = v.attenuation_distance();
+        p.attenuation_distance = if d > 0.0 { d } else { f32::INFINITY };
     }
-    let mut notes = Vec::new();
+    if let Some(s) = m.specular() {
+        p.specular = factor("specularFactor", s.specular_factor(), 1.0, 0.0..=1.0);
+        let [r, g, b] = s.specular_color_factor();
+        let c = |v: f32| factor("specularColorFactor", v, 1.0, 0.0..=100.0);
+        p.specular_color = Color::new(c(r), c(g), c(b));
+    }
+    if let Some(coat) = m.extension_value("KHR_materials_clearcoat") {
+        let number = |key: &str| coat.get(key).and_then(|v| v.as_f64()).map(|v| v as f32);
+        p.clearcoat = factor("clearcoatFactor", number("clearcoatFactor").unwrap_or(0.0), 0.0, 0.0..=1.0);
+        p.clearcoat_roughness = factor(
+            "clearcoatRoughnessFactor",
+            number("clearcoatRoughnessFactor").unwrap_or(0.0),
+            0.0,
+            0.0..=1.0,
+        );
+        for texture in ["clearcoatTexture", "clearcoatRoughnessTexture", "clearcoatNormalTexture"] {
+            if coat.get(texture).is_some() {
+                notes.borrow_mut().push(texture.to_owned());
+            }
+        }
+    }
+    let [r, g, b] = m.emissive_factor();
+    let e = |v: f32| factor("emissiveFactor", v, 0.0, 0.0..=1.0);
+    let strength = factor("emissiveStrength", m.emissive_strength().unwrap_or(1.0), 1.0, 0.0..=f32::MAX);
+    let ior = factor("ior", m.ior().unwrap_or(1.5), 1.5, 1.0..=100.0);
+    let material =
+        Material { ior, emission: Color::new(e(r), e(g), e(b)) * strength, ..Material::principled(base, p) };
+    let mut notes = notes.into_inner();
     if pbr.metallic_roughness_texture().is_some() {
         notes.push("metallicRoughnessTexture".to_owned());
     }
@@ -913,6 +956,17 @@ fn map_material(m: &::gltf::Material) -> (Material, Vec<String>) {
     }
     if m.transmission().is_some_and(|t| t.transmission_texture().is_some()) {
         notes.push("transmissionTexture".to_owned());
+    }
+    if m.volume().is_some_and(|v| v.thickness_texture().is_some()) {
+        notes.push("thicknessTexture".to_owned());
+    }
+    if let Some(s) = m.specular() {
+        if s.specular_texture().is_some() {
+            notes.push("specularTexture".to_owned());
+        }
+        if s.specular_color_texture().is_some() {
+            notes.push("specularColorTexture".to_owned());
+        }
     }
     if m.alpha_mode() != ::gltf::material::AlphaMode::Opaque {
         notes.push(format!("alphaMode {:?} (the surface is opaque)", m.alpha_mode()));
@@ -1106,45 +1160,75 @@ mod tests {
     }
 
     #[test]
-    fn metallic_roughness_transmission_ior_and_emission_map_onto_the_lobes() {
+    fn every_factor_of_the_material_and_its_extensions_maps_exactly() {
         let bytes = triangle_glb(|doc, _| {
             doc["extensionsUsed"] = json!([
                 "KHR_materials_transmission",
                 "KHR_materials_ior",
                 "KHR_materials_emissive_strength",
+                "KHR_materials_specular",
+                "KHR_materials_volume",
+                "KHR_materials_clearcoat",
                 "KHR_texture_transform"
             ]);
             doc["materials"] = json!([{
-                "pbrMetallicRoughness": { "baseColorFactor": [1.0, 0.5, 0.25, 1.0], "metallicFactor": 0.5, "roughnessFactor": 0.5 },
+                "pbrMetallicRoughness": { "baseColorFactor": [1.0, 0.5, 0.25, 1.0], "metallicFactor": 0.5, "roughnessFactor": 0.3 },
                 "emissiveFactor": [1.0, 0.5, 0.0],
                 "alphaMode": "BLEND",
                 "extensions": {
                     "KHR_materials_transmission": { "transmissionFactor": 0.8 },
                     "KHR_materials_ior": { "ior": 1.33 },
-                    "KHR_materials_emissive_strength": { "emissiveStrength": 4.0 }
+                    "KHR_materials_emissive_strength": { "emissiveStrength": 4.0 },
+                    "KHR_materials_specular": { "specularFactor": 0.7, "specularColorFactor": [1.0, 0.9, 0.8] },
+                    "KHR_materials_volume": { "attenuationColor": [0.5, 0.6, 0.7], "attenuationDistance": 2.5 },
+                    "KHR_materials_clearcoat": { "clearcoatFactor": 0.6, "clearcoatRoughnessFactor": 0.2 }
                 }
             }]);
         });
         let model = load_bytes(&bytes).unwrap();
         let m = model.materials[0].1;
-        let k = 0.5 + 0.04 * 0.5;
-        assert!((m.specular - k).abs() < 1e-6);
-        assert!(
-            (m.specular_color - (0.5 * Color::new(1.0, 0.5, 0.25) + Color::splat(0.02)) / k).length() < 1e-6
+        assert_eq!(
+            (m.color, m.ior, m.emission),
+            (Color::new(1.0, 0.5, 0.25), 1.33, Color::new(4.0, 2.0, 0.0))
         );
-        // α = r² = 0.25: shininess 2/α² − 2 = 30, whose roughness is α again.
-        assert!((m.shininess - 30.0).abs() < 1e-3 && (m.roughness() - 0.25).abs() < 1e-6);
-        assert!((m.transparency - 0.4).abs() < 1e-6 && m.reflectivity == 0.0);
-        assert_eq!((m.ior, m.emission), (1.33, Color::new(4.0, 2.0, 0.0)));
+        let expected = Principled {
+            metallic: 0.5,
+            roughness: 0.3,
+            transmission: 0.8,
+            attenuation_color: Color::new(0.5, 0.6, 0.7),
+            attenuation_distance: 2.5,
+            clearcoat: 0.6,
+            clearcoat_roughness: 0.2,
+            specular: 0.7,
+            specular_color: Color::new(1.0, 0.9, 0.8),
+        };
+        assert_eq!(m.physical, Some(expected));
         assert_eq!(model.warnings.len(), 2, "{:?}", model.warnings);
         assert!(model.warnings[0].contains("KHR_texture_transform"));
         assert!(model.warnings[1].contains("alphaMode Blend"));
-        // A smooth metal is a mirror of its colour.
-        let bytes = triangle_glb(|doc, _| {
-            doc["materials"] = json!([{ "pbrMetallicRoughness": { "baseColorFactor": [0.9, 0.6, 0.2, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.05 } }]);
-        });
+        // Without extensions: glTF's defaults (metallic and roughness 1).
+        let bytes = triangle_glb(|doc, _| doc["materials"] = json!([{}]));
         let m = load_bytes(&bytes).unwrap().materials[0].1;
-        assert_eq!((m.reflectivity, m.specular_color), (1.0, Color::new(0.9, 0.6, 0.2)));
+        let p = m.physical.unwrap();
+        assert_eq!((m.color, p.metallic, p.roughness, p.transmission), (Color::ONE, 1.0, 1.0, 0.0));
+    }
+
+    #[test]
+    fn a_factor_out_of_range_is_clamped_and_named() {
+        let bytes = triangle_glb(|doc, _| {
+            doc["materials"] = json!([{
+                "pbrMetallicRoughness": { "baseColorFactor": [1.5, 0.5, -0.25, 1.0], "metallicFactor": -1.0, "roughnessFactor": 7.0 },
+            }]);
+        });
+        let model = load_bytes(&bytes).unwrap();
+        let m = model.materials[0].1;
+        let p = m.physical.unwrap();
+        assert_eq!((m.color, p.metallic, p.roughness), (Color::new(1.0, 0.5, 0.0), 0.0, 1.0));
+        let all = model.warnings.join("\n");
+        for name in ["baseColorFactor 1.5", "baseColorFactor -0.25", "metallicFactor -1", "roughnessFactor 7"]
+        {
+            assert!(all.contains(name), "{name}: {all}");
+        }
     }
 
     #[test]

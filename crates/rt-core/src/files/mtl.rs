@@ -18,13 +18,22 @@
 //! | `illum` 3, 5, 7 | mirror | `Ks` becomes the mirror weight instead of the glossy one |
 //!
 //! Weights are then scaled so that `reflectivity + transparency ≤ 1`, which
-//! keeps every material energy conserving. Everything else (`Ka`, `map_Ks`,
+//! keeps every material energy conserving.
+//!
+//! With the PBR extension of MTL (`Pr` roughness or `Pm` metallic present,
+//! as Blender writes them) the material is physically based instead
+//! ([`crate::materials::principled`]): base colour `Kd`, `metallic` `Pm`,
+//! `roughness` `Pr`, `clearcoat` `Pc`, `clearcoat_roughness` `Pcr`, `ior`
+//! `Ni`, `transmission` `1 − d` (or `Tr`), `emission` `Ke` (each of
+//! `Pr`, `Pm`, `Pc`, `Pcr` from 0 to 1); `Ks`, `Ns` and `illum` are then
+//! not used (and named). Everything else (`Ka`, `map_Ks`,
 //! `map_Bump`, `map_d`, `norm`, …) is not used and named in the part's
 //! warnings, never dropped silently.
 
 use std::path::{Path, PathBuf};
 
 use crate::materials::material::Material;
+use crate::materials::principled::Principled;
 use crate::math::color::Color;
 
 /// An MTL material mapped onto a [`Material`].
@@ -102,6 +111,42 @@ pub fn from_mtl(m: &tobj::Material, dir: &Path) -> Result<MtlMaterial, String> {
     }
     let texture = m.diffuse_texture.as_ref().map(|t| dir.join(texture_file(t)));
     let mut ignored = Vec::new();
+    // The PBR extension: a physically based material instead of the weights.
+    let pbr_value = |key: &str| -> Result<Option<f32>, String> {
+        match m.unknown_param.get(key) {
+            None => Ok(None),
+            Some(v) => match v.trim().parse::<f32>() {
+                Ok(x) if (0.0..=1.0).contains(&x) => Ok(Some(x)),
+                _ => Err(format!("{key} must be a number from 0 to 1, got {v}")),
+            },
+        }
+    };
+    let (pr, pm, pc, pcr) = (pbr_value("Pr")?, pbr_value("Pm")?, pbr_value("Pc")?, pbr_value("Pcr")?);
+    if pr.is_some() || pm.is_some() {
+        let d = Principled::DIELECTRIC;
+        let p = Principled {
+            metallic: pm.unwrap_or(d.metallic),
+            roughness: pr.unwrap_or(d.roughness),
+            transmission: tr.unwrap_or(0.0).clamp(0.0, 1.0),
+            clearcoat: pc.unwrap_or(0.0),
+            clearcoat_roughness: pcr.unwrap_or(0.0),
+            ..d
+        };
+        material = Material {
+            ior: material.ior,
+            emission: material.emission,
+            ..Material::principled(material.color, p)
+        };
+        for (name, present) in [
+            ("Ks", m.specular.is_some()),
+            ("Ns", m.shininess.is_some()),
+            ("illum", m.illumination_model.is_some()),
+        ] {
+            if present {
+                ignored.push(format!("{name} (the PBR fields Pr/Pm define the material)"));
+            }
+        }
+    }
     for (name, value) in [
         ("Ka", m.ambient.is_some()),
         ("map_Ka", m.ambient_texture.is_some()),
@@ -114,7 +159,8 @@ pub fn from_mtl(m: &tobj::Material, dir: &Path) -> Result<MtlMaterial, String> {
             ignored.push(name.to_owned());
         }
     }
-    let mut unknown: Vec<&String> = m.unknown_param.keys().filter(|k| k.as_str() != "Tr").collect();
+    let read = ["Tr", "Pr", "Pm", "Pc", "Pcr"];
+    let mut unknown: Vec<&String> = m.unknown_param.keys().filter(|k| !read.contains(&k.as_str())).collect();
     unknown.sort();
     ignored.extend(unknown.into_iter().cloned());
     Ok(MtlMaterial { material, texture, ignored })
@@ -152,6 +198,24 @@ mod tests {
     }
 
     #[test]
+    fn the_pbr_extension_makes_a_physically_based_material_from_its_fields() {
+        let text = "newmtl a\nKd 0.9 0.5 0.1\nKs 0.5 0.5 0.5\nNs 250\nPr 0.3\nPm 1\nPc 0.5\nPcr 0.1\nNi 1.6\nd 0.75\nKe 1 0 0\n";
+        let mapped = from_mtl(&parse(text), Path::new(".")).unwrap();
+        let m = mapped.material;
+        let p = m.physical.unwrap();
+        assert_eq!((m.color, m.ior, m.emission), (Color::new(0.9, 0.5, 0.1), 1.6, Color::new(1.0, 0.0, 0.0)));
+        assert_eq!((p.metallic, p.roughness, p.clearcoat, p.clearcoat_roughness), (1.0, 0.3, 0.5, 0.1));
+        assert!((p.transmission - 0.25).abs() < 1e-6);
+        assert!(
+            mapped.ignored.iter().any(|i| i.starts_with("Ks"))
+                && mapped.ignored.iter().any(|i| i.starts_with("Ns"))
+        );
+        assert!(!mapped.ignored.iter().any(|i| i == "Pr" || i == "Pm"), "{:?}", mapped.ignored);
+        let e = from_mtl(&parse("newmtl a\nPr 2\n"), Path::new(".")).unwrap_err();
+        assert_eq!(e, "Pr must be a number from 0 to 1, got 2");
+    }
+
+    #[test]
     fn mirror_illumination_models_turn_ks_into_a_mirror_and_weights_stay_energy_conserving() {
         let m = parse("newmtl a\nKs 1 0.8 0.4\nillum 3\nTr 0.5\n");
         let mat = from_mtl(&m, Path::new(".")).unwrap().material;
@@ -169,9 +233,9 @@ mod tests {
 
     #[test]
     fn unused_statements_are_named_and_bad_values_are_errors_naming_the_field() {
-        let m = parse("newmtl a\nKa 1 1 1\nmap_Bump n.png\nPr 0.5\n");
+        let m = parse("newmtl a\nKa 1 1 1\nmap_Bump n.png\naniso 0.5\n");
         let got = from_mtl(&m, Path::new(".")).unwrap();
-        assert_eq!(got.ignored, ["Ka", "map_Bump/norm", "Pr"]);
+        assert_eq!(got.ignored, ["Ka", "map_Bump/norm", "aniso"]);
         for (text, field) in
             [("Kd -1 0 0", "Kd"), ("Ke 0 -2 0", "Ke"), ("Ni 0", "Ni"), ("Ni 500", "Ni"), ("Tr x", "Tr")]
         {

@@ -126,6 +126,14 @@ impl<'s> PathTracer<'s> {
                 &*si.material
             };
 
+            // A path inside a physically based object with an absorbing
+            // volume keeps e^(−σ·distance) (Beer–Lambert).
+            if !si.front()
+                && let Some(p) = m.physical
+            {
+                beta *= p.transmittance(to_f32(h.t * ray.dir.length()));
+            }
+
             // 1. Emission found by this ray.
             if m.is_emissive() && si.front() {
                 let w = found_light_weight(previous, |p| match scene.emitter_index(h.object) {
@@ -580,6 +588,35 @@ mod tests {
         assert!(f.pixels[centre].x > 0.1, "{}", f.pixels[centre]);
     }
 
+    #[test]
+    fn light_through_a_physically_based_volume_keeps_e_to_the_minus_sigma_times_its_path_inside() {
+        // An index-matched (ior 1), smooth, fully transmissive sphere of
+        // radius 1 with attenuation colour (0.5, 0.25, 1) at distance 2, in
+        // a background of radiance 1: the ray through the centre crosses 2
+        // units inside and keeps exactly the attenuation colour
+        // (Beer–Lambert, σ = −ln(colour)/distance); nothing reflects at an
+        // index-matched boundary. Without attenuation it keeps everything.
+        let text = |volume: &str| {
+            format!(
+                r#"(
+                camera: (position: (0, 0, -4), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 10, near: 1),
+                image: (width: 3, height: 3),
+                background: (1, 1, 1),
+                materials: {{ "m": (base_color: (1, 1, 1), roughness: 0, transmission: 1, ior: 1{volume}) }},
+                objects: [ Sphere(center: (0, 0, 0), radius: 1, material: "m") ],
+                effects: (global_illumination: (max_bounces: 8)),
+            )"#
+            )
+        };
+        let centre = 4;
+        let f =
+            render(&scene(&text(", attenuation_color: (0.5, 0.25, 1), attenuation_distance: 2")), 3, 3, 1);
+        let got = f.pixels[centre];
+        assert!((got - Color::new(0.5, 0.25, 1.0)).abs().max_element() < 1e-4, "{got}");
+        let clear = render(&scene(&text("")), 3, 3, 1).pixels[centre];
+        assert!((clear - Color::ONE).abs().max_element() < 1e-5, "{clear}");
+    }
+
     /// A scene with one translucent `object` of albedo `albedo`, mean free
     /// paths `mfp` and index `ior`, in a background of radiance 1 and
     /// nothing else, seen from −z.
@@ -828,6 +865,18 @@ mod tests {
                     emission: if e > 0.7 { Color::splat(e * 5.0) } else { Color::ZERO },
                     subsurface: None,
                     texture: textured[i].then_some(0),
+                    // Half the materials physically based, from the same numbers.
+                    physical: (ks > 0.5).then_some(crate::materials::principled::Principled {
+                        metallic: kd,
+                        roughness: s,
+                        transmission: kt,
+                        attenuation_color: Color::new(c, 0.5, 1.0).max(Color::splat(0.01)),
+                        attenuation_distance: 0.1 + e,
+                        clearcoat: kr,
+                        clearcoat_roughness: s * 0.5,
+                        specular: ior,
+                        specular_color: Color::new(1.0, c, 0.5),
+                    }),
                 };
                 let (_, albedo, mfp, g) = media[i];
                 let medium = Subsurface { albedo: Color::from_array(albedo), mean_free_path: Color::from_array(mfp), anisotropy: g };

@@ -147,9 +147,17 @@ impl<'s> Tracer<'s> {
             // the facet's own normal): see `bsdf`'s "Shading normals".
             let ns = if shading.is_some() { bsdf.normal() } else { n };
             let (eta_i, eta_t) = if front { (1.0, m.ior as Real) } else { (m.ior as Real, 1.0) };
-            let fresnel =
-                if m.transparency > 0.0 { to_f32(fresnel_dielectric(-d.dot(ns), eta_i, eta_t)) } else { 0.0 };
-            let reflected = m.reflectivity * m.specular_color + Color::splat(m.transparency * fresnel);
+            let (reflected, transmitted) = bsdf.delta_weights(wo).unwrap_or_else(|| {
+                let fresnel = if m.transparency > 0.0 {
+                    to_f32(fresnel_dielectric(-d.dot(ns), eta_i, eta_t))
+                } else {
+                    0.0
+                };
+                (
+                    m.reflectivity * m.specular_color + Color::splat(m.transparency * fresnel),
+                    m.color * (m.transparency * (1.0 - fresnel)),
+                )
+            });
             let next = path.then(reflected.max_element());
             if self.plan.reflection && next.weight >= MIN_WEIGHT {
                 counts.reflection += 1;
@@ -157,7 +165,6 @@ impl<'s> Tracer<'s> {
                 let ray = si.spawn_ray(r);
                 color += reflected * self.trace_secondary(&ray, next, sampler, counts);
             }
-            let transmitted = m.color * (m.transparency * (1.0 - fresnel));
             // The η² factors of entering and leaving cancel along a path, so
             // they do not count towards a ray's weight in the pixel.
             let next = path.then(transmitted.max_element());

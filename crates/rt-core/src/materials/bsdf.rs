@@ -78,6 +78,7 @@
 //! three are the plain rules above, and nothing changes.
 
 use crate::materials::material::Material;
+use crate::materials::principled::{Chosen, Lobes};
 use crate::materials::shading::{fresnel_dielectric, reflect, refract};
 use crate::math::color::Color;
 use crate::math::real::{Real, Vec3, to_f32};
@@ -96,12 +97,19 @@ pub enum Lobe {
     Reflection,
     /// The dielectric's refraction (δ).
     Transmission,
+    /// A rough dielectric's refraction (the physically based model's transmission).
+    RoughTransmission,
 }
 
 impl Lobe {
     /// Whether the lobe is a δ distribution: one direction, no density.
     pub fn is_delta(self) -> bool {
-        !matches!(self, Self::Diffuse | Self::Glossy)
+        !matches!(self, Self::Diffuse | Self::Glossy | Self::RoughTransmission)
+    }
+
+    /// Whether the sampled direction goes through the surface.
+    pub fn is_transmission(self) -> bool {
+        matches!(self, Self::Transmission | Self::RoughTransmission)
     }
 }
 
@@ -152,6 +160,9 @@ pub struct Bsdf {
     /// diffuse, glossy, mirror, dielectric; they sum to 1 (or all are 0 for a
     /// black material).
     choose: [f32; 4],
+    /// The physically based model's lobes, for a material that has one
+    /// (then the fields of the weights above are unused).
+    principled: Option<Lobes>,
 }
 
 impl Bsdf {
@@ -161,7 +172,7 @@ impl Bsdf {
     pub fn new(m: &Material, normal: Vec3, wo: Vec3) -> Self {
         let outside = wo.dot(normal) >= 0.0;
         let n = if outside { normal } else { -normal };
-        Self::with_normals(m, n, n, outside)
+        Self::with_normals(m, n, n, outside, wo)
     }
 
     /// The BSDF of `m` at a hit with unit geometric normal `geometric` and
@@ -178,12 +189,12 @@ impl Bsdf {
         let ns = if shading.dot(ng) < 0.0 { -shading } else { shading };
         // ω_o below the shading hemisphere: fall back to the facet.
         let n = if ns.dot(wo) > 0.0 { ns } else { ng };
-        Self::with_normals(m, n, ng, outside)
+        Self::with_normals(m, n, ng, outside, wo)
     }
 
     #[allow(clippy::unnecessary_cast)] // `Real` is f64 with the `f64` feature.
     #[inline]
-    fn with_normals(m: &Material, n: Vec3, ng: Vec3, outside: bool) -> Self {
+    fn with_normals(m: &Material, n: Vec3, ng: Vec3, outside: bool, wo: Vec3) -> Self {
         let rest = (1.0 - m.reflectivity - m.transparency).max(0.0);
         let diffuse = m.color * (rest * (1.0 - m.specular) * m.diffuse);
         let glossy = rest * m.specular;
@@ -207,6 +218,9 @@ impl Bsdf {
             tint: m.color,
             ior: m.ior as Real,
             choose,
+            principled: m
+                .physical
+                .map(|p| Lobes::new(&p, m.color, m.ior as Real, outside, n.dot(wo).max(0.0))),
         }
     }
 
@@ -221,16 +235,37 @@ impl Bsdf {
     /// tracer's ambient term).
     #[inline]
     pub fn diffuse_albedo(&self) -> Color {
+        if let Some(p) = &self.principled {
+            return p.diffuse_albedo();
+        }
         self.diffuse
+    }
+
+    /// For the physically based model, the weights of its δ lobes
+    /// `(reflection, transmission)` as seen from `wo` (the transmission
+    /// without its 1/η²); `None` for the weights model, whose δ lobes are
+    /// its `reflectivity` and `transparency`.
+    pub fn delta_weights(&self, wo: Vec3) -> Option<(Color, Color)> {
+        self.principled.map(|p| p.delta_weights(self.n.dot(wo).max(0.0)))
     }
 
     /// Whether the BSDF has a smooth (non-δ) part, which light sampling can reach.
     pub fn has_smooth_lobes(&self) -> bool {
+        if let Some(p) = &self.principled {
+            return p.has_smooth_lobes();
+        }
         self.choose[0] > 0.0 || self.choose[1] > 0.0
     }
 
     /// The smooth lobes' `f(ω_o, ω_i)` (δ lobes have no value to evaluate).
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Color {
+        if let Some(p) = &self.principled {
+            if !self.on_the_right_side(wo, wi) {
+                return Color::ZERO;
+            }
+            let f = p.eval(self.local(wo), self.local(wi));
+            return if self.shaded && self.n.dot(wi) > 0.0 { f * self.terminator(wi) } else { f };
+        }
         let (cos_o, cos_i) = (self.n.dot(wo), self.n.dot(wi));
         if cos_i <= 0.0 || cos_o <= 0.0 || (self.shaded && self.ng.dot(wi) <= 0.0) {
             return Color::ZERO;
@@ -259,6 +294,12 @@ impl Bsdf {
     /// The density over solid angle with which [`Bsdf::sample`] draws `ω_i`
     /// from the smooth lobes (their selection probabilities included).
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> Real {
+        if let Some(p) = &self.principled {
+            if !self.on_the_right_side(wo, wi) {
+                return 0.0;
+            }
+            return p.pdf(self.local(wo), self.local(wi));
+        }
         let (cos_o, cos_i) = (self.n.dot(wo), self.n.dot(wi));
         if cos_i <= 0.0 || cos_o <= 0.0 || (self.shaded && self.ng.dot(wi) <= 0.0) {
             return 0.0;
@@ -277,7 +318,7 @@ impl Bsdf {
         let s = self.sample_lobes(wo, u, u2)?;
         if self.shaded {
             // Reflections stay on ω_o's side of the facet, refractions cross it.
-            let through = s.lobe == Lobe::Transmission;
+            let through = s.lobe.is_transmission();
             if (self.ng.dot(s.wi) < 0.0) != through || self.ng.dot(s.wi) == 0.0 {
                 return None;
             }
@@ -285,7 +326,45 @@ impl Bsdf {
         Some(s)
     }
 
+    /// For the physically based model: `ω_o` above the lobes' normal, and
+    /// `ω_i` on the same side of both normals (reflection) or on the other
+    /// side of both (transmission): see "Shading normals".
+    fn on_the_right_side(&self, wo: Vec3, wi: Vec3) -> bool {
+        let (cos_o, cos_i, cos_g) = (self.n.dot(wo), self.n.dot(wi), self.ng.dot(wi));
+        cos_o > 0.0 && cos_i != 0.0 && (!self.shaded || (cos_g != 0.0 && (cos_g > 0.0) == (cos_i > 0.0)))
+    }
+
+    /// [`Bsdf::sample_lobes`] for the physically based model.
+    fn sample_principled(&self, p: &Lobes, wo: Vec3, u: Real, u2: (Real, Real)) -> Option<BsdfSample> {
+        if self.n.dot(wo) <= 0.0 {
+            return None;
+        }
+        let s = p.sample(self.local(wo), u, u2)?;
+        let lobe = match s.chosen {
+            Chosen::Diffuse => Lobe::Diffuse,
+            Chosen::Reflection | Chosen::Coat => Lobe::Glossy,
+            Chosen::Mirror => Lobe::Mirror,
+            Chosen::CoatMirror => Lobe::Reflection,
+            Chosen::RoughTransmission => Lobe::RoughTransmission,
+            Chosen::Transmission => Lobe::Transmission,
+        };
+        let wi = self.world(s.wi);
+        if self.shaded && !lobe.is_delta() {
+            // The terminator term and the facet's sides: as `eval` and `pdf` say.
+            let pdf = self.pdf(wo, wi);
+            if pdf.is_nan() || pdf <= 0.0 {
+                return None;
+            }
+            let weight = self.eval(wo, wi) * to_f32(self.cosine(wi) / pdf);
+            return Some(BsdfSample { wi, weight, pdf, lobe });
+        }
+        Some(BsdfSample { wi, weight: s.weight, pdf: s.pdf, lobe })
+    }
+
     fn sample_lobes(&self, wo: Vec3, u: Real, u2: (Real, Real)) -> Option<BsdfSample> {
+        if let Some(p) = &self.principled {
+            return self.sample_principled(p, wo, u, u2);
+        }
         let [p_diffuse, p_glossy, p_mirror, p_dielectric] = self.choose.map(|p| p as Real);
         if self.n.dot(wo) <= 0.0 && p_dielectric == 0.0 {
             return None;

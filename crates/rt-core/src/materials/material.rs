@@ -2,9 +2,18 @@
 //! ([`crate::math::color`]).
 
 use crate::materials::medium::Subsurface;
+use crate::materials::principled::Principled;
 use crate::math::color::Color;
+use crate::math::real::{Real, SMOOTH_ALPHA};
 
 /// A surface's appearance.
+///
+/// Two models: the physically based one (glTF 2.0's metallic-roughness
+/// BSDF, [`crate::materials::principled`]) when `physical` is set — then
+/// `color` is its base colour, `ior` its index of refraction, `emission`
+/// its emission, and the weights `diffuse` … `transparency` and
+/// `specular_color` are unused — or else the weights of the older model
+/// below.
 ///
 /// Without lights (pure ray casting) a hit shows `color` flat and every other
 /// field is unused. With lights it is shaded by its BSDF ([`crate::materials::bsdf`]),
@@ -52,6 +61,9 @@ pub struct Material {
     /// coordinates, the texture's colour multiplies `color` (as `map_Kd`
     /// multiplies `Kd`, and glTF's `baseColorTexture` its factor).
     pub texture: Option<u32>,
+    /// The physically based parameters ([`Principled`]): when set, the
+    /// surface is shaded by the glTF 2.0 BSDF instead of the weights.
+    pub physical: Option<Principled>,
 }
 
 impl Material {
@@ -69,7 +81,13 @@ impl Material {
             emission: Color::ZERO,
             subsurface: None,
             texture: None,
+            physical: None,
         }
+    }
+
+    /// A physically based material of base colour `color` and parameters `p`.
+    pub const fn principled(color: Color, p: Principled) -> Self {
+        Self { physical: Some(p), ..Self::flat(color) }
     }
 
     /// The GGX roughness α of the glossy lobe, from the Blinn–Phong exponent
@@ -83,11 +101,73 @@ impl Material {
     /// The surface of a subsurface material: a clear, smooth dielectric of
     /// its `ior` (the medium inside does the colouring), with its emission.
     pub fn boundary(&self) -> Material {
-        Material { color: Color::ONE, transparency: 1.0, reflectivity: 0.0, subsurface: None, ..*self }
+        Material {
+            color: Color::ONE,
+            transparency: 1.0,
+            reflectivity: 0.0,
+            subsurface: None,
+            physical: None,
+            ..*self
+        }
+    }
+
+    /// Whether the surface has a δ (mirror) reflection, which the
+    /// direct-lighting tracer follows with a ray: `reflectivity` or
+    /// `transparency` of the weights model; a smooth specular layer or
+    /// clearcoat (α below [`SMOOTH_ALPHA`]), or a δ refraction, of the
+    /// physically based one.
+    pub fn reflects_sharply(&self) -> bool {
+        match &self.physical {
+            None => self.reflectivity > 0.0 || self.transparency > 0.0,
+            Some(p) => {
+                let smooth = |roughness: f32| Real::from(roughness * roughness) < SMOOTH_ALPHA;
+                smooth(p.roughness)
+                    || (p.clearcoat > 0.0 && smooth(p.clearcoat_roughness))
+                    || self.refracts_sharply()
+            }
+        }
+    }
+
+    /// Whether the surface has a δ refraction, which the direct-lighting
+    /// tracer follows with a ray: `transparency` of the weights model; a
+    /// smooth (or index-matched) transmission of the physically based one.
+    pub fn refracts_sharply(&self) -> bool {
+        match &self.physical {
+            None => self.transparency > 0.0,
+            Some(p) => {
+                p.transmission > 0.0
+                    && p.metallic < 1.0
+                    && (Real::from(p.roughness * p.roughness) < SMOOTH_ALPHA || self.ior == 1.0)
+            }
+        }
     }
 
     /// Whether the surface gives off light.
     pub fn is_emissive(&self) -> bool {
         self.emission != Color::ZERO
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn smooth_physically_based_surfaces_ask_for_reflection_and_refraction_rays() {
+        let p = |f: fn(&mut Principled)| {
+            let mut p = Principled::DIELECTRIC;
+            f(&mut p);
+            Material::principled(Color::ONE, p)
+        };
+        let rough = p(|p| p.roughness = 0.5);
+        assert!(!rough.reflects_sharply() && !rough.refracts_sharply());
+        let mirror = p(|p| (p.roughness, p.metallic) = (0.0, 1.0));
+        assert!(mirror.reflects_sharply() && !mirror.refracts_sharply());
+        let glass = p(|p| (p.roughness, p.transmission) = (0.0, 1.0));
+        assert!(glass.reflects_sharply() && glass.refracts_sharply());
+        let coated = p(|p| (p.roughness, p.clearcoat) = (0.5, 1.0));
+        assert!(coated.reflects_sharply() && !coated.refracts_sharply());
+        let weights = Material { reflectivity: 0.5, ..Material::flat(Color::ONE) };
+        assert!(weights.reflects_sharply() && !weights.refracts_sharply());
     }
 }

@@ -1,9 +1,11 @@
 //! How surfaces and insides scatter light: a scene file's [`material`],
-//! the BSDF it makes ([`bsdf`], with the optics of [`shading`]), the
+//! the BSDF it makes ([`bsdf`], with the optics of [`shading`] and the
+//! physically based model of [`principled`]), the
 //! medium of a translucent inside ([`medium`]) and image [`texture`]s.
 
 pub mod bsdf;
 pub mod material;
 pub mod medium;
+pub mod principled;
 pub mod shading;
 pub mod texture;

@@ -106,6 +106,18 @@ pub const SUN_RIM_SLACK: Real = 1e-3;
 /// there (e^(−0.11/10⁻³) ≈ 10⁻⁴⁹ at the mildest B, nothing next to 1).
 pub const PEREZ_MIN_COS: f64 = 1e-3;
 
+/// The GGX roughness α below which a microfacet lobe is a perfectly smooth
+/// surface: δ reflection and refraction instead of a distribution of normals
+/// (pbrt-v4's `TrowbridgeReitzDistribution::EffectivelySmooth`, §9.6.1).
+///
+/// At α = 10⁻³ the lobe is under 0.1° wide, far below a pixel's footprint
+/// at any reasonable field of view, so treating it as δ changes no image;
+/// below it, `D(h)` peaks above 3·10⁵ and its density is concentrated in a
+/// cone narrower than f32 directions resolve near the normal (a unit
+/// vector's z differs from 1 by α²/2 = 5·10⁻⁷ there, ~8 ulps), so a
+/// sampled GGX would be numerically degenerate.
+pub const SMOOTH_ALPHA: Real = 1e-3;
+
 /// `v / |v|`, or `None` for a zero or non-finite `v`, for any finite `v`:
 /// `v` is first divided by its largest absolute component, so `|v|²` can
 /// neither overflow (components near 10³⁸ in f32) nor underflow (near 10⁻²⁰).

@@ -143,8 +143,8 @@ impl EffectPlan {
         let shading = !lights.is_empty() || global_illumination.is_some();
         let (mut reflects, mut refracts, mut translucent) = (false, false, false);
         for m in used_materials {
-            reflects |= m.reflectivity > 0.0 || m.transparency > 0.0;
-            refracts |= m.transparency > 0.0;
+            reflects |= m.reflects_sharply();
+            refracts |= m.refracts_sharply();
             translucent |= m.subsurface.is_some();
         }
         let recursion = shading && effects.max_depth > 0;

@@ -129,6 +129,24 @@ struct MaterialJson {
     /// The medium inside, if translucent.
     #[serde(skip_serializing_if = "Option::is_none")]
     subsurface: Option<SubsurfaceJson>,
+    /// The physically based parameters, for such a material (then `color`
+    /// is its base colour and the weights above are unused).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    physical: Option<PhysicalJson>,
+}
+
+#[derive(Serialize)]
+struct PhysicalJson {
+    metallic: f32,
+    roughness: f32,
+    transmission: f32,
+    attenuation_color: [f32; 3],
+    /// `None` (null) for a clear inside.
+    attenuation_distance: Option<f32>,
+    clearcoat: f32,
+    clearcoat_roughness: f32,
+    specular: f32,
+    specular_color: [f32; 3],
 }
 
 #[derive(Serialize)]
@@ -239,6 +257,17 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
                 albedo: c3(s.albedo),
                 mean_free_path: c3(s.mean_free_path),
                 anisotropy: s.anisotropy,
+            }),
+            physical: m.physical.map(|p| PhysicalJson {
+                metallic: p.metallic,
+                roughness: p.roughness,
+                transmission: p.transmission,
+                attenuation_color: c3(p.attenuation_color),
+                attenuation_distance: p.attenuation_distance.is_finite().then_some(p.attenuation_distance),
+                clearcoat: p.clearcoat,
+                clearcoat_roughness: p.clearcoat_roughness,
+                specular: p.specular,
+                specular_color: c3(p.specular_color),
             }),
         })
         .collect();

@@ -2,33 +2,65 @@
 
 use serde::Deserialize;
 
-use super::values::{ColorDesc, Finite, unit_scale};
+use super::values::{ColorDesc, Finite};
 use crate::materials::material::Material;
 use crate::materials::medium::Subsurface;
+use crate::materials::principled::Principled;
 use crate::math::color::Color;
 use crate::math::real::{Real, to_f32};
 
-/// A material as written: only `color` is required; the defaults make a
-/// plain diffuse surface ([`Material::flat`]). Every weight is checked to
-/// keep the material energy conserving ([`crate::materials::bsdf`]).
+/// A material as written, in one of two models. With `base_color` it is
+/// physically based (glTF 2.0's metallic-roughness BSDF,
+/// [`crate::materials::principled`]): `metallic`, `roughness`,
+/// `transmission`, `attenuation_color`, `attenuation_distance`,
+/// `clearcoat`, `clearcoat_roughness`, `specular_factor`,
+/// `specular_color_factor` and `emission_strength` apply. With `color` it
+/// is the older mixture of weights: `diffuse`, `specular`,
+/// `specular_color`, `shininess`, `reflectivity` and `transparency` apply,
+/// and the defaults make a plain diffuse surface ([`Material::flat`]).
+/// Mixing the two models' fields is refused, naming the field. Every value
+/// is checked to keep the material energy conserving.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields, rename = "Material")]
 pub(super) struct MaterialFields {
-    color: ColorDesc,
-    #[serde(default = "unit_scale")]
-    diffuse: Finite,
-    #[serde(default)]
-    specular: Finite,
-    #[serde(default = "super::values::white")]
-    specular_color: ColorDesc,
-    #[serde(default = "default_shininess")]
-    shininess: Finite,
-    #[serde(default)]
-    reflectivity: Finite,
-    #[serde(default)]
-    transparency: Finite,
-    #[serde(default = "default_ior")]
-    ior: Finite,
+    #[serde(default, deserialize_with = "super::values::present")]
+    color: Option<ColorDesc>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    diffuse: Option<Finite>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    specular: Option<Finite>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    specular_color: Option<ColorDesc>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    shininess: Option<Finite>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    reflectivity: Option<Finite>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    transparency: Option<Finite>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    base_color: Option<ColorDesc>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    metallic: Option<Finite>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    roughness: Option<Finite>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    transmission: Option<Finite>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    attenuation_color: Option<ColorDesc>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    attenuation_distance: Option<Finite>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    clearcoat: Option<Finite>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    clearcoat_roughness: Option<Finite>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    specular_factor: Option<Finite>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    specular_color_factor: Option<ColorDesc>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    emission_strength: Option<Finite>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    ior: Option<Finite>,
     #[serde(default)]
     emission: ColorDesc,
     #[serde(default, deserialize_with = "super::values::present")]
@@ -83,48 +115,213 @@ pub(super) struct MaterialDesc(pub(super) Material);
 impl TryFrom<MaterialFields> for MaterialDesc {
     type Error = String;
     fn try_from(f: MaterialFields) -> Result<Self, String> {
-        let number = |Finite(v): Finite, name: &str, ok: fn(Real) -> bool, rule: &str| {
-            if ok(v) { Ok(to_f32(v)) } else { Err(format!("material {name} must be {rule}, got {v}")) }
+        let number = |v: Option<Finite>, default: f32, name: &str, ok: fn(Real) -> bool, rule: &str| match v {
+            None => Ok(default),
+            Some(Finite(v)) if ok(v) => Ok(to_f32(v)),
+            Some(Finite(v)) => Err(format!("material {name} must be {rule}, got {v}")),
         };
         let unit = |v: Real| (0.0..=1.0).contains(&v);
-        let m = Material {
-            color: f.color.0,
-            diffuse: number(f.diffuse, "diffuse", unit, "0 to 1")?,
-            specular: number(f.specular, "specular", unit, "0 to 1")?,
-            specular_color: f.specular_color.0,
-            shininess: number(f.shininess, "shininess", |v| (0.0..=1e4).contains(&v), "0 to 10000")?,
-            reflectivity: number(f.reflectivity, "reflectivity", unit, "0 to 1")?,
-            transparency: number(f.transparency, "transparency", unit, "0 to 1")?,
-            ior: number(f.ior, "ior", |v| v > 0.0 && v <= 100.0, "above 0 and at most 100")?,
-            emission: f.emission.0,
-            subsurface: f.subsurface.map(|s| s.0),
-            texture: None,
+        let reflectance = |c: Option<ColorDesc>, default: Color, name: &str| match c {
+            None => Ok(default),
+            Some(ColorDesc(c)) if c.max_element() <= 1.0 => Ok(c),
+            Some(ColorDesc(c)) => {
+                Err(format!("material {name} is a reflectance: each component must be 0 to 1, got {c}"))
+            }
         };
-        if m.color.max_element() > 1.0 {
-            return Err(format!(
-                "material color is a reflectance: each component must be 0 to 1, got {}",
-                m.color
-            ));
-        }
-        if m.specular_color.max_element() > 1.0 {
-            return Err(format!(
-                "material specular_color is a reflectance: each component must be 0 to 1, got {}",
-                m.specular_color
-            ));
-        }
-        if m.reflectivity + m.transparency > 1.0 {
-            return Err(format!(
-                "material reflectivity + transparency must not exceed 1, got {} + {}",
-                m.reflectivity, m.transparency
-            ));
-        }
+        let ior = number(f.ior, 1.5, "ior", |v| v > 0.0 && v <= 100.0, "above 0 and at most 100")?;
+        let emission = f.emission.0;
+        let subsurface = f.subsurface.map(|s| s.0);
+        let physical_fields = [
+            ("metallic", f.metallic.is_some()),
+            ("roughness", f.roughness.is_some()),
+            ("transmission", f.transmission.is_some()),
+            ("attenuation_color", f.attenuation_color.is_some()),
+            ("attenuation_distance", f.attenuation_distance.is_some()),
+            ("clearcoat", f.clearcoat.is_some()),
+            ("clearcoat_roughness", f.clearcoat_roughness.is_some()),
+            ("specular_factor", f.specular_factor.is_some()),
+            ("specular_color_factor", f.specular_color_factor.is_some()),
+            ("emission_strength", f.emission_strength.is_some()),
+        ];
+        let weight_fields = [
+            ("diffuse", f.diffuse.is_some()),
+            ("specular", f.specular.is_some()),
+            ("specular_color", f.specular_color.is_some()),
+            ("shininess", f.shininess.is_some()),
+            ("reflectivity", f.reflectivity.is_some()),
+            ("transparency", f.transparency.is_some()),
+        ];
+        let m = match (f.color, f.base_color) {
+            (Some(_), Some(_)) => {
+                return Err(
+                    "material has both color (the weights model) and base_color (the physically based \
+                     model): write one"
+                        .into(),
+                );
+            }
+            (None, None) => {
+                return Err("material needs a color (or a base_color, for a physically based one)".into());
+            }
+            (None, Some(base)) => {
+                if let Some((name, _)) = weight_fields.iter().find(|(_, present)| *present) {
+                    return Err(format!(
+                        "material {name} belongs to the weights model (with color); a material with base_color \
+                         is physically based: use metallic, roughness, transmission, clearcoat, specular_factor"
+                    ));
+                }
+                let base = reflectance(Some(base), Color::ONE, "base_color")?;
+                let d = Principled::DIELECTRIC;
+                let attenuation_color = reflectance(f.attenuation_color, Color::ONE, "attenuation_color")?;
+                if attenuation_color.min_element() <= 0.0 {
+                    return Err(format!(
+                        "material attenuation_color must be above 0 in each component (0 would absorb \
+                         everything at once), got {attenuation_color}"
+                    ));
+                }
+                let p = Principled {
+                    metallic: number(f.metallic, d.metallic, "metallic", unit, "0 to 1")?,
+                    roughness: number(f.roughness, d.roughness, "roughness", unit, "0 to 1")?,
+                    transmission: number(f.transmission, d.transmission, "transmission", unit, "0 to 1")?,
+                    attenuation_color,
+                    attenuation_distance: number(
+                        f.attenuation_distance,
+                        f32::INFINITY,
+                        "attenuation_distance",
+                        |v| v > 0.0,
+                        "above 0 (in scene units; leave it out for a clear inside)",
+                    )?,
+                    clearcoat: number(f.clearcoat, d.clearcoat, "clearcoat", unit, "0 to 1")?,
+                    clearcoat_roughness: number(
+                        f.clearcoat_roughness,
+                        d.clearcoat_roughness,
+                        "clearcoat_roughness",
+                        unit,
+                        "0 to 1",
+                    )?,
+                    specular: number(f.specular_factor, d.specular, "specular_factor", unit, "0 to 1")?,
+                    specular_color: reflectance(
+                        f.specular_color_factor,
+                        Color::ONE,
+                        "specular_color_factor",
+                    )?,
+                };
+                let strength =
+                    number(f.emission_strength, 1.0, "emission_strength", |v| v >= 0.0, "0 or more")?;
+                Material { ior, emission: emission * strength, subsurface, ..Material::principled(base, p) }
+            }
+            (Some(color), None) => {
+                if let Some((name, _)) = physical_fields.iter().find(|(_, present)| *present) {
+                    return Err(format!(
+                        "material {name} belongs to the physically based model: write base_color instead of color"
+                    ));
+                }
+                let flat = Material::flat(Color::ZERO);
+                let m = Material {
+                    color: reflectance(Some(color), Color::ONE, "color")?,
+                    diffuse: number(f.diffuse, flat.diffuse, "diffuse", unit, "0 to 1")?,
+                    specular: number(f.specular, flat.specular, "specular", unit, "0 to 1")?,
+                    specular_color: reflectance(f.specular_color, Color::ONE, "specular_color")?,
+                    shininess: number(
+                        f.shininess,
+                        flat.shininess,
+                        "shininess",
+                        |v| (0.0..=1e4).contains(&v),
+                        "0 to 10000",
+                    )?,
+                    reflectivity: number(f.reflectivity, 0.0, "reflectivity", unit, "0 to 1")?,
+                    transparency: number(f.transparency, 0.0, "transparency", unit, "0 to 1")?,
+                    ior,
+                    emission,
+                    subsurface,
+                    texture: None,
+                    physical: None,
+                };
+                if m.reflectivity + m.transparency > 1.0 {
+                    return Err(format!(
+                        "material reflectivity + transparency must not exceed 1, got {} + {}",
+                        m.reflectivity, m.transparency
+                    ));
+                }
+                m
+            }
+        };
         Ok(Self(m))
     }
 }
 
-pub(super) fn default_shininess() -> Finite {
-    Finite(Material::flat(Color::ZERO).shininess as Real)
-}
-pub(super) fn default_ior() -> Finite {
-    Finite(Material::flat(Color::ZERO).ior as Real)
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::super::parse_scene;
+    use crate::materials::principled::Principled;
+    use crate::math::color::Color;
+
+    /// The scene's first material, written as `material`, or the error as text.
+    fn material(material: &str) -> Result<crate::materials::material::Material, String> {
+        let text = format!(
+            "Scene(camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1),
+            image: (width: 8, height: 8), materials: {{ \"m\": {material} }},
+            objects: [Sphere(center: (0, 0, 0), radius: 1, material: \"m\")])"
+        );
+        parse_scene(&text, "m.ron", Path::new(".")).map(|l| *l.scene.material(0)).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn a_base_color_makes_a_physically_based_material_with_every_field_read() {
+        let m = material(
+            "(base_color: (0.9, 0.5, 0.1), metallic: 0.3, roughness: 0.4, ior: 1.7, transmission: 0.5,
+              attenuation_color: (0.5, 0.6, 0.7), attenuation_distance: 2, clearcoat: 0.6, clearcoat_roughness: 0.1,
+              specular_factor: 0.8, specular_color_factor: (1, 0.9, 0.8), emission: (1, 2, 3), emission_strength: 4)",
+        )
+        .unwrap();
+        assert_eq!(
+            (m.color, m.ior, m.emission),
+            (Color::new(0.9, 0.5, 0.1), 1.7, Color::new(4.0, 8.0, 12.0))
+        );
+        let p = m.physical.unwrap();
+        assert_eq!((p.metallic, p.roughness, p.transmission), (0.3, 0.4, 0.5));
+        assert_eq!((p.attenuation_color, p.attenuation_distance), (Color::new(0.5, 0.6, 0.7), 2.0));
+        assert_eq!((p.clearcoat, p.clearcoat_roughness, p.specular), (0.6, 0.1, 0.8));
+        assert_eq!(p.specular_color, Color::new(1.0, 0.9, 0.8));
+        // Defaults: glTF's, with metallic 0 and roughness 0.5.
+        let m = material("(base_color: (1, 1, 1))").unwrap();
+        assert_eq!((m.physical, m.ior), (Some(Principled::DIELECTRIC), 1.5));
+        // The weights model is untouched.
+        assert_eq!(material("(color: (1, 1, 1))").unwrap().physical, None);
+    }
+
+    #[test]
+    fn mixing_the_two_models_or_bad_values_are_refused_naming_the_field() {
+        let cases = [
+            (
+                "(base_color: (1, 1, 1), reflectivity: 0.5)",
+                "material reflectivity belongs to the weights model",
+            ),
+            ("(color: (1, 1, 1), metallic: 1)", "material metallic belongs to the physically based model"),
+            ("(color: (1, 1, 1), base_color: (1, 1, 1))", "both color"),
+            ("(diffuse: 1)", "material needs a color"),
+            ("(base_color: (1, 1, 1), roughness: 1.5)", "material roughness must be 0 to 1, got 1.5"),
+            ("(base_color: (1, 1, 1), metallic: -0.1)", "material metallic must be 0 to 1, got -0.1"),
+            ("(base_color: (1.2, 1, 1))", "material base_color is a reflectance"),
+            (
+                "(base_color: (1, 1, 1), attenuation_distance: 0)",
+                "material attenuation_distance must be above 0",
+            ),
+            (
+                "(base_color: (1, 1, 1), attenuation_color: (0, 1, 1))",
+                "material attenuation_color must be above 0",
+            ),
+            (
+                "(base_color: (1, 1, 1), emission_strength: -1)",
+                "material emission_strength must be 0 or more",
+            ),
+            ("(base_color: (1, 1, 1), clearcoat: NaN)", "m.ron:"),
+        ];
+        for (text, expected) in cases {
+            let error = material(text).unwrap_err();
+            assert!(error.contains(expected), "{text}: {error}");
+            assert!(error.starts_with("m.ron:2:"), "where it stands: {error}");
+        }
+    }
 }
