@@ -1763,10 +1763,11 @@ mod tests {
             doc["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = json!(0);
             doc["meshes"][0]["primitives"][0]["targets"] = json!([{ "POSITION": 0 }]);
             doc["animations"] = json!([{ "channels": [], "samplers": [] }]);
+            doc["extensionsUsed"].as_array_mut().unwrap().push(json!("KHR_materials_sheen"));
         });
         let w = load_bytes(&bytes).unwrap().warnings;
         for says in [
-            "extension KHR_materials_specular is not used",
+            "extension KHR_materials_sheen is not used",
             "1 animation(s) not used",
             "1 primitive(s) with morph targets not used",
             "vertex attributes not used: COLOR_0",
