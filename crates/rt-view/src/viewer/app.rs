@@ -195,7 +195,9 @@ impl Viewer {
     /// The full-resolution job for the current scene, camera and settings.
     fn job_spec(&self) -> Option<JobSpec> {
         let scene = self.source.scene();
-        let camera = self.camera.settings().to_camera().ok()?;
+        // The panel edits where the camera is and what it sees; the lens
+        // (aperture and focus distance) stays the scene file's.
+        let camera = self.camera.settings().to_camera().ok()?.with_lens(scene.camera.lens());
         let (width, height) = self.image.full_size(scene);
         let toggles = self.image.toggles();
         let (spp, open_ended) = (self.image.spp(), self.image.no_limit());
@@ -1293,6 +1295,20 @@ mod tests {
         // The flight is one undo step.
         frame(&ctx, &mut v, size, vec![key_with(Key::Z, true, Modifiers::COMMAND)]);
         assert_eq!(*v.camera.settings(), start);
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn the_render_sees_through_the_scene_files_lens_wherever_the_camera_moves() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("depth_of_field.ron")));
+        let lens = v.source.scene().camera.lens();
+        assert!(lens.radius > 0.0, "depth_of_field.ron has an aperture");
+        assert_eq!(v.job_spec().unwrap().camera.lens(), lens);
+        v.camera.edit(|s| s.zoom(0.5));
+        let spec = v.job_spec().unwrap();
+        assert_ne!(spec.camera.position(), v.source.scene().camera.position(), "the camera moved");
+        assert_eq!(spec.camera.lens(), lens);
         drop_textures(&ctx, v);
     }
 
