@@ -154,13 +154,15 @@ impl Viewer {
         }
         let mut image = ImageSettings::new(&scene);
         image.set_resolution_scale(remembered.resolution_scale);
+        let mut display = DisplayPanel::default();
+        display.scene_loaded(scene.settings.display, scene.settings.display, true);
         let mut viewer = Self {
             camera,
             image,
             source: SceneSource::new(path, scene, remembered.recent, ctx),
             scheduler: Scheduler::default(),
             view: ImageView::default(),
-            display: DisplayPanel::default(),
+            display,
             save_path: "render.png".to_owned(),
             notice: None,
             show_panel: remembered.show_panel,
@@ -230,6 +232,7 @@ impl Viewer {
         let scene = self.source.scene().clone();
         self.camera.scene_loaded(&scene.camera, change.opened);
         let scale_note = self.image.scene_loaded(&scene, &change.previous, change.opened);
+        self.display.scene_loaded(scene.settings.display, change.previous.settings.display, change.opened);
         self.notice = None;
         if let Some(note) = scale_note {
             self.notify(note);
@@ -773,6 +776,45 @@ mod tests {
             let file = rt_core::load_scene(&path).unwrap().camera;
             assert_eq!(v.camera.settings().to_camera().unwrap(), file, "{name}");
         }
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn an_opened_scene_sets_the_display_to_its_files_exposure_and_view_transform() {
+        use rt_core::render::view_transform::{self, ViewTransform};
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        v.display.set_exposure(2.0);
+        let path = scenes().join("outdoor.ron");
+        v.source.open(path.clone(), &ctx);
+        let change = v.source.wait_for_load(&ctx).unwrap();
+        v.scene_changed(&ctx, change);
+        finish_render(&ctx, &mut v);
+        frame(&ctx, &mut v, egui::vec2(1000.0, 700.0), vec![]);
+        let file = rt_core::load_scene(&path).unwrap().settings.display;
+        assert_eq!(
+            (file.exposure, file.view_transform),
+            (-1.0, ViewTransform::AgX),
+            "outdoor.ron as assumed"
+        );
+        assert_eq!(v.display.view_transform(), ViewTransform::AgX);
+        // The canvas shows the image through the file's exposure and AgX:
+        // the bytes a PNG of it would hold.
+        let canvas = v.scheduler.canvas().unwrap();
+        let (display, space) = (canvas.display().clone(), v.source.scene().settings.color_space);
+        assert_eq!((display.exposure, display.view_transform), (-1.0, ViewTransform::AgX));
+        let png = view_transform::Display { exposure: -1.0, view_transform: ViewTransform::AgX };
+        let expected: Vec<Color32> = canvas
+            .linear()
+            .iter()
+            .map(|&c| png.encode(rt_core::math::color::Color::from_array(c), space))
+            .map(|[r, g, b]| Color32::from_rgb(r, g, b))
+            .collect();
+        assert_eq!(canvas.display_image(), expected);
+        // A panel choice stays while the same file reloads unchanged.
+        v.display.set_exposure(0.5);
+        v.display.scene_loaded(file, file, false);
+        assert_eq!(v.display.display(space).exposure, 0.5);
         drop_textures(&ctx, v);
     }
 

@@ -10,8 +10,11 @@
 //!    as grey, the luminance as grey, or the luminance's log2 through the
 //!    Turbo colour map (false colour);
 //! 4. encoded in the scene's colour space ([`ColorSpace::encode`]): clamped
-//!    to [0, 1], sRGB transfer curve or not, rounded to 8 bits. False colour
-//!    is already a display colour and is not encoded again.
+//!    to [0, 1], sRGB transfer curve or not, rounded to 8 bits; or, with the
+//!    AgX view transform, through rt-core's [`view_transform::Display::encode`]
+//!    (the curve PNG output uses, so the window shows what a saved PNG
+//!    holds). False colour is already a display colour and is not encoded
+//!    again.
 //!
 //! At exposure 0 in the RGB view the texels are bit for bit what the
 //! viewer always showed (`ColorSpace::encode` of the mean): the encoding
@@ -22,6 +25,7 @@ use std::sync::{Arc, OnceLock};
 
 use egui::Color32;
 use rt_core::math::color::{Color, ColorSpace};
+use rt_core::render::view_transform::{self, ViewTransform};
 
 use super::reference::Reference;
 
@@ -112,6 +116,8 @@ impl PartialEq for ErrorView {
 pub struct Display {
     /// Exposure in stops: the linear colour is multiplied by `2^exposure`.
     pub exposure: f32,
+    /// The curve from scene light to display light (after exposure).
+    pub view_transform: ViewTransform,
     /// What of the colour is shown.
     pub channel: Channel,
     /// log2 luminances shown at the two ends of the false colour map
@@ -128,6 +134,7 @@ impl Default for Display {
     fn default() -> Self {
         Self {
             exposure: 0.0,
+            view_transform: ViewTransform::Standard,
             channel: Channel::Rgb,
             false_colour_range: [-10.0, 2.0],
             color_space: ColorSpace::Linear,
@@ -138,10 +145,13 @@ impl Default for Display {
 
 impl Display {
     /// Whether the texels are exactly the colour-space encoding of the
-    /// pixels (exposure 0, RGB, no comparison): the rows' own encoded
-    /// colours can then be shown as they are.
+    /// pixels (exposure 0, Standard, RGB, no comparison): the rows' own
+    /// encoded colours can then be shown as they are.
     pub fn is_plain(&self) -> bool {
-        self.exposure == 0.0 && self.channel == Channel::Rgb && self.error.is_none()
+        self.exposure == 0.0
+            && self.view_transform == ViewTransform::Standard
+            && self.channel == Channel::Rgb
+            && self.error.is_none()
     }
 
     /// The error view for an image of `size`, if one is chosen and its
@@ -188,6 +198,9 @@ impl Display {
 struct Prepared {
     multiplier: f32,
     encoder: &'static Encoder,
+    /// The view transform with its exposure, when it is not Standard (the
+    /// table encoder is for the plain clamp only).
+    curve: Option<(view_transform::Display, ColorSpace)>,
     channel: Channel,
     /// log2 luminance at the false colour map's low end, and 1 / the range.
     low: f32,
@@ -200,6 +213,10 @@ impl Prepared {
         Self {
             multiplier: d.exposure.exp2(),
             encoder: Encoder::for_space(d.color_space),
+            curve: (d.view_transform != ViewTransform::Standard).then_some((
+                view_transform::Display { exposure: d.exposure, view_transform: d.view_transform },
+                d.color_space,
+            )),
             channel: d.channel,
             low: lo,
             per_stop: 1.0 / (hi - lo).max(1e-6),
@@ -209,6 +226,11 @@ impl Prepared {
     #[inline]
     fn texel(&self, c: [f32; 3]) -> Color32 {
         let (m, encoder) = (self.multiplier, self.encoder);
+        if self.channel != Channel::FalseColour
+            && let Some((curve, space)) = &self.curve
+        {
+            return self.curve_texel(curve, *space, c);
+        }
         let grey = |v: f32| {
             let e = encoder.encode(v * m);
             Color32::from_rgb(e, e, e)
@@ -227,6 +249,27 @@ impl Prepared {
                 let t = if y > 0.0 { (y.log2() - self.low) * self.per_stop } else { 0.0 };
                 turbo(t)
             }
+        }
+    }
+}
+
+impl Prepared {
+    /// The texel of linear `c` through a view transform other than
+    /// Standard: exposure and curve are rt-core's, exactly as PNG output
+    /// applies them; a one-channel view sends that channel as a grey.
+    /// (False colour maps luminance itself and never comes here.)
+    #[cold]
+    fn curve_texel(&self, curve: &view_transform::Display, space: ColorSpace, c: [f32; 3]) -> Color32 {
+        let grey = |v: f32| Color32::from_gray(curve.encode(Color::splat(v), space)[0]);
+        match self.channel {
+            Channel::Rgb => {
+                let [r, g, b] = curve.encode(Color::from_array(c), space);
+                Color32::from_rgb(r, g, b)
+            }
+            Channel::R => grey(c[0]),
+            Channel::G => grey(c[1]),
+            Channel::B => grey(c[2]),
+            Channel::Luminance | Channel::FalseColour => grey(luminance(c)),
         }
     }
 }
@@ -389,6 +432,33 @@ mod tests {
         let (a, b) = ([[0.5, 0.5, 0.5], [1.0, 0.0, 0.25]], [[0.25, 0.5, 1.0], [0.0, 0.0, 0.0]]);
         d.row(&a, 1, Some((ErrorKind::Absolute, &b)), &mut texels);
         assert_eq!(texels, [Color32::from_rgb(64, 0, 128), Color32::from_rgb(255, 0, 64)]);
+    }
+
+    #[test]
+    fn agx_texels_are_the_png_outputs_bytes_at_the_same_exposure() {
+        let values =
+            [[0.0, 0.0, 0.0], [0.18, 0.18, 0.18], [1.0, 0.5, 0.25], [40.0, 3.0, 0.01], [1e4, 1e4, 1e4]];
+        for space in [ColorSpace::Linear, ColorSpace::Srgb] {
+            for exposure in [0.0, 1.5, -3.0] {
+                let view_transform = ViewTransform::AgX;
+                let d = Display { exposure, view_transform, color_space: space, ..Display::default() };
+                assert!(!d.is_plain(), "AgX is never the rows' own encoding");
+                let png = view_transform::Display { exposure, view_transform };
+                for c in values {
+                    let [r, g, b] = png.encode(Color::from_array(c), space);
+                    assert_eq!(d.texel(c), Color32::from_rgb(r, g, b), "{space:?} {exposure} {c:?}");
+                }
+            }
+        }
+        // Not the clamp: AgX rolls 1.0 off to 202 where Standard gives 255.
+        let agx = Display { view_transform: ViewTransform::AgX, ..Display::default() };
+        assert_eq!(agx.texel([1.0; 3]), Color32::from_gray(202));
+        let grey = Display { channel: Channel::G, ..agx };
+        assert_eq!(
+            grey.texel([0.0, 1.0, 0.0]),
+            Color32::from_gray(202),
+            "a channel goes through AgX as a grey"
+        );
     }
 
     #[test]

@@ -1,5 +1,5 @@
 //! The display and reference sections of the side panel: exposure, the
-//! channel view and false colour (with its legend), the histogram, and the
+//! view transform (Standard or AgX), the channel view and false colour (with its legend), the histogram, and the
 //! reference image with the comparison views and their metrics.
 //!
 //! The panel holds these settings and what is computed from the image; the
@@ -14,6 +14,7 @@ use std::time::Instant;
 
 use egui::{Color32, ColorImage, Pos2, Rect, Sense, Stroke, TextureHandle, TextureOptions, Vec2, pos2};
 use rt_core::math::color::ColorSpace;
+use rt_core::render::view_transform::{self, ViewTransform};
 
 use super::canvas::{Canvas, MAX_DISPLAY_SIDE};
 use super::display::{Channel, Display, ErrorKind, ErrorView, turbo};
@@ -40,6 +41,7 @@ pub(super) enum Compare {
 /// The panel's state.
 pub(super) struct DisplayPanel {
     exposure: f32,
+    view_transform: ViewTransform,
     channel: Channel,
     false_colour_range: [f32; 2],
     compare: Compare,
@@ -67,6 +69,7 @@ impl Default for DisplayPanel {
     fn default() -> Self {
         Self {
             exposure: 0.0,
+            view_transform: ViewTransform::Standard,
             channel: Channel::Rgb,
             false_colour_range: Display::default().false_colour_range,
             compare: Compare::Off,
@@ -96,6 +99,7 @@ impl DisplayPanel {
         let error = kind.zip(self.reference.clone()).map(|(kind, reference)| ErrorView { kind, reference });
         Display {
             exposure: self.exposure,
+            view_transform: self.view_transform,
             channel: self.channel,
             false_colour_range: self.false_colour_range,
             color_space,
@@ -115,6 +119,27 @@ impl DisplayPanel {
     /// render's: nearest-neighbour when magnified).
     pub fn set_filter(&mut self, options: TextureOptions) {
         self.filter = options;
+    }
+
+    /// A scene was loaded: its file's exposure and view transform become
+    /// the display's when it was opened (`reset`) or when the file changed
+    /// them; otherwise what the panel was set to stays.
+    pub fn scene_loaded(
+        &mut self,
+        file: view_transform::Display,
+        previous: view_transform::Display,
+        reset: bool,
+    ) {
+        if reset || file != previous {
+            self.exposure = file.exposure.clamp(*EXPOSURE_RANGE.start(), *EXPOSURE_RANGE.end());
+            self.view_transform = file.view_transform;
+        }
+    }
+
+    /// The view transform chosen.
+    #[cfg(test)]
+    pub fn view_transform(&self) -> ViewTransform {
+        self.view_transform
     }
 
     /// Sets the exposure, in stops.
@@ -234,6 +259,23 @@ impl DisplayPanel {
                 .on_hover_text("in stops: the linear colours are multiplied by 2^exposure");
             if ui.small_button("0").on_hover_text("exposure 0").clicked() {
                 self.exposure = 0.0;
+            }
+        });
+        ui.horizontal(|ui| {
+            ui.label("view");
+            for (transform, label, hover) in [
+                (
+                    ViewTransform::Standard,
+                    "Standard",
+                    "clamped to [0, 1], encoded in the scene's colour space",
+                ),
+                (
+                    ViewTransform::AgX,
+                    "AgX",
+                    "AgX's curve: bright colours roll off to white instead of clipping",
+                ),
+            ] {
+                ui.selectable_value(&mut self.view_transform, transform, label).on_hover_text(hover);
             }
         });
         ui.horizontal_wrapped(|ui| {
