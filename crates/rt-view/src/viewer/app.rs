@@ -197,9 +197,8 @@ impl Viewer {
     /// The full-resolution job for the current scene, camera and settings.
     fn job_spec(&self) -> Option<JobSpec> {
         let scene = self.source.scene();
-        // The panel edits where the camera is and what it sees; the lens
-        // (aperture and focus distance) stays the scene file's.
-        let camera = self.camera.settings().to_camera().ok()?.with_lens(scene.camera.lens());
+        // The panel's camera, its lens (aperture, focus distance) included.
+        let camera = self.camera.settings().to_camera().ok()?;
         let (width, height) = self.image.full_size(scene);
         let toggles = self.image.toggles();
         let (spp, open_ended) = (self.image.spp(), self.image.no_limit());
@@ -1351,6 +1350,9 @@ mod tests {
         let spec = v.job_spec().unwrap();
         assert_ne!(spec.camera.position(), v.source.scene().camera.position(), "the camera moved");
         assert_eq!(spec.camera.lens(), lens);
+        // The panel's aperture is the render's.
+        v.camera.edit(|s| CameraSettings { aperture: 0.0, ..s });
+        assert_eq!(v.job_spec().unwrap().camera.lens().radius, 0.0, "set to a pinhole in the panel");
         drop_textures(&ctx, v);
     }
 

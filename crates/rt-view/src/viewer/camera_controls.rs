@@ -7,12 +7,16 @@
 
 use std::ops::RangeInclusive;
 
+use rt_core::camera::Lens;
 use rt_core::{Camera, CameraError, Projection, Real, Vec3};
 
 /// Range of the vertical field-of-view slider, degrees.
 pub const FOV_RANGE: RangeInclusive<Real> = 1.0..=179.0;
 /// Range of the near-distance control, world units.
 pub const NEAR_RANGE: RangeInclusive<Real> = 1e-3..=1e4;
+/// Range of the aperture (lens radius) control, world units; 0 is the
+/// pinhole.
+pub const APERTURE_RANGE: RangeInclusive<Real> = 0.0..=10.0;
 /// Orbiting stops this close (degrees) to looking straight along ±up.
 pub const MIN_POLAR_DEGREES: Real = 1.0;
 
@@ -32,6 +36,19 @@ pub struct CameraSettings {
     pub near: Real,
     /// Perspective or orthographic.
     pub projection: Projection,
+    /// Lens radius, world units; 0 is the pinhole (absent in state
+    /// remembered before the lens was editable: a pinhole).
+    #[serde(default)]
+    pub aperture: Real,
+    /// Distance along cam_z of the plane in focus, world units (used only
+    /// when `aperture` is above 0).
+    #[serde(default = "unit_focus_distance")]
+    pub focus_distance: Real,
+}
+
+/// The pinhole's focus distance, as [`Lens::PINHOLE`] has it.
+fn unit_focus_distance() -> Real {
+    Lens::PINHOLE.focus_distance
 }
 
 impl CameraSettings {
@@ -44,20 +61,38 @@ impl CameraSettings {
             fov_y: c.fov_y(),
             near: c.near(),
             projection: c.projection(),
+            aperture: c.lens().radius,
+            focus_distance: c.lens().focus_distance,
         }
     }
 
-    /// The camera these settings describe, or why there is none.
+    /// The camera these settings describe, lens included, or why there is
+    /// none. A pinhole's focus distance is kept as it is (it is never
+    /// used), as the scene loader keeps it.
     pub fn to_camera(&self) -> Result<Camera, CameraError> {
-        Camera::new(self.position, self.center_of_interest, self.up, self.fov_y, self.near, self.projection)
+        let camera = Camera::new(
+            self.position,
+            self.center_of_interest,
+            self.up,
+            self.fov_y,
+            self.near,
+            self.projection,
+        )?;
+        let lens = if self.aperture == 0.0 {
+            Lens { focus_distance: self.focus_distance, ..Lens::PINHOLE }
+        } else {
+            Lens::new(self.aperture, self.focus_distance)?
+        };
+        Ok(camera.with_lens(lens))
     }
 
-    /// `candidate` with fov and near clamped to the control ranges if that
+    /// `candidate` with fov, near and aperture clamped to the control ranges if that
     /// makes a valid camera, else `self` unchanged.
     pub fn accept(&self, candidate: Self) -> Self {
         let clamped = Self {
             fov_y: candidate.fov_y.clamp(*FOV_RANGE.start(), *FOV_RANGE.end()),
             near: candidate.near.clamp(*NEAR_RANGE.start(), *NEAR_RANGE.end()),
+            aperture: candidate.aperture.clamp(*APERTURE_RANGE.start(), *APERTURE_RANGE.end()),
             ..candidate
         };
         if clamped.to_camera().is_ok() { clamped } else { *self }
@@ -237,6 +272,8 @@ mod tests {
             fov_y: 45.0,
             near: 1.0,
             projection: Projection::Perspective,
+            aperture: 0.0,
+            focus_distance: 1.0,
         }
     }
 

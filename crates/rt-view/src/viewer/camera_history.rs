@@ -142,6 +142,8 @@ mod tests {
             fov_y: 40.0,
             near: 1.0,
             projection: Projection::Perspective,
+            aperture: 0.0,
+            focus_distance: 1.0,
         }
     }
 

@@ -35,7 +35,8 @@ fn error(message: impl Into<String>) -> CameraFileError {
 }
 
 /// The camera's fields in the order they are written.
-const FIELDS: [&str; 6] = ["position", "center_of_interest", "up", "fov_y", "near", "projection"];
+const FIELDS: [&str; 8] =
+    ["position", "center_of_interest", "up", "fov_y", "near", "projection", "aperture", "focus_distance"];
 
 /// The fields of a camera taken from a glTF file, `(gltf: FILE, index: N,
 /// scale: S, translate: T)`, which a saved camera replaces.
@@ -46,12 +47,12 @@ pub fn camera_ron(camera: &CameraSettings) -> String {
     format!("camera: ({}),", field_list(camera))
 }
 
-/// `camera`'s fields as RON, `position: …, …`, `projection` only when it is
-/// not the default.
+/// `camera`'s fields as RON, `position: …, …`, those that can be left out
+/// ([`implied`]) only when they differ from what leaving them out means.
 fn field_list(camera: &CameraSettings) -> String {
     let fields: Vec<String> = FIELDS
         .iter()
-        .filter(|&&name| name != "projection" || camera.projection != Projection::Perspective)
+        .filter(|&&name| !implied(camera, name))
         .map(|&name| format!("{name}: {}", value_text(camera, name)))
         .collect();
     fields.join(", ")
@@ -92,7 +93,7 @@ pub fn with_camera(text: &str, camera: &CameraSettings) -> Result<String, Camera
                     edits.push((field.value.clone(), wanted));
                 }
             }
-            None if name == "projection" && camera.projection == Projection::Perspective => {}
+            None if implied(camera, name) => {}
             None => edits.push(block.insertion(text, name, &wanted)),
         }
     }
@@ -135,14 +136,38 @@ pub fn read_camera(text: &str) -> Result<CameraSettings, CameraFileError> {
         Err(_) => Projection::Perspective,
         Ok(v) => parse_projection(v).ok_or_else(|| error(format!("camera `projection` is unknown: {v}")))?,
     };
-    Ok(CameraSettings {
+    let optional = |name: &str| if value(name).is_ok() { number(name).map(Some) } else { Ok(None) };
+    let mut camera = CameraSettings {
         position: vector("position")?,
         center_of_interest: vector("center_of_interest")?,
         up: vector("up")?,
         fov_y: number("fov_y")?,
         near: number("near")?,
         projection,
-    })
+        aperture: optional("aperture")?.unwrap_or(0.0),
+        focus_distance: 0.0,
+    };
+    camera.focus_distance = optional("focus_distance")?.unwrap_or_else(|| implied_focus_distance(&camera));
+    Ok(camera)
+}
+
+/// The focus distance a camera block without `focus_distance` has, as the
+/// scene loader reads it: the distance to the centre of interest with a
+/// lens, 1 for the pinhole.
+fn implied_focus_distance(camera: &CameraSettings) -> Real {
+    if camera.aperture > 0.0 { (camera.center_of_interest - camera.position).length() } else { 1.0 }
+}
+
+/// Whether field `name` of `camera` is what a block without it means, so
+/// that it need not be written: a perspective projection, no aperture, the
+/// implied focus distance.
+fn implied(camera: &CameraSettings, name: &str) -> bool {
+    match name {
+        "projection" => camera.projection == Projection::Perspective,
+        "aperture" => camera.aperture == 0.0,
+        "focus_distance" => camera.focus_distance == implied_focus_distance(camera),
+        _ => false,
+    }
 }
 
 /// The text a field of `camera` is written as.
@@ -153,6 +178,8 @@ fn value_text(camera: &CameraSettings, name: &str) -> String {
         "up" => vector_text(camera.up),
         "fov_y" => number_text(camera.fov_y),
         "near" => number_text(camera.near),
+        "aperture" => number_text(camera.aperture),
+        "focus_distance" => number_text(camera.focus_distance),
         _ => format!("{:?}", camera.projection),
     }
 }
@@ -516,6 +543,8 @@ mod tests {
             fov_y: 33.5,
             near: 0.5,
             projection,
+            aperture: 0.0,
+            focus_distance: 1.0,
         }
     }
 
@@ -559,6 +588,23 @@ Scene(
     }
 
     #[test]
+    fn a_lens_set_in_the_viewer_is_written_and_one_as_the_file_means_is_left_out() {
+        let text = "Scene(camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1), image: (width: 8, height: 6), materials: {}, objects: [])";
+        let pinhole = read_camera(text).unwrap();
+        assert_eq!((pinhole.aperture, pinhole.focus_distance), (0.0, 1.0), "no lens fields: the pinhole");
+        // A lens focused at the centre of interest is what `aperture` alone means.
+        let at_coi = CameraSettings { aperture: 0.25, focus_distance: 5.0, ..pinhole };
+        let edited = with_camera(text, &at_coi).unwrap();
+        assert!(edited.contains("near: 1, aperture: 0.25), image"), "{edited}");
+        let focused = CameraSettings { focus_distance: 3.5, ..at_coi };
+        let edited = with_camera(&edited, &focused).unwrap();
+        assert!(edited.contains("aperture: 0.25, focus_distance: 3.5)"), "{edited}");
+        let loaded = rt_core::parse_scene(&edited, "t.ron", Path::new(".")).unwrap().camera;
+        assert_eq!(CameraSettings::from_camera(&loaded), focused);
+        assert_eq!(with_camera(&edited, &focused).unwrap(), edited, "unchanged: not a byte moves");
+    }
+
+    #[test]
     fn a_one_line_block_gets_a_missing_field_on_the_same_line() {
         let text = "Scene(camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1), objects: [])";
         let edited = with_camera(text, &settings(Projection::Orthographic)).unwrap();
@@ -576,6 +622,8 @@ Scene(
             fov_y: 30.0,
             near: 0.5,
             projection: Projection::Perspective,
+            aperture: 0.0,
+            focus_distance: 1.0,
         };
         let edited = with_camera(text, &camera).unwrap();
         assert_eq!(

@@ -17,7 +17,7 @@ use std::path::Path;
 
 use rt_core::{Camera, Projection, Real, Vec3};
 
-use super::camera_controls::{CameraSettings, FOV_RANGE, NEAR_RANGE};
+use super::camera_controls::{APERTURE_RANGE, CameraSettings, FOV_RANGE, NEAR_RANGE};
 use super::camera_history::{CameraHistory, Gesture};
 use super::camera_in_file::{camera_ron, save_camera};
 use super::fly::{self, FlyKeys};
@@ -331,6 +331,7 @@ impl CameraPanel {
             );
             dragging |= r.dragged();
             ui.end_row();
+            dragging |= lens_ui(ui, &mut s);
             ui.label("position");
             let (dragged, _rects) = vector_ui(ui, &mut s.position);
             dragging |= dragged;
@@ -403,6 +404,41 @@ impl CameraPanel {
         }
         Interaction { changed, dragging }
     }
+}
+
+/// The lens rows of the camera grid: the aperture (lens radius; 0 is the
+/// pinhole, logarithmic above) and the focus distance along cam_z. Returns
+/// whether one is being dragged.
+fn lens_ui(ui: &mut egui::Ui, s: &mut CameraSettings) -> bool {
+    ui.label("aperture");
+    let r = ui
+        .add(
+            egui::Slider::new(&mut s.aperture, APERTURE_RANGE)
+                .logarithmic(true)
+                .smallest_positive(1e-3)
+                .smart_aim(false)
+                .max_decimals(DECIMALS),
+        )
+        .on_hover_text("Lens radius in world units: 0 is a pinhole, everything sharp");
+    let mut dragging = r.dragged();
+    ui.end_row();
+    ui.label("focus distance");
+    let speed = 0.005 * s.focus_distance.max(1e-3);
+    let r = ui
+        .add_enabled(
+            s.aperture > 0.0,
+            egui::DragValue::new(&mut s.focus_distance)
+                .speed(speed)
+                .range(1e-3..=1e9)
+                .max_decimals(DECIMALS)
+                .custom_formatter(shown),
+        )
+        .on_hover_text(
+            "Distance along the view direction that is in focus (Alt+click a pixel to focus on it)",
+        );
+    dragging |= r.dragged();
+    ui.end_row();
+    dragging
 }
 
 /// Three drag values in a row; returns whether one is being dragged, and
@@ -479,6 +515,30 @@ mod tests {
                 .unwrap();
         panel.scene_loaded(&ortho, true);
         assert_eq!(*panel.settings(), CameraSettings::from_camera(&ortho));
+    }
+
+    #[test]
+    fn the_lens_controls_edit_the_camera_and_undo_takes_an_aperture_change_back() {
+        let ctx = egui::Context::default();
+        let mut panel = CameraPanel::new(&camera(Projection::Perspective));
+        let run = |panel: &mut CameraPanel, events: Vec<egui::Event>| {
+            let input = egui::RawInput { events, ..Default::default() };
+            let mut output = ctx.run_ui(input, |ui| {
+                egui::CentralPanel::default().show(ui, |ui| panel.ui(ui, None, None));
+                panel.end_frame(ui.ctx());
+            });
+            output.textures_delta.clear();
+        };
+        run(&mut panel, vec![]);
+        assert_eq!(panel.settings().to_camera().unwrap().lens().radius, 0.0, "a pinhole at first");
+        assert!(panel.edit(|s| CameraSettings { aperture: 0.2, focus_distance: 3.0, ..s }));
+        run(&mut panel, vec![]);
+        let lens = panel.settings().to_camera().unwrap().lens();
+        assert_eq!((lens.radius, lens.focus_distance), (0.2, 3.0), "the render's camera has the lens");
+        assert!(panel.undo());
+        assert_eq!(panel.settings().aperture, 0.0, "undo: the pinhole again");
+        assert!(panel.redo());
+        assert_eq!(panel.settings().aperture, 0.2);
     }
 
     #[test]

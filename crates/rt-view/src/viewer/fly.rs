@@ -137,6 +137,8 @@ mod tests {
             fov_y: 45.0,
             near: 1.0,
             projection: Projection::Perspective,
+            aperture: 0.0,
+            focus_distance: 1.0,
         }
     }
 

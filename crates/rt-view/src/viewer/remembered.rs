@@ -239,6 +239,8 @@ mod tests {
             fov_y: 41.37,
             near: 0.7,
             projection: Projection::Orthographic,
+            aperture: 0.0,
+            focus_distance: 1.0,
         }
     }
 
