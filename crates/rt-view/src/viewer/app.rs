@@ -90,6 +90,7 @@ pub const SHORTCUTS: &[(&str, &str)] = &[
     ("V", "switch between orbit and fly navigation"),
     ("W A S D, Q E", "fly: forward, left, back, right, down, up (Shift: faster)"),
     (".", "frame the pinned object: it fills the view"),
+    ("Alt+click", "pin the pixel and focus the lens on what it sees"),
     ("F", "fit the image to the window"),
     ("1", "show the image 1:1 (one image pixel per screen pixel)"),
     ("Ctrl+S", "save the finished image (PNG or EXR, by the path's extension)"),
@@ -246,6 +247,26 @@ impl Viewer {
         let (w, h) = self.image.full_size(self.source.scene());
         let view = ViewPlane::new(self.camera.settings().to_camera().ok()?, w, h).ok()?;
         self.source.scene().scene.cast(&view.center_ray(x, y)).map(|hit| hit.object)
+    }
+
+    /// Focus: the focus distance becomes the depth, along cam_z from the
+    /// eye, of what the pinned pixel's centre ray hits (the ray the
+    /// inspection casts). Returns whether the camera changed.
+    fn focus_on_pinned(&mut self) -> bool {
+        let Some([x, y]) = self.view.pinned() else {
+            self.notify("nothing to focus on: click a pixel first".into());
+            return false;
+        };
+        let (w, h) = self.image.full_size(self.source.scene());
+        let Some(camera) = self.camera.settings().to_camera().ok() else { return false };
+        let Ok(view) = ViewPlane::new(camera, w, h) else { return false };
+        let ray = view.center_ray(x, y);
+        let Some(hit) = self.source.scene().scene.cast(&ray) else {
+            self.notify("the pinned pixel sees no object: nothing to focus on".into());
+            return false;
+        };
+        let depth = (ray.at(hit.t) - camera.position()).dot(camera.basis().z);
+        self.camera.edit(|s| CameraSettings { focus_distance: depth, ..s })
     }
 
     /// Frame: the camera moves so that the pinned object fills the view,
@@ -502,18 +523,29 @@ impl Viewer {
         self.scheduler.set_display(self.display.display(color_space));
         self.view.set_reference(self.display.split_texture(&ctx, color_space));
         let texture = self.scheduler.texture().cloned();
-        let (view_input, magnified) = egui::CentralPanel::default()
-            .show(ui, |ui| {
-                let (scene, scheduler) = (self.source.scene().clone(), &self.scheduler);
-                let settings = *self.camera.settings();
-                let inspect = |p| inspect(&scene, &settings, size, scheduler.shown_job(), p);
-                self.view.outline_region(scheduler.region().cloned());
-                self.view.ui(ui, texture.as_ref(), size, &mut self.camera, inspect)
-            })
-            .inner;
+        let shown = egui::CentralPanel::default().show(ui, |ui| {
+            let (scene, scheduler) = (self.source.scene().clone(), &self.scheduler);
+            let settings = *self.camera.settings();
+            let inspect = |p| inspect(&scene, &settings, size, scheduler.shown_job(), p);
+            self.view.outline_region(scheduler.region().cloned());
+            self.view.ui(ui, texture.as_ref(), size, &mut self.camera, inspect)
+        });
+        let (image_rect, (view_input, magnified)) = (shown.response.rect, shown.inner);
         input = input | view_input;
         if self.camera.take_frame_request() {
             input.changed |= self.frame_pinned();
+        }
+        // Alt+click on the image pins the pixel (the view does) and focuses on it.
+        // (The button's release carries the modifiers held; a drag is no click.)
+        let alt_click = ctx.input(|i| {
+            i.pointer.primary_clicked()
+                && i.events.iter().any(|e| {
+                    matches!(e, egui::Event::PointerButton { pos, button: egui::PointerButton::Primary, pressed: false, modifiers }
+                        if modifiers.alt && image_rect.contains(*pos))
+                })
+        });
+        if self.camera.take_focus_request() || alt_click {
+            input.changed |= self.focus_on_pinned();
         }
         self.camera.end_frame(&ctx);
         if let Some(corners) = self.view.take_dragged_region() {
@@ -1426,6 +1458,46 @@ mod tests {
         frame(&ctx, &mut v, size, vec![key(Key::Period)]);
         assert_eq!(*v.camera.settings(), after);
         assert!(v.notice.as_ref().is_some_and(|n| n.text.starts_with("nothing to frame")));
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn alt_click_sets_the_focus_distance_to_the_depth_of_what_the_pixel_sees() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        let size = egui::vec2(1000.0, 700.0);
+        frame(&ctx, &mut v, size, vec![]);
+        let before = *v.camera.settings();
+        let click = |at, down, modifiers| egui::Event::PointerButton {
+            pos: at,
+            button: egui::PointerButton::Primary,
+            pressed: down,
+            modifiers,
+        };
+        // A plain click pins a pixel and leaves the lens alone.
+        let at = egui::pos2(650.0, 330.0);
+        frame(&ctx, &mut v, size, vec![egui::Event::PointerMoved(at), click(at, true, Modifiers::NONE)]);
+        frame(&ctx, &mut v, size, vec![click(at, false, Modifiers::NONE)]);
+        assert!(v.view.pinned().is_some(), "the click pinned a pixel");
+        assert_eq!(*v.camera.settings(), before);
+        let at = egui::pos2(700.0, 400.0);
+        frame(&ctx, &mut v, size, vec![egui::Event::PointerMoved(at), click(at, true, Modifiers::ALT)]);
+        frame(&ctx, &mut v, size, vec![click(at, false, Modifiers::ALT)]);
+        let [x, y] = v.view.pinned().expect("the click pinned a pixel");
+        let camera = before.to_camera().unwrap();
+        let (w, h) = v.image.full_size(v.source.scene());
+        let ray = ViewPlane::new(camera, w, h).unwrap().center_ray(x, y);
+        let hit = v.source.scene().scene.cast(&ray).expect("box.ron: the pixel sees an object");
+        let depth = (ray.at(hit.t) - camera.position()).dot(camera.basis().z);
+        assert!(depth > 0.0 && depth != before.focus_distance, "{depth}");
+        assert_eq!(v.camera.settings().focus_distance, depth);
+        assert_eq!(CameraSettings { focus_distance: before.focus_distance, ..*v.camera.settings() }, before);
+        frame(&ctx, &mut v, size, vec![key_with(Key::Z, true, Modifiers::COMMAND)]);
+        assert_eq!(*v.camera.settings(), before, "one undo step");
+        // Nothing pinned: nothing changes, and the window says why.
+        v.view.unpin();
+        assert!(!v.focus_on_pinned());
+        assert!(v.notice.as_ref().is_some_and(|n| n.text.starts_with("nothing to focus on")));
         drop_textures(&ctx, v);
     }
 

@@ -52,6 +52,9 @@ pub(super) struct CameraPanel {
     last_wheel: Option<f64>,
     /// Frame was clicked: the app frames the pinned object.
     frame_requested: bool,
+    /// Focus was pressed: the app sets the focus distance to the pinned
+    /// pixel's depth.
+    focus_requested: bool,
     /// What Save to file or Copy did.
     message: Option<String>,
     /// Where the position's fields were drawn (tests click them).
@@ -71,6 +74,7 @@ impl CameraPanel {
             navigation: Navigation::Orbit,
             last_wheel: None,
             frame_requested: false,
+            focus_requested: false,
             message: None,
             #[cfg(test)]
             field_rects: [egui::Rect::NOTHING; 3],
@@ -191,6 +195,11 @@ impl CameraPanel {
     /// Whether Frame was clicked since the last call.
     pub fn take_frame_request(&mut self) -> bool {
         std::mem::take(&mut self.frame_requested)
+    }
+
+    /// Whether Focus was clicked since the last call.
+    pub fn take_focus_request(&mut self) -> bool {
+        std::mem::take(&mut self.focus_requested)
     }
 
     /// The end of a frame: tells the history which gesture is changing the
@@ -378,6 +387,13 @@ impl CameraPanel {
                 .map_or("Click a pixel of an object first".to_owned(), |o| format!("Fill the view with {o}"));
             if frame.on_hover_text(format!("{what} (.)")).clicked() {
                 self.frame_requested = true;
+            }
+            let focus = ui.add_enabled(selected.is_some(), egui::Button::new("Focus"));
+            let what = selected.map_or("Click a pixel of an object first".to_owned(), |o| {
+                format!("Set the focus distance to the pinned pixel's depth, on {o}")
+            });
+            if focus.on_hover_text(format!("{what} (Alt+click)")).clicked() {
+                self.focus_requested = true;
             }
         });
         if changed {
