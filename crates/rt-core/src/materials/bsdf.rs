@@ -78,7 +78,7 @@
 //! three are the plain rules above, and nothing changes.
 
 use crate::materials::material::Material;
-use crate::materials::principled::{Chosen, Lobes};
+use crate::materials::principled::{Chosen, Lobes, sample_visible_normal};
 use crate::materials::shading::{fresnel_dielectric, reflect, refract};
 use crate::math::color::Color;
 use crate::math::real::{Real, Vec3, to_f32};
@@ -459,19 +459,8 @@ impl Bsdf {
 
     /// A microfacet normal drawn from the normals visible from local `wo`
     /// (Heitz 2018, listing 1).
-    fn ggx_sample_normal(&self, wo: Vec3, (u1, u2): (Real, Real)) -> Vec3 {
-        let a = self.alpha;
-        let vh = Vec3::new(a * wo.x, a * wo.y, wo.z).normalize();
-        let len2 = vh.x * vh.x + vh.y * vh.y;
-        let t1 = if len2 > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt() } else { Vec3::X };
-        let t2 = vh.cross(t1);
-        let r = u1.sqrt();
-        let phi = 2.0 * std::f64::consts::PI as Real * u2;
-        let p1 = r * phi.cos();
-        let s = 0.5 * (1.0 + vh.z);
-        let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
-        let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
-        Vec3::new(a * nh.x, a * nh.y, nh.z.max(0.0)).normalize()
+    fn ggx_sample_normal(&self, wo: Vec3, u: (Real, Real)) -> Vec3 {
+        sample_visible_normal(wo, self.alpha, u)
     }
 }
 

@@ -270,8 +270,10 @@ fn visible_normal_pdf(wo: Vec3, h: Vec3, alpha: Real) -> Real {
 }
 
 /// A microfacet normal drawn from the normals visible from local `wo`
-/// (Heitz 2018, listing 1).
-fn sample_visible_normal(wo: Vec3, alpha: Real, (u1, u2): (Real, Real)) -> Vec3 {
+/// (Heitz 2018, listing 1); the classic material's glossy lobe draws its
+/// normals here too.
+#[inline]
+pub(super) fn sample_visible_normal(wo: Vec3, alpha: Real, (u1, u2): (Real, Real)) -> Vec3 {
     let vh = Vec3::new(alpha * wo.x, alpha * wo.y, wo.z).normalize();
     let len2 = vh.x * vh.x + vh.y * vh.y;
     let t1 = if len2 > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt() } else { Vec3::X };
