@@ -347,7 +347,7 @@ impl Viewer {
         let path = save_path_for(self.save_path.trim(), self.source.path());
         let [width, height] = [canvas.size()[0] as u32, canvas.size()[1] as u32];
         let saved = PendingImage::create(&path).and_then(|out| match out.format() {
-            Format::Png => out.write_rgb8(width, height, &canvas.rgb8()),
+            Format::Png => out.write_rgb8(width, height, &canvas.rgb8_displayed()),
             Format::Exr => out.write_linear(width, height, &canvas.linear()),
         });
         self.notify(match saved {
@@ -443,7 +443,9 @@ impl Viewer {
         ui.horizontal(|ui| {
             ui.add(egui::TextEdit::singleline(&mut self.save_path).desired_width(140.0));
             let ready = self.scheduler.frame_is_final();
-            let button = ui.add_enabled(ready, egui::Button::new("Save PNG")).on_hover_text("Ctrl+S");
+            let button = ui
+                .add_enabled(ready, egui::Button::new("Save PNG"))
+                .on_hover_text("Ctrl+S: 8 bits through the exposure and view transform shown");
             #[cfg(test)]
             {
                 self.save_button = Some(button.rect);

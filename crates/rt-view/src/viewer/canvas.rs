@@ -24,7 +24,7 @@
 
 use egui::{Color32, ColorImage, TextureHandle, TextureOptions};
 
-use super::display::Display;
+use super::display::{Channel, Display};
 use super::render_job::Row;
 
 /// Largest side of the texture the image is shown through, in texels
@@ -320,6 +320,29 @@ impl Canvas {
     pub fn rgb8(&self) -> Vec<rt_core::render::Rgb8> {
         self.pixels().iter().map(|c| [c.r(), c.g(), c.b()]).collect()
     }
+
+    /// The image as 8-bit RGB rows through the exposure and view transform
+    /// of the display in force, as Save PNG writes it: what the window shows
+    /// at full resolution, as `rt-view render --exposure --view-transform`
+    /// writes a PNG. The analysis views (one channel, false colour, the
+    /// error against a reference) are not part of it: they are ways of
+    /// looking at the image, not the image. With exposure 0 and the Standard
+    /// transform these are the rows' own colours ([`Canvas::rgb8`]).
+    pub fn rgb8_displayed(&self) -> Vec<rt_core::render::Rgb8> {
+        let display = Display { channel: Channel::Rgb, error: None, ..self.transform.clone() };
+        if display.is_plain() {
+            return self.rgb8();
+        }
+        let [width, _] = self.size();
+        let mut texels = vec![Color32::TRANSPARENT; width];
+        let linear = self.linear();
+        let mut out = Vec::with_capacity(linear.len());
+        for row in linear.chunks_exact(width) {
+            display.row(row, 1, None, &mut texels);
+            out.extend(texels.iter().map(|c| [c.r(), c.g(), c.b()]));
+        }
+        out
+    }
 }
 
 #[cfg(test)]
@@ -329,6 +352,26 @@ mod tests {
     fn row(generation: u64, y: u32, width: usize, c: Color32) -> Row {
         let linear = [c.r(), c.g(), c.b()].map(|v| v as f32 / 255.0);
         Row { generation, y, samples: 1, pixels: vec![c; width], linear: vec![linear; width] }
+    }
+
+    #[test]
+    fn saved_colours_follow_the_exposure_and_view_transform_but_not_the_analysis_views() {
+        let mut canvas = Canvas::new(1, 3, 2, 16);
+        for y in 0..2 {
+            assert!(canvas.apply(&row(1, y, 3, Color32::from_rgb(40, 80, 120))));
+        }
+        let plain = canvas.rgb8_displayed();
+        assert_eq!(plain, canvas.rgb8(), "exposure 0, Standard: the rows' own colours");
+        canvas.set_display(&Display { exposure: 1.0, ..Display::default() });
+        let brighter = canvas.rgb8_displayed();
+        assert_eq!(brighter[0], [80, 160, 240], "one stop up doubles linear values: {:?}", brighter[0]);
+        canvas.set_display(&Display { exposure: 1.0, channel: Channel::FalseColour, ..Display::default() });
+        assert_eq!(canvas.rgb8_displayed(), brighter, "false colour is a view, not the saved image");
+        canvas.set_display(&Display {
+            view_transform: rt_core::render::view_transform::ViewTransform::AgX,
+            ..Display::default()
+        });
+        assert_ne!(canvas.rgb8_displayed(), plain, "AgX rolls the values through its curve");
     }
 
     #[test]
