@@ -17,8 +17,9 @@ a constant `background` and global illumination. Cycles renders the same
   exporter wrote them in): a point light's candela I becomes 4π·I/683 W,
   which Cycles spreads as I/683 W/sr, a sun's lux E becomes E/683 W/m²;
   rt-view divides by 683 lm/W the same way (docs/models.md). The importer
-  gives every point light Blender's default radius of 0.25 and every sun a
-  0.5° disc: both are set to 0 (punctual, as in glTF and rt-view).
+  gives every sun Blender's default disc of 0.526°, which is set to 0, and
+  a point light any radius it has is set to 0 too (punctual, as in glTF and
+  rt-view); each change is printed.
 - the camera is the file's (`yfov`, vertical sensor fit), the image the
   same size; Cycles' pixel filter is a box of 1 pixel (rt-view's samples are
   spread uniformly over each pixel); no denoising, no adaptive sampling, no
