@@ -59,6 +59,7 @@ the projected bounding sphere of every object not named `floor` or `wall`
 """
 
 import argparse
+import json
 import math
 import os
 import re
@@ -103,8 +104,6 @@ def scene_facts(rt_view, scene, folder):
     os.makedirs(folder, exist_ok=True)
     export = os.path.join(folder, "scene.json")
     subprocess.run([rt_view, "export", scene, "-o", export], check=True, stderr=subprocess.DEVNULL)
-    import json
-
     with open(export) as f:
         desc = json.load(f)
     gi = desc.get("global_illumination")
