@@ -23,11 +23,12 @@ through 683 lm/W and 4π sr, a sun's W/m² lux through 683 lm/W):
   space normal map (a tile of round bumps, a grooved cross and a ridge,
   drawn here from a height field) through a Normal Map node, lit by a sun
   15° above the horizon.
-- `cycles_suzanne.glb` — Suzanne (subdivided once, smooth) with a checker
-  base-colour texture (orange and blue), a metallic-roughness texture (its
-  blue channel, metallic, is 1 on the left half of the UV square; its green
-  channel, roughness, runs from 0.15 at the bottom of the UV square to 0.8 at
-  the top), wired as an artist would (Image Texture → Separate Color →
+- `cycles_suzanne.glb` — Suzanne (subdivided once, smooth, her UVs wrapped
+  around her vertical axis) with a checker base-colour texture (orange and
+  blue), a metallic-roughness texture (its blue channel, metallic, is 1 on
+  the left half of the UV square, her left half as the camera sees her; its
+  green channel, roughness, runs from 0.15 at the bottom of the UV square,
+  her chin, to 0.8 at the top), wired as an artist would (Image Texture → Separate Color →
   Metallic and Roughness), and a normal map of small bumps through a Normal
   Map node; on a floor, under a point light and a sun.
 - `cycles_glass.glb` — a rough glass sphere (transmission 1, roughness 0.3,
@@ -270,6 +271,28 @@ def normal_map_plane(out):
     export(os.path.join(out, "cycles_normal_map.glb"), tangents=True)
 
 
+def wrap_around_uvs(mesh):
+    """Replaces a mesh's UVs by a projection around its vertical axis: u
+    runs once around (0.5 straight ahead along -y, the seam at the back, u
+    below 0.5 on the model's -x side, the viewer's left), v from the lowest
+    point (0) to the highest (1). The UV square's left half is then the
+    model's left half."""
+    co = np.array([v.co[:] for v in mesh.vertices])
+    z0, z1 = co[:, 2].min(), co[:, 2].max()
+    uv = mesh.uv_layers.active.data
+    for poly in mesh.polygons:
+        corners = []
+        for li in poly.loop_indices:
+            x, y, z = co[mesh.loops[li].vertex_index]
+            corners.append([0.5 + math.atan2(x, -y) / (2 * math.pi), (z - z0) / (z1 - z0)])
+        us = [c[0] for c in corners]
+        if max(us) - min(us) > 0.5:  # a face across the seam: keep it whole
+            for c in corners:
+                c[0] += 1.0 if c[0] < 0.5 else 0.0
+        for li, c in zip(poly.loop_indices, corners):
+            uv[li].uv = c
+
+
 def suzanne(out):
     """(c) Suzanne with base-colour, metallic-roughness and normal textures."""
     reset(192, 144)
@@ -298,6 +321,7 @@ def suzanne(out):
     normal_map_node(mat, image("bumps", normals, False))
 
     monkey = primitive(bpy.ops.mesh.primitive_monkey_add, "Suzanne", mat, size=2.0, calc_uvs=True, location=(0, 0, 0))
+    wrap_around_uvs(monkey.data)
     monkey.rotation_euler = (math.radians(-10), 0, math.radians(20))
     sub = monkey.modifiers.new("subdivision", "SUBSURF")
     sub.levels = sub.render_levels = 1
