@@ -36,14 +36,18 @@ through 683 lm/W and 4π sr, a sun's W/m² lux through 683 lm/W):
   the floor, before a wall, under a point light and a sun.
 
 Textures are at most 256² texels and written into the .glb as PNG; each file
-stays under 300 KB. The Principled BSDFs keep Blender's defaults where the
+stays under 300 KB. Every triangle list's triangles are sorted after the
+export (the exporter's order changes from run to run), so the files are the
+same byte for byte each time the script runs. The Principled BSDFs keep Blender's defaults where the
 scene does not set a value (IOR 1.5, specular IOR level 0.5), except the
 floors, whose specular level is 0 (a plain Lambert surface, which glTF
 writes as `KHR_materials_specular` with specularFactor 0).
 """
 
+import json
 import math
 import os
+import struct
 import sys
 
 import bpy
@@ -197,6 +201,38 @@ def normals_from_height(height, depth):
     return (normal + 1) / 2
 
 
+def canonical_triangle_order(path):
+    """Sorts every triangle list's triangles in a .glb, in place: Blender's
+    exporter writes the same triangles in an order that changes from run to
+    run, and a file that changes with nothing in it changed is noise in
+    the repository. Each triangle is rotated to start at its smallest index
+    (its winding kept), then the triangles are sorted."""
+    with open(path, "rb") as f:
+        data = bytearray(f.read())
+    json_length = struct.unpack_from("<I", data, 12)[0]
+    doc = json.loads(data[20 : 20 + json_length])
+    bin_start = 20 + json_length + 8
+    done = set()
+    for mesh in doc["meshes"]:
+        for prim in mesh["primitives"]:
+            index = prim.get("indices")
+            if index is None or index in done or prim.get("mode", 4) != 4:
+                continue
+            done.add(index)
+            acc = doc["accessors"][index]
+            view = doc["bufferViews"][acc["bufferView"]]
+            dtype = {5121: np.uint8, 5123: np.uint16, 5125: np.uint32}[acc["componentType"]]
+            start = bin_start + view.get("byteOffset", 0) + acc.get("byteOffset", 0)
+            size = acc["count"] * np.dtype(dtype).itemsize
+            tris = np.frombuffer(bytes(data[start : start + size]), dtype=dtype).reshape(-1, 3)
+            first = tris.argmin(axis=1)
+            rotated = np.stack([tris[np.arange(len(tris)), (first + k) % 3] for k in range(3)], axis=1)
+            rotated = rotated[np.lexsort(rotated.T[::-1])]
+            data[start : start + size] = rotated.astype(dtype).tobytes()
+    with open(path, "wb") as f:
+        f.write(data)
+
+
 def export(path, tangents=False):
     bpy.ops.export_scene.gltf(
         filepath=path,
@@ -210,6 +246,7 @@ def export(path, tangents=False):
         export_animations=False,
         export_image_format="AUTO",
     )
+    canonical_triangle_order(path)
     print(f"{path}: {os.path.getsize(path) / 1024:.0f} KB")
 
 
