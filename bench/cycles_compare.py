@@ -56,6 +56,19 @@ every colour channel,
 whole-image means are compared too, and the mean over a disc of 0.7 of
 the projected bounding sphere of every object not named `floor` or `wall`
 (the spheres of the grid, the glass, Suzanne).
+
+With `--mitsuba` (the `mitsuba` package installed beside `bpy`), Mitsuba 3
+renders the scene Blender imported, as a third opinion: every mesh written
+as an OBJ file with its vertex normals in Blender's world frame (right-
+handed, as Mitsuba's; nothing is mirrored), the camera, point lights
+(intensity = watts/4π) and suns (`directional`, irradiance = strength), the
+background as a `constant` emitter, the `path` integrator with
+`max_depth = max_bounces + 1`. A Principled BSDF becomes a `roughdielectric`
+(GGX, α = roughness², its IOR, the base colour as transmittance) when its
+transmission is 1, a two-sided `diffuse` of the base colour when it has no
+specular reflection and no metal (specular IOR level 0, metallic 0), and
+Mitsuba's `principled` (Disney 2015, another model: see docs/models.md)
+otherwise; a textured material is refused.
 """
 
 import argparse
@@ -85,6 +98,8 @@ def parse_args():
     p.add_argument("--width", type=int, help="override the image width")
     p.add_argument("--height", type=int, help="override the image height")
     p.add_argument("--multiscatter", action="store_true", help="keep Cycles' multiple-scattering GGX")
+    p.add_argument("--mitsuba", action="store_true", help="render a third image with Mitsuba 3 (pip install mitsuba)")
+    p.add_argument("--variant", default="scalar_rgb", help="Mitsuba variant, with --mitsuba")
     return p.parse_args()
 
 
@@ -183,6 +198,125 @@ def cycles_scene(bpy, glb, desc, width, height, threads, multiscatter):
     return scene, notes
 
 
+def mitsuba_bsdf(mat):
+    """The Mitsuba BSDF of a Blender material (see the module comment)."""
+    nodes = [n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED"] if mat and mat.node_tree else []
+    if len(nodes) != 1:
+        sys.exit(f"material {mat.name if mat else None!r}: not one Principled BSDF")
+    inputs = nodes[0].inputs
+    linked = [i.name for i in inputs if i.is_linked]
+    if linked:
+        sys.exit(f"material {mat.name!r}: driven by textures or nodes ({', '.join(linked)}): not converted for Mitsuba")
+    value = lambda name: inputs[name].default_value  # noqa: E731
+    base = [float(c) for c in value("Base Color")[:3]]
+    roughness, metallic, ior = float(value("Roughness")), float(value("Metallic")), float(value("IOR"))
+    if value("Transmission Weight") >= 1 and metallic == 0:
+        if roughness**2 < 1e-3:
+            return {"type": "dielectric", "int_ior": ior, "ext_ior": 1.0}
+        return {
+            "type": "roughdielectric",
+            "distribution": "ggx",
+            "alpha": roughness**2,
+            "int_ior": ior,
+            "ext_ior": 1.0,
+            "specular_transmittance": {"type": "rgb", "value": base},
+        }
+    if value("Specular IOR Level") == 0 and metallic == 0 and value("Transmission Weight") == 0:
+        return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": base}}}
+    return {
+        "type": "twosided",
+        "bsdf": {
+            "type": "principled",
+            "base_color": {"type": "rgb", "value": base},
+            "metallic": metallic,
+            "roughness": roughness,
+            "spec_tint": 0.0,
+            "eta": max(ior, 1.0001),
+        },
+    }
+
+
+def mitsuba_scene(mi, bpy, scene, desc, folder, width, height):
+    """The Mitsuba scene dictionary of the scene Blender imported."""
+    from mathutils import Vector
+
+    T = mi.ScalarTransform4f
+    cam = scene.camera
+    rot = cam.matrix_world.to_3x3()
+    eye = cam.matrix_world.translation
+    out = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": desc["global_illumination"]["max_bounces"] + 1},
+        "sensor": {
+            "type": "perspective",
+            "fov": math.degrees(cam.data.angle_y),
+            "fov_axis": "y",
+            "near_clip": 1e-3,
+            "to_world": T().look_at(
+                origin=list(eye), target=list(eye + rot @ Vector((0, 0, -1))), up=list(rot @ Vector((0, 1, 0)))
+            ),
+            "film": {"type": "hdrfilm", "width": width, "height": height, "rfilter": {"type": "box"}},
+            "sampler": {"type": "independent", "sample_count": 1},
+        },
+        "background": {"type": "constant", "radiance": {"type": "rgb", "value": list(desc["background"])}},
+    }
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    for i, obj in enumerate(scene.objects):
+        if obj.type == "MESH":
+            mesh = obj.evaluated_get(depsgraph).to_mesh()
+            mesh.calc_loop_triangles()
+            normal_matrix = obj.matrix_world.to_3x3().inverted().transposed()
+            path = os.path.join(folder, f"mitsuba-{i}.obj")
+            with open(path, "w") as f:
+                for v in mesh.vertices:
+                    p = obj.matrix_world @ v.co
+                    n = (normal_matrix @ v.normal).normalized()
+                    f.write(f"v {p.x!r} {p.y!r} {p.z!r}\nvn {n.x!r} {n.y!r} {n.z!r}\n")
+                for t in mesh.loop_triangles:
+                    a, b, c = (j + 1 for j in t.vertices)
+                    f.write(f"f {a}//{a} {b}//{b} {c}//{c}\n")
+            out[f"mesh-{i}"] = {"type": "obj", "filename": path, "bsdf": mitsuba_bsdf(obj.active_material)}
+        elif obj.type == "LIGHT":
+            light = obj.data
+            color = [float(c) for c in light.color]
+            if light.type == "POINT":
+                power = [light.energy / (4 * math.pi) * c for c in color]
+                position = list(obj.matrix_world.translation)
+                out[f"light-{i}"] = {"type": "point", "position": position, "intensity": {"type": "rgb", "value": power}}
+            elif light.type == "SUN":
+                direction = list(obj.matrix_world.to_3x3() @ Vector((0, 0, -1)))
+                irradiance = {"type": "rgb", "value": [light.energy * c for c in color]}
+                out[f"light-{i}"] = {"type": "directional", "direction": direction, "irradiance": irradiance}
+            else:
+                sys.exit(f"light {obj.name!r}: a {light.type} light is not converted for Mitsuba")
+    return out
+
+
+def agreement(a, b, block, z, rel):
+    """Block agreement of two lists of independent images: (the share of
+    blocks that agree, how many, the blocks' z-scores, the block means of
+    each, their standard errors, whole-image means a/b)."""
+    ba = np.stack([block_means(im, block) for im in a])
+    bb = np.stack([block_means(im, block) for im in b])
+    n = len(a)
+    ma, mb = ba.mean(0), bb.mean(0)
+    sa, sb = ba.std(0, ddof=1) / math.sqrt(n), bb.std(0, ddof=1) / math.sqrt(n)
+    agree = (np.abs(ma - mb) <= z * np.sqrt(sa**2 + sb**2) + rel * np.maximum(np.abs(ma), np.abs(mb))).all(axis=2)
+    ratio = np.mean(a, axis=0).mean(axis=(0, 1)) / np.maximum(np.mean(b, axis=0).mean(axis=(0, 1)), 1e-30)
+    return agree, ratio
+
+
+def disc_ratio(a, b, cx, cy, r):
+    """Mean luminance over a disc, a/b, and two standard errors of it."""
+    lum = np.array([0.2126, 0.7152, 0.0722])
+    la = np.array([disc_mean(im, cx, cy, r) @ lum for im in a])
+    lb = np.array([disc_mean(im, cx, cy, r) @ lum for im in b])
+    q = la.mean() / max(lb.mean(), 1e-30)
+    n = len(a)
+    se = q * math.sqrt((la.std(ddof=1) / la.mean()) ** 2 / n + (lb.std(ddof=1) / lb.mean()) ** 2 / n)
+    return q, 2 * se
+
+
 def read_exr(bpy, path):
     """Linear RGB of an OpenEXR file, rows top to bottom, as float64."""
     img = bpy.data.images.load(os.path.abspath(path), check_existing=False)
@@ -264,9 +398,18 @@ def main():
     for note in notes:
         print(f"cycles: {note}")
 
+    mi_scene = None
+    if args.mitsuba:
+        import drjit as dr
+        import mitsuba as mi
+
+        mi.set_variant(args.variant)
+        dr.set_thread_count(args.threads)
+        mi_scene = mi.load_dict(mitsuba_scene(mi, bpy, scene, desc, folder, width, height))
+
     env = dict(os.environ, RAYON_NUM_THREADS=str(args.threads))
-    rt_images, cy_images = [], []
-    rt_time = cy_time = 0.0
+    rt_images, cy_images, mi_images = [], [], []
+    rt_time = cy_time = mi_time = 0.0
     for k in range(args.batches):
         out = os.path.join(folder, f"rt-{k}.exr")
         command = [args.rt_view, "render", args.scene, "-o", out, "--spp", str(per_batch), "--seed", str(k)]
@@ -284,6 +427,10 @@ def main():
         bpy.ops.render.render(write_still=True)
         cy_time += time.perf_counter() - start
         cy_images.append(read_exr(bpy, out))
+        if mi_scene is not None:
+            start = time.perf_counter()
+            mi_images.append(np.array(mi.render(mi_scene, spp=per_batch, seed=k), dtype=np.float64)[:, :, :3])
+            mi_time += time.perf_counter() - start
         print(f"batch {k + 1}/{args.batches}: rt-view {rt_time:.1f} s, Cycles {cy_time:.1f} s so far", flush=True)
 
     rt_blocks = np.stack([block_means(im, args.block) for im in rt_images])
@@ -327,23 +474,26 @@ def main():
             f"  - block ({bx}, {by}): rt-view {rt_mean[by, bx].round(4).tolist()} ± {rt_se[by, bx].round(4).tolist()},"
             f" Cycles {cy_mean[by, bx].round(4).tolist()} ± {cy_se[by, bx].round(4).tolist()}"
         )
-    discs = object_discs(bpy, scene, width, height)
-    if discs:
-        lines += ["", "| object | rt-view / Cycles (luminance) | rt-view (RGB) | Cycles (RGB) | ± (2 se) |", "|---|---|---|---|---|"]
-        lum = np.array([0.2126, 0.7152, 0.0722])
-        for obj, cx, cy, r in discs:
-            rt_d = [disc_mean(im, cx, cy, r) for im in rt_images]
-            cy_d = [disc_mean(im, cx, cy, r) for im in cy_images]
-            if rt_d[0] is None:
-                continue
-            rt_l = np.array([d @ lum for d in rt_d])
-            cy_l = np.array([d @ lum for d in cy_d])
-            q = rt_l.mean() / max(cy_l.mean(), 1e-30)
-            se = q * math.sqrt((rt_l.std(ddof=1) / rt_l.mean()) ** 2 / n + (cy_l.std(ddof=1) / cy_l.mean()) ** 2 / n)
+    if mi_images:
+        for label, a, b in (("Mitsuba / Cycles", mi_images, cy_images), ("rt-view / Mitsuba", rt_images, mi_images)):
+            agree_ab, ratio_ab = agreement(a, b, args.block, args.z, args.rel)
             lines.append(
-                f"| {obj} | {q:.3f} | {np.mean(rt_d, axis=0).round(4).tolist()} |"
-                f" {np.mean(cy_d, axis=0).round(4).tolist()} | {2 * se:.3f} |"
+                f"- {label} ({args.variant}, {mi_time:.1f} s): {agree_ab.sum()} of {agree_ab.size} blocks agree"
+                f" ({100 * agree_ab.mean():.1f} %); image means R {ratio_ab[0]:.4f}, G {ratio_ab[1]:.4f}, B {ratio_ab[2]:.4f}"
             )
+    discs = [d for d in object_discs(bpy, scene, width, height) if disc_mean(rt_images[0], *d[1:]) is not None]
+    if discs:
+        head = "| object | rt-view / Cycles (luminance) ± 2 se | rt-view (RGB) | Cycles (RGB) |"
+        head += " Mitsuba / Cycles | rt-view / Mitsuba |" if mi_images else ""
+        lines += ["", head, "|---" * head.count(" | ") + "|---|"]
+        for obj, cx, cy, r in discs:
+            q, se2 = disc_ratio(rt_images, cy_images, cx, cy, r)
+            row = f"| {obj} | {q:.3f} ± {se2:.3f} | {np.mean([disc_mean(im, cx, cy, r) for im in rt_images], axis=0).round(4).tolist()} |"
+            row += f" {np.mean([disc_mean(im, cx, cy, r) for im in cy_images], axis=0).round(4).tolist()} |"
+            if mi_images:
+                row += " {:.3f} ± {:.3f} |".format(*disc_ratio(mi_images, cy_images, cx, cy, r))
+                row += " {:.3f} ± {:.3f} |".format(*disc_ratio(rt_images, mi_images, cx, cy, r))
+            lines.append(row)
     report = "\n".join(lines) + "\n"
     print(report)
     with open(os.path.join(folder, "report.md"), "w") as f:
@@ -368,6 +518,8 @@ def main():
     write_png(bpy, os.path.join(folder, "compare.png"), picture)
     np.save(os.path.join(folder, "rt-view.npy"), rt_image.astype(np.float32))
     np.save(os.path.join(folder, "cycles.npy"), cy_image.astype(np.float32))
+    if mi_images:
+        np.save(os.path.join(folder, "mitsuba.npy"), np.mean(mi_images, axis=0).astype(np.float32))
     passed = fraction >= 0.99 and np.all(np.abs(ratio - 1) <= 0.01)
     sys.exit(0 if passed else 1)
 
