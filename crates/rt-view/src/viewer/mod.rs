@@ -25,7 +25,8 @@
 //!   camera (rt-core's flat render, `observer_render`, on a thread of its
 //!   own), the render camera, view plane, frustum and lights drawn over it
 //!   (`camera_overlay`) through the observer's `projection`, and the
-//!   pinned pixel's path (`path_overlay`);
+//!   pinned pixel's path (`path_overlay`); [`scene_view_image`] makes the
+//!   same picture without a window, painted on the CPU (`soft_paint`);
 //! - `screenshot`: `--screenshot`, saving the window once the frame is done;
 //! - `trace`: with `RT_VIEW_TRACE=FILE`, a line per frame and per job of
 //!   what the window did and shows, for the tests that drive it;
@@ -64,9 +65,11 @@ mod remembered;
 pub mod render_job;
 mod scene_source;
 mod scene_view;
+pub mod scene_view_image;
 pub mod scene_watch;
 mod scheduler;
 mod screenshot;
+mod soft_paint;
 mod trace;
 
 use std::sync::{Arc, Mutex};

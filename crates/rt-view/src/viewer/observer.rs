@@ -21,8 +21,9 @@ impl Observer {
     /// interest) and the scene's bounded objects (`bounds`, min and max
     /// corners, if any): it looks at the middle of them all from beside
     /// and above the render camera (to its right, a little behind), far
-    /// enough to see their bounding sphere whole.
-    pub fn framing(camera: &Camera, bounds: Option<(Vec3, Vec3)>) -> Self {
+    /// enough to see their bounding sphere whole in a view `aspect` (width
+    /// / height) wide.
+    pub fn framing(camera: &Camera, bounds: Option<(Vec3, Vec3)>, aspect: Real) -> Self {
         let (c, coi) = (camera.position(), camera.center_of_interest());
         let (mut lo, mut hi) = (c.min(coi), c.max(coi));
         if let Some((min, max)) = bounds.filter(|(a, b)| a.is_finite() && b.is_finite()) {
@@ -33,7 +34,9 @@ impl Observer {
         let b = camera.basis();
         let from =
             (1.0 * b.x + 0.7 * camera.up().normalize_or_zero() - 0.6 * b.z).try_normalize().unwrap_or(b.x);
-        let distance = radius / (0.5 * OBSERVER_FOV.to_radians()).sin() * 1.1;
+        // The narrower of the vertical and horizontal fields of view decides.
+        let half_tan = (0.5 * OBSERVER_FOV.to_radians()).tan() * aspect.clamp(0.05, 1.0);
+        let distance = radius / half_tan.atan().sin() * 1.1;
         let settings = CameraSettings {
             position: target + distance * from,
             center_of_interest: target,
@@ -104,23 +107,23 @@ mod tests {
     fn the_first_observer_sees_the_render_camera_and_the_scene() {
         let camera = render_camera();
         let bounds = (Vec3::splat(-1.0), Vec3::splat(1.0));
-        let o = Observer::framing(&camera, Some(bounds));
-        let view = rt_core::ViewPlane::new(o.camera().unwrap(), 400, 300).unwrap();
+        let o = Observer::framing(&camera, Some(bounds), 0.5);
+        let view = rt_core::ViewPlane::new(o.camera().unwrap(), 200, 400).unwrap();
         let p = super::super::projection::Projection::new(
             *view.camera(),
-            [400, 300],
-            egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(400.0, 300.0)),
+            [200, 400],
+            egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(200.0, 400.0)),
         )
         .unwrap();
         for point in [camera.position(), camera.center_of_interest(), bounds.0, bounds.1] {
             let [x, y] = p.to_pixels(point).expect("in front of the observer");
-            assert!((0.0..400.0).contains(&x) && (0.0..300.0).contains(&y), "{point} at {x}, {y}");
+            assert!((0.0..200.0).contains(&x) && (0.0..400.0).contains(&y), "{point} at {x}, {y}");
         }
     }
 
     #[test]
     fn orbiting_and_zooming_move_the_observer_and_keep_its_target() {
-        let mut o = Observer::framing(&render_camera(), None);
+        let mut o = Observer::framing(&render_camera(), None, 1.5);
         let before = *o.settings();
         o.orbit(0.5, 0.2);
         assert_ne!(o.settings().position, before.position);

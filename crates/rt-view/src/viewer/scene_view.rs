@@ -215,7 +215,8 @@ impl SceneView {
         let rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, Sense::click_and_drag());
         let camera = input.camera.unwrap_or(input.scene.camera);
-        let observer = self.observer.get_or_insert_with(|| Observer::framing(&camera, extent.bounds));
+        let aspect = (rect.width() / rect.height().max(1.0)) as Real;
+        let observer = self.observer.get_or_insert_with(|| Observer::framing(&camera, extent.bounds, aspect));
         let moving = steer(ui, &response, observer);
         let observer = *observer;
         let ppp = ui.ctx().pixels_per_point();

@@ -1,0 +1,135 @@
+//! The scene view as an image, without a window: the flat render of the
+//! scene seen by the observer the view starts with, and the same overlays
+//! the window draws (render camera, view plane, frustum, lights, the
+//! pixel's path), painted on the CPU ([`SoftPainter`]). Used by
+//! `--scene-view OUT.png` and for the pictures in the docs.
+
+use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use egui::{Color32, Rect, TextureOptions, pos2, vec2};
+use rt_core::{Camera, LoadedScene, Real};
+
+use super::observer::Observer;
+use super::observer_render::flat_render;
+use super::projection::Projection;
+use super::scene_view::{SceneExtent, ViewInput, draw_overlays};
+use super::soft_paint::SoftPainter;
+use crate::image_out::PendingImage;
+
+/// What to picture: the scene, its render camera and image size, the
+/// pixel whose path is drawn, and the observer (`None`: the one the scene
+/// view starts with, framing the camera and the scene).
+pub struct SceneViewShot<'a> {
+    /// The scene.
+    pub scene: &'a Arc<LoadedScene>,
+    /// The render camera.
+    pub camera: Camera,
+    /// The rendered image's size, pixels (the view plane's resolution).
+    pub image_size: (u32, u32),
+    /// The pixel whose path is drawn, if any.
+    pub pixel: Option<[u32; 2]>,
+    /// The observer; `None` frames the camera and the scene.
+    pub observer: Option<Observer>,
+}
+
+/// The scene view `size` pixels large as 8-bit RGB, row after row.
+pub fn scene_view_image(shot: &SceneViewShot<'_>, size: [u32; 2]) -> Vec<[u8; 3]> {
+    let extent = SceneExtent::of(&shot.scene.scene);
+    let aspect = size[0] as Real / size[1].max(1) as Real;
+    let observer = shot.observer.unwrap_or_else(|| Observer::framing(&shot.camera, extent.bounds, aspect));
+    let flat =
+        observer.camera().and_then(|c| flat_render(&shot.scene.scene, c, size, &AtomicBool::new(false)));
+    let input = ViewInput {
+        scene: shot.scene,
+        camera: Some(shot.camera),
+        image_size: shot.image_size,
+        pinned: shot.pixel,
+    };
+    let ctx = egui::Context::default();
+    ctx.set_pixels_per_point(1.0);
+    let screen = Rect::from_min_size(pos2(0.0, 0.0), vec2(size[0] as f32, size[1] as f32));
+    let mut painter = SoftPainter::new(size.map(|s| s as usize), Color32::from_rgb(40, 42, 46));
+    let texture = flat.map(|image| ctx.load_texture("scene view", image, TextureOptions::LINEAR));
+    // The first pass builds the fonts; the second draws with them laid out.
+    for pass in 0..2 {
+        let raw = egui::RawInput { screen_rect: Some(screen), ..Default::default() };
+        let mut output = ctx.run_ui(raw, |ui| {
+            let p = ui.painter_at(screen);
+            if let Some(t) = &texture {
+                p.image(t.id(), screen, Rect::from_min_max(pos2(0.0, 0.0), pos2(1.0, 1.0)), Color32::WHITE);
+            }
+            if let Some(projection) = observer.camera().and_then(|c| Projection::new(c, size, screen)) {
+                draw_overlays(&p, &projection, &input, &extent, None);
+            }
+        });
+        if pass == 0 {
+            painter.update_textures(&mut output.textures_delta);
+        } else {
+            painter.paint_output(&ctx, output);
+        }
+    }
+    drop(texture);
+    ctx.tex_manager().write().take_delta().clear();
+    painter.rgb8()
+}
+
+/// Writes the scene view `size` pixels large to `out` (a `.png`), atomically.
+pub fn write_scene_view(shot: &SceneViewShot<'_>, size: [u32; 2], out: &Path) -> anyhow::Result<()> {
+    let pending = PendingImage::png(out)?;
+    pending.write_rgb8(size[0], size[1], &scene_view_image(shot, size))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_image_shows_the_flat_render_and_the_overlays_over_it() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/box.ron");
+        let scene = Arc::new(rt_core::load_scene(&path).unwrap());
+        let shot = SceneViewShot {
+            scene: &scene,
+            camera: scene.camera,
+            image_size: (32, 24),
+            pixel: Some([16, 12]),
+            observer: None,
+        };
+        let size = [320, 240];
+        let image = scene_view_image(&shot, size);
+        assert_eq!(image.len(), 320 * 240);
+        // Where the camera's eye C is drawn, the image is white (its dot).
+        let extent = SceneExtent::of(&scene.scene);
+        let observer = Observer::framing(&scene.camera, extent.bounds, 320.0 / 240.0);
+        let screen = Rect::from_min_size(pos2(0.0, 0.0), vec2(320.0, 240.0));
+        let projection = Projection::new(observer.camera().unwrap(), size, screen).unwrap();
+        let c = projection.point(scene.camera.position()).unwrap();
+        assert_eq!(image[c.y as usize * 320 + c.x as usize], [255, 255, 255], "no eye at {c:?}");
+        // Somewhere the flat render shows the blue box, and the view plane's yellow is drawn.
+        assert!(image.iter().any(|p| p[2] > 150 && p[0] < 120), "no box");
+        assert!(image.iter().any(|p| p[0] > 200 && p[1] > 160 && p[2] < 120), "no view plane");
+    }
+}
+#[cfg(test)]
+mod look {
+    #[test]
+    #[ignore]
+    fn write_for_looking() {
+        let name = std::env::var("LOOK_SCENE").unwrap();
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes").join(&name);
+        let scene = std::sync::Arc::new(rt_core::load_scene(&path).unwrap());
+        let (w, h) = (scene.settings.image.width(), scene.settings.image.height());
+        let px: Vec<u32> =
+            std::env::var("LOOK_PIXEL").unwrap().split(',').map(|s| s.parse().unwrap()).collect();
+        let shot = super::SceneViewShot {
+            scene: &scene,
+            camera: scene.camera,
+            image_size: (w, h),
+            pixel: Some([px[0], px[1]]),
+            observer: None,
+        };
+        super::write_scene_view(&shot, [640, 480], std::path::Path::new(&std::env::var("LOOK_OUT").unwrap()))
+            .unwrap();
+    }
+}
