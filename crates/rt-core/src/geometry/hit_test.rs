@@ -180,3 +180,93 @@ pub struct PolygonTest {
     /// outside every triangle.
     pub triangle: Option<TriangleTest>,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::aabb::Aabb;
+    use crate::geometry::plane::Plane;
+    use crate::geometry::polygon::Polygon;
+    use crate::geometry::primitive::Primitive;
+    use crate::geometry::sphere::Sphere;
+    use crate::geometry::triangle::Triangle;
+    use crate::math::ray::{Interval, Ray};
+
+    const ALL: Interval = Interval::new(0.0, Real::INFINITY);
+
+    #[test]
+    fn a_plane_says_which_side_the_eye_is_on_and_gives_the_intersections_t() {
+        let floor = Plane::new(Vec3::Y, -1.0).unwrap();
+        let down = Ray::new(Vec3::new(0.0, 1.0, -6.0), Vec3::new(0.0, -1.0, 1.0));
+        let test = floor.explain(&down);
+        assert_eq!((test.origin_side, test.origin_distance, test.n_dot_dir), (Placement::Above, 2.0, -1.0));
+        assert_eq!(test.t, floor.intersect(&down, ALL).unwrap().t);
+        let up = Ray::new(Vec3::new(0.0, -3.0, 0.0), Vec3::Y);
+        assert_eq!((floor.explain(&up).origin_side, floor.explain(&up).t), (Placement::Below, 2.0));
+        let on = Ray::new(Vec3::new(5.0, -1.0, 0.0), Vec3::X);
+        assert_eq!((floor.explain(&on).origin_side, floor.explain(&on).n_dot_dir), (Placement::On, 0.0));
+    }
+
+    #[test]
+    fn a_sphere_says_whether_the_origin_is_inside_on_or_outside_and_which_root_was_hit() {
+        let s = Sphere::new(Vec3::ZERO, 1.0).unwrap();
+        let from = |z: Real| Ray::new(Vec3::new(0.0, 0.0, z), Vec3::Z);
+        let outside = s.explain(&from(-5.0), 4.0);
+        assert_eq!((outside.origin, outside.roots, outside.far_root), (Placement::Outside, Some([4.0, 6.0]), false));
+        // a = 1, b = 2·(−5) = −10, c = 25 − 1 = 24: b² − 4ac = 4.
+        assert_eq!((outside.quadratic, outside.discriminant), ([1.0, -10.0, 24.0], 4.0));
+        let t = s.intersect(&from(0.0), ALL).unwrap().t;
+        let inside = s.explain(&from(0.0), t);
+        assert_eq!((inside.origin, inside.far_root, inside.origin_distance), (Placement::Inside, true, -1.0));
+        assert_eq!(s.explain(&from(-1.0), 0.0).origin, Placement::On);
+        let miss = s.explain(&Ray::new(Vec3::new(0.0, 2.0, -5.0), Vec3::Z), 0.0);
+        assert!(miss.roots.is_none() && miss.discriminant < 0.0);
+    }
+
+    #[test]
+    fn a_box_gives_its_slabs_and_the_face_entered_or_left() {
+        let b = Aabb::new(Vec3::splat(-1.0), Vec3::new(1.0, 2.0, 1.0)).unwrap();
+        let ray = Ray::new(Vec3::new(0.0, 0.5, -5.0), Vec3::Z);
+        let test = b.explain(&ray, b.intersect(&ray, ALL).unwrap().t);
+        assert_eq!((test.t_enter, test.t_exit, test.origin), (4.0, 6.0, Placement::Outside));
+        assert_eq!((test.face_axis, test.face_max, test.entered), (2, false, true));
+        assert_eq!((test.slabs[2].t_min_plane, test.slabs[2].t_max_plane), (4.0, 6.0));
+        assert_eq!((test.slabs[1].t_enter, test.slabs[1].t_exit), (Real::NEG_INFINITY, Real::INFINITY));
+        // From inside, along −y: it leaves by the face y = min.
+        let ray = Ray::new(Vec3::new(0.0, 0.5, 0.0), -Vec3::Y);
+        let test = b.explain(&ray, b.intersect(&ray, ALL).unwrap().t);
+        assert_eq!((test.origin, test.face_axis, test.face_max, test.entered), (Placement::Inside, 1, false, false));
+        assert_eq!(test.t_exit, 1.5);
+    }
+
+    #[test]
+    fn a_triangle_gives_the_barycentric_coordinates_and_the_one_plus_epsilon_test() {
+        let t = Triangle::new(Vec3::new(0.0, 0.0, 2.0), Vec3::new(0.0, 1.0, 2.0), Vec3::new(1.0, 0.0, 2.0)).unwrap();
+        let inside = t.explain(Vec3::new(0.25, 0.5, 2.0));
+        assert_eq!(inside.barycentric, [0.25, 0.5, 0.25]);
+        assert_eq!((inside.area_ratio_sum, inside.inside), (1.0, true));
+        let outside = t.explain(Vec3::new(1.0, 1.0, 2.0));
+        assert!(!outside.inside && outside.area_ratio_sum > 1.0 + outside.epsilon);
+        assert!(outside.barycentric.iter().any(|&w| w < 0.0));
+        // A mesh's triangle is explained as that triangle.
+        let mesh = crate::geometry::mesh::Mesh::new(t.corners().to_vec(), vec![[0, 1, 2]]).unwrap();
+        let ray = Ray::new(Vec3::new(0.25, 0.5, 0.0), Vec3::Z);
+        assert_eq!(Primitive::Mesh(mesh).explain(0, &ray, 2.0), Some(HitTest::Triangle(inside)));
+    }
+
+    #[test]
+    fn a_polygon_gives_the_crossing_test_and_the_triangle_holding_the_point() {
+        let square = Polygon::new(vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+        ])
+        .unwrap();
+        let inside = square.explain(Vec3::new(0.5, 0.2, 0.0));
+        assert!(inside.inside && inside.triangle.as_ref().is_some_and(|t| t.inside));
+        assert_eq!(inside.axes, [0, 1]);
+        let outside = square.explain(Vec3::new(2.0, 0.0, 0.0));
+        assert!(!outside.inside && outside.triangle.is_some_and(|t| !t.inside));
+    }
+}
