@@ -33,6 +33,15 @@ pub struct ExplainArgs {
     /// Image height in pixels (default: the scene's).
     #[arg(long, value_name = "H")]
     pub height: Option<u32>,
+    /// Also write the scene view of the sample's path to this PNG: the
+    /// scene seen from beside the camera, the camera, its view plane and
+    /// frustum, the lights and every ray of the path (the viewer's scene
+    /// view, drawn without a window).
+    #[arg(long, value_name = "OUT.png")]
+    pub scene_view: Option<PathBuf>,
+    /// The scene view's size, `W,H` pixels.
+    #[arg(long, value_name = "W,H", value_parser = parse_pixel, default_value = "960,640")]
+    pub scene_view_size: (u32, u32),
 }
 
 /// `X,Y` as two pixel indices.
@@ -70,7 +79,26 @@ pub fn run(args: &ExplainArgs) -> anyhow::Result<()> {
             spp - 1
         );
     }
+    // Check the picture's path before any work.
+    let picture = args.scene_view.as_deref().map(crate::image_out::PendingImage::png).transpose()?;
     let record = renderer.record_sample(x, y, args.sample).context("the pixel sample was refused")?;
+    if let Some(out) = picture {
+        use crate::viewer::scene_view_image::{SceneViewShot, scene_view_image};
+        let (w, h) = args.scene_view_size;
+        if !(1..=8192).contains(&w) || !(1..=8192).contains(&h) {
+            anyhow::bail!("--scene-view-size {w},{h}: each side must be 1 to 8192 pixels");
+        }
+        let scene = std::sync::Arc::new(loaded.clone());
+        let shot = SceneViewShot {
+            scene: &scene,
+            camera: loaded.camera,
+            image_size: (width, height),
+            pixel: Some([x, y]),
+            observer: None,
+            record: Some(&record),
+        };
+        out.write_rgb8(w, h, &scene_view_image(&shot, [w, h]))?;
+    }
     let json = serde_json::to_string_pretty(&record).context("cannot write the record as JSON")?;
     let mut out = std::io::stdout().lock();
     writeln!(out, "{json}").and_then(|()| out.flush()).context("cannot write to standard output")

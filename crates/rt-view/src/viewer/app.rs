@@ -594,6 +594,7 @@ impl Viewer {
             camera: self.camera.settings().to_camera().ok(),
             image_size,
             pinned: self.view.pinned(),
+            spec: self.job_spec(),
         };
         egui::Panel::right("scene view")
             .resizable(true)
@@ -1624,17 +1625,26 @@ mod tests {
         let ctx = egui::Context::default();
         let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
         let size = egui::vec2(1100.0, 700.0);
+        // A pinned pixel records nothing while the view is closed.
+        v.view.pin([100, 80]);
         for _ in 0..5 {
             frame(&ctx, &mut v, size, vec![]);
         }
         assert!(!v.scene_view.is_open());
         assert_eq!(v.scene_view.renders_started(), 0, "a closed view started a render");
-        assert!(!v.scene_view.rendering());
-        // Key 3 opens it: its first frame starts one flat render.
+        assert!(!v.scene_view.rendering(), "a closed view runs a job");
+        // Key 3 opens it: its first frame starts one flat render, and the
+        // pinned pixel's record, which arrives off the UI thread.
         frame(&ctx, &mut v, size, vec![key(Key::Num3)]);
         assert!(v.scene_view.is_open());
         assert_eq!(v.scene_view.renders_started(), 1);
         assert!(v.scene_view.rendering());
+        let deadline = Instant::now() + Duration::from_secs(30);
+        while v.scene_view.record_pixel() != Some([100, 80]) {
+            assert!(Instant::now() < deadline, "the record never arrived");
+            frame(&ctx, &mut v, size, vec![]);
+            std::thread::sleep(Duration::from_millis(5));
+        }
         // Closed again: the job is dropped (cancelled), and no frame starts another.
         frame(&ctx, &mut v, size, vec![key(Key::Num3)]);
         assert!(!v.scene_view.is_open());

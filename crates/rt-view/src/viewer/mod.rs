@@ -25,7 +25,8 @@
 //!   camera (rt-core's flat render, `observer_render`, on a thread of its
 //!   own), the render camera, view plane, frustum and lights drawn over it
 //!   (`camera_overlay`) through the observer's `projection`, and the
-//!   pinned pixel's path (`path_overlay`); [`scene_view_image`] makes the
+//!   pinned pixel's path (`path_overlay`) from the record of one of its
+//!   samples (`record_job`); [`scene_view_image`] makes the
 //!   same picture without a window, painted on the CPU (`soft_paint`);
 //! - `screenshot`: `--screenshot`, saving the window once the frame is done;
 //! - `trace`: with `RT_VIEW_TRACE=FILE`, a line per frame and per job of
@@ -59,6 +60,7 @@ mod observer;
 mod observer_render;
 mod path_overlay;
 mod projection;
+mod record_job;
 pub mod reference;
 pub mod region;
 mod remembered;

@@ -42,11 +42,6 @@ impl Projection {
         &self.view
     }
 
-    /// The rectangle on screen the observer's image fills.
-    pub fn screen(&self) -> Rect {
-        self.screen
-    }
-
     /// Distance along cam_z from the observer of `p`.
     pub fn depth(&self, p: Vec3) -> Real {
         (p - self.view.camera().position()).dot(self.view.camera().basis().z)

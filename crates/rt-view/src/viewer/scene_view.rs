@@ -13,9 +13,13 @@
 //! observer's [`Projection`]: moving the render camera's sliders moves
 //! them at once.
 //!
-//! Closed, the view costs nothing: no job runs, no texture is kept, and
-//! nothing is computed in the frame ([`SceneView::renders_started`] counts
-//! the jobs, for the tests and the trace).
+//! With a pixel pinned, the record of one of its samples (chosen in the
+//! view's header) is computed off the UI thread ([`RecordJob`]) and its
+//! whole path drawn; until it arrives, the primary ray is.
+//!
+//! Closed, the view costs nothing: no job runs, no texture or record is
+//! kept, and nothing is computed in the frame ([`SceneView::renders_started`]
+//! counts the jobs, for the tests and the trace).
 
 use std::sync::Arc;
 
@@ -28,6 +32,9 @@ use super::observer::Observer;
 use super::observer_render::ObserverJob;
 use super::path_overlay::PixelPath;
 use super::projection::Projection;
+use super::record_job::{RecordJob, RecordKey};
+use super::render_job::JobSpec;
+use rt_core::explain::record::PathRecord;
 
 /// The flat render's longer side, in pixels, when the observer is still.
 const STILL_SIDE: f32 = 480.0;
@@ -60,6 +67,8 @@ pub(super) struct ViewInput<'a> {
     pub image_size: (u32, u32),
     /// The pinned pixel of the image, if any.
     pub pinned: Option<[u32; 2]>,
+    /// The full-resolution render (whose samples are recorded), if any.
+    pub spec: Option<JobSpec>,
 }
 
 /// Lengths that make the overlays read well in a scene: its bounded
@@ -109,6 +118,7 @@ pub(super) fn draw_overlays(
     projection: &Projection,
     input: &ViewInput<'_>,
     extent: &SceneExtent,
+    record: Option<&PathRecord>,
     pointer: Option<egui::Pos2>,
 ) -> Option<usize> {
     let camera = input.camera?;
@@ -118,7 +128,10 @@ pub(super) fn draw_overlays(
     let overlay = extent.camera_scene(&view, scene.lights());
     camera_overlay::draw(painter, projection, &overlay);
     let pixel = input.pinned.filter(|&[x, y]| x < w && y < h)?;
-    let path = PixelPath::primary(&view, scene, pixel, overlay.unit, overlay.reach);
+    let path = match record.filter(|r| r.pixel == pixel) {
+        Some(record) => PixelPath::from_record(record, overlay.unit, overlay.reach),
+        None => PixelPath::primary(&view, scene, pixel, overlay.unit, overlay.reach),
+    };
     path.draw(painter, projection, pointer)
 }
 
@@ -132,6 +145,11 @@ pub(super) struct SceneView {
     job: Option<(ObserverJob, RenderKey)>,
     texture: Option<(TextureHandle, RenderKey)>,
     renders_started: u64,
+    /// The pinned pixel's sample whose path is drawn.
+    sample: u32,
+    record_job: Option<RecordJob>,
+    /// The last record (or why there is none) and what it records.
+    record: Option<(RecordKey, Result<PathRecord, String>)>,
 }
 
 impl SceneView {
@@ -146,6 +164,8 @@ impl SceneView {
         if !open {
             self.job = None;
             self.texture = None;
+            self.record_job = None;
+            self.record = None;
         }
     }
 
@@ -162,7 +182,13 @@ impl SceneView {
     /// Whether a flat render is in flight.
     #[cfg(test)]
     pub fn rendering(&self) -> bool {
-        self.job.is_some()
+        self.job.is_some() || self.record_job.is_some()
+    }
+
+    /// The pixel of the record drawn, once it has arrived.
+    #[cfg(test)]
+    pub fn record_pixel(&self) -> Option<[u32; 2]> {
+        self.record.as_ref().and_then(|(_, r)| r.as_ref().ok()).map(|r| r.pixel)
     }
 
     /// The observer, once the view has been shown.
@@ -176,6 +202,8 @@ impl SceneView {
         self.observer = None;
         self.extent = None;
         self.job = None;
+        self.record_job = None;
+        self.record = None;
     }
 
     /// The button that shows and hides the view (side panel).
@@ -210,8 +238,32 @@ impl SceneView {
             {
                 self.observer = None;
             }
-            ui.small("drag: orbit · Shift/right drag: pan · wheel: zoom");
+            if let (Some(_), Some(spec)) = (input.pinned, &input.spec) {
+                ui.separator();
+                ui.label("sample");
+                let last = spec.spp.saturating_sub(1);
+                ui.add(egui::DragValue::new(&mut self.sample).range(0..=last))
+                    .on_hover_text("which of the pinned pixel's samples to follow");
+                self.sample = self.sample.min(last);
+                match &self.record {
+                    Some((_, Ok(r))) => {
+                        let [r, g, b] = r.value.to_array();
+                        ui.small(format!("value ({r:.4}, {g:.4}, {b:.4})"));
+                    }
+                    Some((_, Err(e))) => {
+                        ui.small(e.as_str());
+                    }
+                    None => {}
+                }
+            } else {
+                ui.small("drag: orbit · Shift/right drag: pan · wheel: zoom · click a pixel: its path");
+            }
         });
+        let wanted = input
+            .pinned
+            .zip(input.spec.as_ref())
+            .map(|(p, spec)| (RecordKey::new(spec, p, self.sample), spec));
+        self.poll_record(ui.ctx(), wanted);
         let rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, Sense::click_and_drag());
         let camera = input.camera.unwrap_or(input.scene.camera);
@@ -233,7 +285,33 @@ impl SceneView {
             painter.image(texture.id(), rect, uv, Color32::WHITE);
         }
         let Some(projection) = observer.camera().and_then(|c| Projection::new(c, size, rect)) else { return };
-        draw_overlays(&painter, &projection, input, &extent, response.hover_pos());
+        let record = self.record.as_ref().and_then(|(_, r)| r.as_ref().ok());
+        draw_overlays(&painter, &projection, input, &extent, record, response.hover_pos());
+    }
+
+    /// Takes a finished record; starts recording `wanted` (the pinned
+    /// pixel's chosen sample of the render) once no other is in flight;
+    /// forgets the record when no pixel is pinned.
+    fn poll_record(&mut self, ctx: &egui::Context, wanted: Option<(RecordKey, &JobSpec)>) {
+        if let Some(job) = &self.record_job
+            && let Some(record) = job.take()
+        {
+            self.record = Some((job.key().clone(), record));
+            self.record_job = None;
+        }
+        let Some((key, spec)) = wanted else {
+            self.record = None;
+            return;
+        };
+        let have = self.record.as_ref().is_some_and(|(k, _)| *k == key);
+        let pending = self.record_job.as_ref().is_some_and(|j| *j.key() == key);
+        if !have && !pending && self.record_job.is_none() {
+            let repaint = ctx.clone();
+            self.record_job = Some(RecordJob::start(spec, key.clone(), move || repaint.request_repaint()));
+        }
+        if self.record.as_ref().is_some_and(|(k, _)| k.pixel != key.pixel) {
+            self.record = None;
+        }
     }
 
     /// Takes a finished image into the texture; forgets a job that ended.

@@ -9,6 +9,7 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use egui::{Color32, Rect, TextureOptions, pos2, vec2};
+use rt_core::explain::record::PathRecord;
 use rt_core::{Camera, LoadedScene, Real};
 
 use super::observer::Observer;
@@ -32,6 +33,9 @@ pub struct SceneViewShot<'a> {
     pub pixel: Option<[u32; 2]>,
     /// The observer; `None` frames the camera and the scene.
     pub observer: Option<Observer>,
+    /// The record of one of the pixel's samples: its whole path is drawn
+    /// (`None`: the pixel's primary ray).
+    pub record: Option<&'a PathRecord>,
 }
 
 /// The scene view `size` pixels large as 8-bit RGB, row after row.
@@ -46,6 +50,7 @@ pub fn scene_view_image(shot: &SceneViewShot<'_>, size: [u32; 2]) -> Vec<[u8; 3]
         camera: Some(shot.camera),
         image_size: shot.image_size,
         pinned: shot.pixel,
+        spec: None,
     };
     let ctx = egui::Context::default();
     ctx.set_pixels_per_point(1.0);
@@ -61,7 +66,7 @@ pub fn scene_view_image(shot: &SceneViewShot<'_>, size: [u32; 2]) -> Vec<[u8; 3]
                 p.image(t.id(), screen, Rect::from_min_max(pos2(0.0, 0.0), pos2(1.0, 1.0)), Color32::WHITE);
             }
             if let Some(projection) = observer.camera().and_then(|c| Projection::new(c, size, screen)) {
-                draw_overlays(&p, &projection, &input, &extent, None);
+                draw_overlays(&p, &projection, &input, &extent, shot.record, None);
             }
         });
         if pass == 0 {
@@ -95,6 +100,7 @@ mod tests {
             image_size: (32, 24),
             pixel: Some([16, 12]),
             observer: None,
+            record: None,
         };
         let size = [320, 240];
         let image = scene_view_image(&shot, size);
@@ -128,6 +134,7 @@ mod look {
             image_size: (w, h),
             pixel: Some([px[0], px[1]]),
             observer: None,
+            record: None,
         };
         super::write_scene_view(&shot, [640, 480], std::path::Path::new(&std::env::var("LOOK_OUT").unwrap()))
             .unwrap();
