@@ -30,6 +30,9 @@ const LABEL: f32 = 12.0;
 /// Pixel grid lines are drawn once a pixel is at least this many points
 /// wide on screen.
 const GRID_MIN_POINTS: f32 = 6.0;
+/// The view plane's width and height are written on it once its top edge
+/// is at least this many points long on screen.
+const SIZE_LABELS_MIN_POINTS: f32 = 90.0;
 /// No pixel grid for images with more lines than this (a grid that dense
 /// is only ever seen partly; drawing all of it would cost frames).
 const GRID_MAX_LINES: u32 = 1200;
@@ -137,11 +140,15 @@ fn draw_view_plane(painter: &Painter, p: &Projection, view: &ViewPlane) {
     for i in 0..4 {
         line(painter, p, corners[i], corners[(i + 1) % 4], Stroke::new(1.5, PLANE));
     }
-    let (plane_w, plane_h) = view.size();
-    let top = 0.5 * (corners[0] + corners[1]);
-    label(painter, p, top, &format!("plane_w = {}", short(plane_w)), PLANE);
-    let left = 0.5 * (corners[0] + corners[3]);
-    label(painter, p, left, &format!("plane_h = {}", short(plane_h)), PLANE);
+    // The sizes are written once the plane is large enough on screen to hold them.
+    let across = p.point(corners[0]).zip(p.point(corners[1])).map_or(0.0, |(a, b)| a.distance(b));
+    if across >= SIZE_LABELS_MIN_POINTS {
+        let (plane_w, plane_h) = view.size();
+        let top = 0.5 * (corners[0] + corners[1]);
+        label(painter, p, top, &format!("plane_w = {}", short(plane_w)), PLANE);
+        let left = 0.5 * (corners[0] + corners[3]);
+        label(painter, p, left, &format!("plane_h = {}", short(plane_h)), PLANE);
+    }
     dot(painter, p, corners[0], 4.0, PLANE);
     label(painter, p, corners[0], "O (0,0)", PLANE);
 }

@@ -31,12 +31,19 @@ impl Observer {
         }
         let target = 0.5 * (lo + hi);
         let radius = (0.5 * (hi - lo).length()).max(camera.near() * 4.0).max(1e-3);
-        let b = camera.basis();
-        let from =
-            (1.0 * b.x + 0.7 * camera.up().normalize_or_zero() - 0.6 * b.z).try_normalize().unwrap_or(b.x);
         // The narrower of the vertical and horizontal fields of view decides.
         let half_tan = (0.5 * OBSERVER_FOV.to_radians()).tan() * aspect.clamp(0.05, 1.0);
         let distance = radius / half_tan.atan().sin() * 1.1;
+        Self::looking_at(camera, target, distance)
+    }
+
+    /// An observer `distance` from `target`, looking at it from where
+    /// [`Observer::framing`] looks: beside and above the render `camera`
+    /// (to its right, a little behind).
+    pub fn looking_at(camera: &Camera, target: Vec3, distance: Real) -> Self {
+        let b = camera.basis();
+        let from =
+            (1.0 * b.x + 0.7 * camera.up().normalize_or_zero() - 0.6 * b.z).try_normalize().unwrap_or(b.x);
         let settings = CameraSettings {
             position: target + distance * from,
             center_of_interest: target,
@@ -47,7 +54,7 @@ impl Observer {
             aperture: 0.0,
             focus_distance: 1.0,
         };
-        // A degenerate framing (up along the view) falls back to a side view.
+        // A degenerate view (up along it) falls back to a side view.
         let settings = if settings.to_camera().is_ok() {
             settings
         } else {

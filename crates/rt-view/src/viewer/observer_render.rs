@@ -9,16 +9,17 @@
 //! dark grey. No lights, shadows or bounces: the view is for seeing where
 //! things are, the image beside it for how they look.
 //!
-//! [`ObserverJob`] renders one such image in the background (rows in
-//! parallel on rayon's pool) and hands it over whole; the UI thread only
-//! polls it ([`ObserverJob::take`]), never waits.
+//! [`ObserverJob`] renders one such image in the background and hands it
+//! over whole; the UI thread only polls it ([`ObserverJob::take`]), never
+//! waits. It renders on its own thread, row after row, not on rayon's pool:
+//! the image's render job keeps every rayon thread busy until it is done,
+//! and the scene view must not wait for it.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver};
 
 use egui::{Color32, ColorImage};
-use rayon::prelude::*;
 use rt_core::{Camera, LoadedScene, Scene, ViewPlane};
 
 /// The share of a surface's colour it shows when seen edge-on.
@@ -33,9 +34,9 @@ pub fn flat_render(scene: &Scene, camera: Camera, size: [u32; 2], cancel: &Atomi
     let view = ViewPlane::new(camera, size[0], size[1]).ok()?;
     let (w, h) = (size[0] as usize, size[1] as usize);
     let mut pixels = vec![EMPTY; w * h];
-    pixels.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+    for (y, row) in pixels.chunks_mut(w).enumerate() {
         if cancel.load(Ordering::Relaxed) {
-            return;
+            return None;
         }
         for (x, pixel) in row.iter_mut().enumerate() {
             let ray = view.center_ray(x as u32, y as u32);
@@ -47,7 +48,7 @@ pub fn flat_render(scene: &Scene, camera: Camera, size: [u32; 2], cancel: &Atomi
                 *pixel = Color32::from_rgb(byte(c[0] * shade), byte(c[1] * shade), byte(c[2] * shade));
             }
         }
-    });
+    }
     (!cancel.load(Ordering::Relaxed)).then(|| ColorImage::new(size.map(|s| s as usize), pixels))
 }
 

@@ -117,26 +117,118 @@ mod tests {
         assert!(image.iter().any(|p| p[0] > 200 && p[1] > 160 && p[2] < 120), "no view plane");
     }
 }
+/// The pictures of `docs/course-in-3d.md`, made with the function the
+/// docs describe: `cargo test -p rt-view --lib -- --ignored course_pictures`
+/// writes them into `docs/course-in-3d/`.
 #[cfg(test)]
-mod look {
-    #[test]
-    #[ignore]
-    fn write_for_looking() {
-        let name = std::env::var("LOOK_SCENE").unwrap();
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes").join(&name);
-        let scene = std::sync::Arc::new(rt_core::load_scene(&path).unwrap());
-        let (w, h) = (scene.settings.image.width(), scene.settings.image.height());
-        let px: Vec<u32> =
-            std::env::var("LOOK_PIXEL").unwrap().split(',').map(|s| s.parse().unwrap()).collect();
-        let shot = super::SceneViewShot {
+mod course_pictures {
+    use super::*;
+    use rt_core::Renderer;
+    use rt_core::explain::record::{PathRecord, SegmentKind};
+
+    /// Where the observer stands for a picture.
+    enum Look {
+        /// As the scene view starts: the camera and the whole scene.
+        Framing,
+        /// `distance` from the point `fraction` of the way from the eye to
+        /// the primary hit.
+        Along { fraction: Real, distance: Real },
+    }
+
+    /// The first pixel (scanning every `step`th) whose sample 0 `wanted` accepts.
+    fn find(
+        renderer: &Renderer<'_>,
+        (w, h): (u32, u32),
+        step: u32,
+        wanted: &dyn Fn(&PathRecord) -> bool,
+    ) -> PathRecord {
+        (0..h)
+            .step_by(step as usize)
+            .flat_map(|y| (0..w).step_by(step as usize).map(move |x| (x, y)))
+            .filter_map(|(x, y)| renderer.record_sample(x, y, 0))
+            .find(|r| wanted(r))
+            .expect("a pixel with such a path")
+    }
+
+    fn picture(
+        name: &str,
+        file: &str,
+        size: Option<(u32, u32)>,
+        look: Look,
+        wanted: &dyn Fn(&PathRecord) -> bool,
+    ) {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let scene = Arc::new(rt_core::load_scene(&root.join("scenes").join(file)).unwrap());
+        let settings = scene.settings.overridden(size.map(|s| s.0), size.map(|s| s.1), Some(1)).unwrap();
+        let (w, h) = (settings.image.width(), settings.image.height());
+        let renderer = Renderer::new(&scene.scene, scene.camera, &settings).unwrap();
+        let record = find(&renderer, (w, h), (w / 40).max(1), wanted);
+        let out = [640, 400];
+        let observer = match look {
+            Look::Framing => None,
+            Look::Along { fraction, distance } => {
+                let c = scene.camera.position();
+                let hit =
+                    record.segments[0].hit.as_ref().map_or(scene.camera.center_of_interest(), |h| h.point);
+                Some(Observer::looking_at(&scene.camera, c + (hit - c) * fraction, distance))
+            }
+        };
+        let shot = SceneViewShot {
             scene: &scene,
             camera: scene.camera,
             image_size: (w, h),
-            pixel: Some([px[0], px[1]]),
-            observer: None,
-            record: None,
+            pixel: Some(record.pixel),
+            observer,
+            record: Some(&record),
         };
-        super::write_scene_view(&shot, [640, 480], std::path::Path::new(&std::env::var("LOOK_OUT").unwrap()))
-            .unwrap();
+        let dir = root.join("docs/course-in-3d");
+        std::fs::create_dir_all(&dir).unwrap();
+        write_scene_view(&shot, out, &dir.join(name)).unwrap();
+        eprintln!("{name}: {file} pixel {:?} of {w}x{h}", record.pixel);
+    }
+
+    fn has(r: &PathRecord, kind: impl Fn(&SegmentKind) -> bool) -> bool {
+        r.segments.iter().any(|s| kind(&s.kind))
+    }
+
+    #[test]
+    #[ignore]
+    fn course_pictures() {
+        let hits = |r: &PathRecord| r.segments[0].hit.is_some();
+        // Camera space and the view plane up close: a 16x12 image, so its pixel grid shows.
+        picture(
+            "camera.png",
+            "box.ron",
+            Some((16, 12)),
+            Look::Along { fraction: 0.0, distance: 3.2 },
+            &|r| r.pixel == [5, 4],
+        );
+        picture("primary.png", "box.ron", None, Look::Framing, &hits);
+        picture("orthographic.png", "orthographic.ron", None, Look::Framing, &hits);
+        picture("shadows.png", "shadows.ron", None, Look::Framing, &|r| {
+            has(r, |k| matches!(k, SegmentKind::Shadow { blocked: true, .. }))
+                && has(r, |k| matches!(k, SegmentKind::Shadow { blocked: false, .. }))
+        });
+        picture("mirrors.png", "mirrors.ron", None, Look::Framing, &|r| {
+            r.segments.iter().filter(|s| matches!(s.kind, SegmentKind::Reflection)).count() >= 2
+        });
+        picture("glass.png", "glass.ron", None, Look::Framing, &|r| {
+            r.segments.iter().filter(|s| matches!(s.kind, SegmentKind::Refraction)).count() >= 2
+        });
+        picture("path-tracing.png", "cornell_box.ron", None, Look::Framing, &|r| {
+            r.segments.iter().filter(|s| matches!(s.kind, SegmentKind::Bounce)).count() >= 3
+        });
+        picture(
+            "subsurface.png",
+            "subsurface.ron",
+            None,
+            Look::Along { fraction: 1.0, distance: 1.6 },
+            // A walk that starts where the primary ray enters the translucent object.
+            &|r| {
+                let walk = r.segments.iter().filter(|s| matches!(s.kind, SegmentKind::WalkStep));
+                r.segments.iter().any(|s| s.parent == Some(0) && matches!(s.kind, SegmentKind::WalkStep))
+                    && walk.count() >= 5
+            },
+        );
     }
 }
