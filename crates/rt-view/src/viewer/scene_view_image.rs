@@ -212,12 +212,16 @@ mod course_pictures {
         picture("mirrors.png", "mirrors.ron", None, Look::Framing, &|r| {
             r.segments.iter().filter(|s| matches!(s.kind, SegmentKind::Reflection)).count() >= 2
         });
-        picture("glass.png", "glass.ron", None, Look::Framing, &|r| {
+        picture("glass.png", "glass.ron", None, Look::Along { fraction: 1.0, distance: 3.0 }, &|r| {
             r.segments.iter().filter(|s| matches!(s.kind, SegmentKind::Refraction)).count() >= 2
         });
-        picture("path-tracing.png", "cornell_box.ron", None, Look::Framing, &|r| {
-            r.segments.iter().filter(|s| matches!(s.kind, SegmentKind::Bounce)).count() >= 3
-        });
+        picture(
+            "path-tracing.png",
+            "cornell_box.ron",
+            None,
+            Look::Along { fraction: 0.8, distance: 9.0 },
+            &|r| r.segments.iter().filter(|s| matches!(s.kind, SegmentKind::Bounce)).count() >= 3,
+        );
         picture(
             "subsurface.png",
             "subsurface.ron",
