@@ -97,7 +97,10 @@ fn each_kind_of_primitive_hit_carries_the_course_test() {
     let triangle = centre("triangle.ron");
     assert_eq!((triangle["shape"].as_str(), triangle["inside"].as_bool()), (Some("triangle"), Some(true)));
     let sum: f32 = triangle["barycentric"].as_array().unwrap().iter().map(f32_of).sum();
-    assert!((sum - 1.0).abs() < 1e-5 && triangle["barycentric"].as_array().unwrap().iter().all(|w| f32_of(w) >= 0.0));
+    assert!(
+        (sum - 1.0).abs() < 1e-5
+            && triangle["barycentric"].as_array().unwrap().iter().all(|w| f32_of(w) >= 0.0)
+    );
     let polygon = centre("polygon.ron");
     assert_eq!((polygon["shape"].as_str(), polygon["inside"].as_bool()), (Some("polygon"), Some(true)));
     assert_eq!(polygon["triangle"]["inside"], true);

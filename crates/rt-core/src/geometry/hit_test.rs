@@ -212,7 +212,10 @@ mod tests {
         let s = Sphere::new(Vec3::ZERO, 1.0).unwrap();
         let from = |z: Real| Ray::new(Vec3::new(0.0, 0.0, z), Vec3::Z);
         let outside = s.explain(&from(-5.0), 4.0);
-        assert_eq!((outside.origin, outside.roots, outside.far_root), (Placement::Outside, Some([4.0, 6.0]), false));
+        assert_eq!(
+            (outside.origin, outside.roots, outside.far_root),
+            (Placement::Outside, Some([4.0, 6.0]), false)
+        );
         // a = 1, b = 2·(−5) = −10, c = 25 − 1 = 24: b² − 4ac = 4.
         assert_eq!((outside.quadratic, outside.discriminant), ([1.0, -10.0, 24.0], 4.0));
         let t = s.intersect(&from(0.0), ALL).unwrap().t;
@@ -235,13 +238,17 @@ mod tests {
         // From inside, along −y: it leaves by the face y = min.
         let ray = Ray::new(Vec3::new(0.0, 0.5, 0.0), -Vec3::Y);
         let test = b.explain(&ray, b.intersect(&ray, ALL).unwrap().t);
-        assert_eq!((test.origin, test.face_axis, test.face_max, test.entered), (Placement::Inside, 1, false, false));
+        assert_eq!(
+            (test.origin, test.face_axis, test.face_max, test.entered),
+            (Placement::Inside, 1, false, false)
+        );
         assert_eq!(test.t_exit, 1.5);
     }
 
     #[test]
     fn a_triangle_gives_the_barycentric_coordinates_and_the_one_plus_epsilon_test() {
-        let t = Triangle::new(Vec3::new(0.0, 0.0, 2.0), Vec3::new(0.0, 1.0, 2.0), Vec3::new(1.0, 0.0, 2.0)).unwrap();
+        let t = Triangle::new(Vec3::new(0.0, 0.0, 2.0), Vec3::new(0.0, 1.0, 2.0), Vec3::new(1.0, 0.0, 2.0))
+            .unwrap();
         let inside = t.explain(Vec3::new(0.25, 0.5, 2.0));
         assert_eq!(inside.barycentric, [0.25, 0.5, 0.25]);
         assert_eq!((inside.area_ratio_sum, inside.inside), (1.0, true));
