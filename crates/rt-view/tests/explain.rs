@@ -14,7 +14,8 @@ fn scene(name: &str) -> String {
 /// `rt-view explain` on a 32×24 image of `name` at pixel (x, y), parsed.
 fn explain(name: &str, x: u32, y: u32, extra: &[&str]) -> Value {
     let pixel = format!("{x},{y}");
-    let mut args = vec!["explain", &scene(name), "--pixel", &pixel, "--width", "32", "--height", "24"];
+    let path = scene(name);
+    let mut args = vec!["explain", &path, "--pixel", &pixel, "--width", "32", "--height", "24"];
     args.extend_from_slice(extra);
     let o = rt_view(&args, "");
     assert!(o.status.success(), "{name}: {}", stderr(&o));
@@ -38,7 +39,7 @@ fn the_primary_ray_and_its_hit_are_those_of_cast_pixels_number_for_number() {
         for (x, y) in [(0u32, 0u32), (16, 12), (31, 23), (9, 17)] {
             let row: Vec<&str> = csv.lines().nth(1 + (y * 32 + x) as usize).unwrap().split(',').collect();
             let num = |i: usize| row[i].parse::<f32>().unwrap();
-            let json = explain(name, x, y, &[]);
+            let json = explain(name, x, y, &["--spp", "1"]);
             let primary = &json["segments"][0];
             assert_eq!(primary["kind"]["type"], "primary");
             assert_eq!(vec3(&primary["origin"]), [num(2), num(3), num(4)], "{name} ({x}, {y})");
