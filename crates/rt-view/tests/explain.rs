@@ -138,3 +138,29 @@ fn a_bad_pixel_or_sample_is_an_error_that_says_what_and_prints_nothing() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("no-such.ron") && stdout(&o).is_empty());
 }
+
+#[test]
+fn scene_view_writes_the_picture_of_the_path_beside_the_json_and_refuses_a_bad_path_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("view.png");
+    let out_arg = out.to_str().unwrap().to_owned();
+    let record = explain("shadows.ron", 16, 12, &["--scene-view", &out_arg, "--scene-view-size", "240,160"]);
+    assert!(record["segments"].as_array().is_some_and(|s| !s.is_empty()), "the JSON is still printed");
+    let image = common::read_png(&out);
+    assert_eq!(image.dimensions(), (240, 160));
+    // The primary ray is drawn white over the flat render.
+    assert!(
+        image.pixels().any(|p| p.0 == [255, 255, 255]),
+        "nothing drawn in white (the eye, the primary ray)"
+    );
+    // A path that is no PNG is refused before any work, with nothing printed.
+    let bad = dir.path().join("view.jpg");
+    let o = rt_view(
+        &["explain", &scene("shadows.ron"), "--pixel", "1,1", "--scene-view", bad.to_str().unwrap()],
+        "",
+    );
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("must be a .png file"), "{}", stderr(&o));
+    assert!(stdout(&o).is_empty());
+    assert!(!bad.exists());
+}

@@ -255,6 +255,37 @@ pub fn short(v: Real) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rt_core::Camera;
+
+    #[test]
+    fn the_drawn_view_plane_corners_are_the_conventions_camera_math_for_both_projections() {
+        // docs/conventions.md: plane_h = 2·near·tan(fov_y/2), plane_w = plane_h·W/H,
+        // O = C + near·cam_z + (plane_h/2)·cam_y − (plane_w/2)·cam_x, and the
+        // others along cam_x and −cam_y; the explain record's corners too.
+        for projection in [Kind::Perspective, Kind::Orthographic] {
+            let camera = Camera::new(
+                Vec3::new(-4.0, 3.0, -6.0),
+                Vec3::new(0.0, 0.5, 0.0),
+                Vec3::Y,
+                45.0,
+                1.5,
+                projection,
+            )
+            .unwrap();
+            let view = ViewPlane::new(camera, 320, 240).unwrap();
+            let b = camera.basis();
+            let plane_h = 2.0 * 1.5 * (22.5 as Real).to_radians().tan();
+            let plane_w = plane_h * 320.0 / 240.0;
+            let o = camera.position() + 1.5 * b.z + 0.5 * plane_h * b.y - 0.5 * plane_w * b.x;
+            let want = [o, o + plane_w * b.x, o + plane_w * b.x - plane_h * b.y, o - plane_h * b.y];
+            let got = plane_corners(&view);
+            for (g, w) in got.iter().zip(want) {
+                assert!((*g - w).length() < 1e-5, "{projection:?}: {g} vs {w}");
+            }
+            let record = rt_core::explain::record::ViewPlaneRecord::of(&view);
+            assert_eq!([record.upper_left, record.upper_right, record.lower_right, record.lower_left], got);
+        }
+    }
 
     #[test]
     fn labels_show_four_significant_digits() {
