@@ -123,7 +123,7 @@ mod tests {
         )
         .unwrap();
         for point in [camera.position(), camera.center_of_interest(), bounds.0, bounds.1] {
-            let [x, y] = p.to_pixels(point).expect("in front of the observer");
+            let [x, y] = p.pixel_of(point).expect("in front of the observer");
             assert!((0.0..200.0).contains(&x) && (0.0..400.0).contains(&y), "{point} at {x}, {y}");
         }
     }

@@ -30,6 +30,7 @@ const EMPTY: Color32 = Color32::from_rgb(40, 42, 46);
 /// Renders `scene` seen by `camera` as a flat-shaded `size` image (see the
 /// module's docs); `None` if `cancel` was set meanwhile or the camera has
 /// no view plane at that size.
+#[allow(clippy::unnecessary_cast)] // `Real` is f64 when rt-core's `f64` feature is on.
 pub fn flat_render(scene: &Scene, camera: Camera, size: [u32; 2], cancel: &AtomicBool) -> Option<ColorImage> {
     let view = ViewPlane::new(camera, size[0], size[1]).ok()?;
     let (w, h) = (size[0] as usize, size[1] as usize);

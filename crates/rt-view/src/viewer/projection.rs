@@ -49,12 +49,12 @@ impl Projection {
 
     /// `p` in the observer's image, in pixels (fractional; row 0 at the
     /// top), or `None` if it is closer than `near` along cam_z.
-    pub fn to_pixels(&self, p: Vec3) -> Option<[Real; 2]> {
+    pub fn pixel_of(&self, p: Vec3) -> Option<[Real; 2]> {
         let camera = self.view.camera();
         let b = camera.basis();
         let d = p - camera.position();
         let z = d.dot(b.z);
-        if !(z >= camera.near()) {
+        if z.is_nan() || z < camera.near() {
             return None;
         }
         let (plane_w, plane_h) = self.view.size();
@@ -64,6 +64,7 @@ impl Projection {
     }
 
     /// Image pixels → screen points.
+    #[allow(clippy::unnecessary_cast)] // `Real` is f64 when rt-core's `f64` feature is on.
     pub fn pixels_to_screen(&self, [px, py]: [Real; 2]) -> Pos2 {
         let (w, h) = (self.view.width() as f32, self.view.height() as f32);
         let r = self.screen;
@@ -72,7 +73,7 @@ impl Projection {
 
     /// Where `p` is drawn on screen, or `None` if it is behind the observer.
     pub fn point(&self, p: Vec3) -> Option<Pos2> {
-        self.to_pixels(p).map(|px| self.pixels_to_screen(px))
+        self.pixel_of(p).map(|px| self.pixels_to_screen(px))
     }
 
     /// The part of segment `a`–`b` in front of the observer (`z ≥ near`),
@@ -121,6 +122,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::unnecessary_cast)] // `Real` is f64 when rt-core's `f64` feature is on.
     fn a_point_of_the_observers_view_plane_projects_onto_its_own_pixel() {
         // What the overlay draws lines up with the flat render: the view-plane
         // point of pixel (ix+sx, iy+sy) and every point along its primary ray
@@ -131,14 +133,14 @@ mod tests {
             [(0, 0, 0.0, 0.0), (319, 239, 1.0, 1.0), (17, 200, 0.25, 0.75), (160, 120, 0.5, 0.5)]
         {
             let on_plane = p.view().point(ix, iy, sx, sy);
-            let [px, py] = p.to_pixels(on_plane).unwrap();
+            let [px, py] = p.pixel_of(on_plane).unwrap();
             let tolerance = 1e-3;
             assert!(
                 (px - (ix as Real + sx)).abs() < tolerance && (py - (iy as Real + sy)).abs() < tolerance,
                 "{px} {py}"
             );
             let ray = p.view().primary_ray(ix, iy, sx, sy);
-            let [qx, qy] = p.to_pixels(ray.at(7.5)).unwrap();
+            let [qx, qy] = p.pixel_of(ray.at(7.5)).unwrap();
             assert!((qx - px).abs() < tolerance && (qy - py).abs() < tolerance);
             let s = p.point(on_plane).unwrap();
             let want = pos2(100.0 + (ix as f32 + sx as f32) * 2.0, 50.0 + (iy as f32 + sy as f32) * 2.0);
