@@ -1,7 +1,7 @@
 //! The scene view as an image, without a window: the flat render of the
 //! scene seen by the observer the view starts with, and the same overlays
 //! the window draws (render camera, view plane, frustum, lights, the
-//! pixel's path), painted on the CPU ([`SoftPainter`]). Used by
+//! pixel's path), painted on the CPU (`soft_paint`). Used by
 //! `--scene-view OUT.png` and for the pictures in the docs.
 
 use std::path::Path;
