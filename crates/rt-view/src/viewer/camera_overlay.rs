@@ -239,6 +239,7 @@ fn star(painter: &Painter, p: &Projection, at: Vec3) {
 }
 
 /// A number with four significant digits, for labels.
+#[allow(clippy::unnecessary_cast)] // `Real` is f64 when rt-core's `f64` feature is on.
 pub fn short(v: Real) -> String {
     let v = v as f64;
     if v == 0.0 || !v.is_finite() {
