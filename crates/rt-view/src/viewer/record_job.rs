@@ -1,7 +1,8 @@
 //! The record of the pinned pixel's chosen sample, computed off the UI
 //! thread: the renderer the window's image is rendered with (the scene,
 //! its settings with the user's effect toggles, the camera, size and
-//! samples per pixel of the full-resolution job) runs that one sample
+//! samples per pixel of the full-resolution job, and its open-ended
+//! sampler when the render has no sample limit) runs that one sample
 //! with a recorder ([`rt_core::Renderer::record_sample`]). Its record adds
 //! up to the sample's value in the render bit for bit.
 
@@ -20,6 +21,7 @@ pub struct RecordKey {
     camera: Camera,
     size: (u32, u32),
     spp: u32,
+    open_ended: bool,
     toggles: rt_core::scene::effects::EffectToggles,
     /// The pixel.
     pub pixel: [u32; 2],
@@ -35,6 +37,7 @@ impl RecordKey {
             camera: spec.camera,
             size: (spec.width, spec.height),
             spp: spec.spp,
+            open_ended: spec.open_ended,
             toggles: spec.toggles,
             pixel,
             sample,
@@ -55,12 +58,14 @@ impl RecordJob {
         let (tx, done) = mpsc::channel();
         let (scene, toggles, camera) = (spec.scene.clone(), spec.toggles, spec.camera);
         let (width, height, spp) = (spec.width, spec.height, spec.spp);
+        let open_ended = spec.open_ended;
         let [x, y] = key.pixel;
         let sample = key.sample;
         std::thread::Builder::new()
             .name("path-record".into())
             .spawn(move || {
-                let record = record(&scene, camera, toggles, (width, height, spp), [x, y], sample);
+                let record =
+                    record(&scene, camera, toggles, (width, height, spp, open_ended), [x, y], sample);
                 if tx.send(record).is_ok() {
                     on_done();
                 }
@@ -81,12 +86,13 @@ impl RecordJob {
 }
 
 /// Records sample `sample` of pixel (x, y) of `scene` rendered with
-/// `camera` at `width`×`height`, `spp` samples per pixel.
+/// `camera` at `width`×`height`, `spp` samples per pixel (its first `spp`
+/// samples, with the open-ended sampler if `open_ended`).
 fn record(
     scene: &LoadedScene,
     camera: Camera,
     toggles: rt_core::scene::effects::EffectToggles,
-    (width, height, spp): (u32, u32, u32),
+    (width, height, spp, open_ended): (u32, u32, u32, bool),
     [x, y]: [u32; 2],
     sample: u32,
 ) -> Result<PathRecord, String> {
@@ -94,6 +100,7 @@ fn record(
         .overridden(Some(width), Some(height), Some(spp))
         .map_err(|e| e.to_string())?;
     let renderer = Renderer::new(&scene.scene, camera, &settings).map_err(|e| e.to_string())?;
+    let renderer = if open_ended { renderer.open_ended() } else { renderer };
     renderer.record_sample(x, y, sample).ok_or_else(|| {
         format!("no sample {sample} of pixel ({x}, {y}) in a {width}×{height} image at {spp} spp")
     })
@@ -142,5 +149,24 @@ mod tests {
             std::thread::sleep(std::time::Duration::from_millis(5));
         };
         assert!(refused.unwrap_err().contains("no sample 1"));
+    }
+
+    #[test]
+    fn with_no_sample_limit_the_record_follows_the_open_ended_sampler_of_the_windows_render() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/antialiasing.ron");
+        let scene = rt_core::load_scene(&path).unwrap();
+        let settings = scene.settings.overridden(Some(48), Some(36), Some(4)).unwrap();
+        let fixed = Renderer::new(&scene.scene, scene.camera, &settings).unwrap();
+        let open = Renderer::new(&scene.scene, scene.camera, &settings).unwrap().open_ended();
+        let mut differs = false;
+        for y in (0..36).step_by(3) {
+            for x in 0..48 {
+                let toggles = Default::default();
+                let got = record(&scene, scene.camera, toggles, (48, 36, 4, true), [x, y], 2).unwrap();
+                assert_eq!(Some(got.value), open.record_sample(x, y, 2).map(|r| r.value), "pixel ({x}, {y})");
+                differs |= fixed.record_sample(x, y, 2).map(|r| r.value) != Some(got.value);
+            }
+        }
+        assert!(differs, "the two samplers never differ here: the test shows nothing");
     }
 }
