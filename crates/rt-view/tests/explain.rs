@@ -140,6 +140,38 @@ fn a_bad_pixel_or_sample_is_an_error_that_says_what_and_prints_nothing() {
 }
 
 #[test]
+fn the_value_is_the_pixel_of_a_one_sample_render_bit_for_bit() {
+    // A linear EXR holds the render's f32 colours exactly.
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["cornell_box.ron", "effects.ron", "subsurface.ron"] {
+        let exr = dir.path().join(format!("{name}.exr"));
+        let o = rt_view(
+            &[
+                "render",
+                &scene(name),
+                "-o",
+                exr.to_str().unwrap(),
+                "--width",
+                "32",
+                "--height",
+                "24",
+                "--spp",
+                "1",
+                "--seed",
+                "3",
+            ],
+            "",
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        let image = image::open(&exr).unwrap().to_rgb32f();
+        for (x, y) in [(16, 12), (5, 20), (30, 2)] {
+            let json = explain(name, x, y, &["--spp", "1", "--seed", "3"]);
+            assert_eq!(vec3(&json["value"]), image.get_pixel(x, y).0, "{name} ({x}, {y})");
+        }
+    }
+}
+
+#[test]
 fn scene_view_writes_the_picture_of_the_path_beside_the_json_and_refuses_a_bad_path_first() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("view.png");

@@ -151,7 +151,8 @@ pub struct Segment {
     /// Direct lighting: the factor its radiance is multiplied by in its
     /// parent's (`kr·s + kt·F` for reflection, `kt·(1 − F)·color·η²` for
     /// refraction). Path tracing: the throughput β of the path along this
-    /// ray. `None` where it has none (shadow rays).
+    /// ray. `None` where it has none (visibility rays; the primary ray of
+    /// direct lighting).
     pub weight: Option<Color>,
     /// What happened at its hit, in order: the numbers of each decision
     /// (next-event estimation, BSDF sampling, Russian roulette, the walk).
