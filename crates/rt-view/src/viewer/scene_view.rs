@@ -388,4 +388,37 @@ mod tests {
         assert_eq!(render_size(egui::vec2(960.0, 720.0), true), [160, 120]);
         assert_eq!(render_size(egui::vec2(300.0, 200.0), false), [300, 200]);
     }
+
+    #[test]
+    fn hovering_the_primary_ray_in_the_view_picks_it_and_elsewhere_nothing() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/sphere.ron");
+        let scene = Arc::new(rt_core::load_scene(&path).unwrap());
+        let input = ViewInput {
+            scene: &scene,
+            camera: Some(scene.camera),
+            image_size: (320, 240),
+            pinned: Some([160, 120]),
+            spec: None,
+        };
+        let extent = SceneExtent::of(&scene.scene);
+        let screen = Rect::from_min_size(egui::pos2(0.0, 0.0), egui::vec2(400.0, 300.0));
+        let observer = Observer::framing(&scene.camera, extent.bounds, 400.0 / 300.0);
+        let projection = Projection::new(observer.camera().unwrap(), [400, 300], screen).unwrap();
+        let ray = ViewPlane::new(scene.camera, 320, 240).unwrap().center_ray(160, 120);
+        let hit = scene.scene.cast(&ray).unwrap();
+        let [a, b] = projection.segment(ray.origin, ray.at(hit.t)).unwrap();
+        let ctx = egui::Context::default();
+        let hovered = |pointer: egui::Pos2| {
+            let mut found = None;
+            let raw = egui::RawInput { screen_rect: Some(screen), ..Default::default() };
+            let mut output = ctx.run_ui(raw, |ui| {
+                let painter = ui.painter_at(screen);
+                found = draw_overlays(&painter, &projection, &input, &extent, None, Some(pointer));
+            });
+            output.textures_delta.clear();
+            found
+        };
+        assert_eq!(hovered(a + (b - a) * 0.5 + egui::vec2(0.0, 2.0)), Some(0), "the primary ray");
+        assert_eq!(hovered(egui::pos2(2.0, 298.0)), None);
+    }
 }
