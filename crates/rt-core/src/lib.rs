@@ -43,6 +43,7 @@ pub mod math;
 
 pub mod bvh;
 pub mod camera;
+pub mod explain;
 pub mod files;
 pub mod geometry;
 pub mod integrators;

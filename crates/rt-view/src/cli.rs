@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 
+use crate::commands::explain::ExplainArgs;
 use crate::commands::{
     self, accuracy::AccuracyArgs, bench::BenchArgs, cast::CastArgs, export::ExportArgs, render::RenderArgs,
 };
@@ -83,6 +84,11 @@ pub enum Command {
     /// (with OBJ files for its triangle objects) for outside tools such as
     /// `bench/mitsuba_compare.py`.
     Export(ExportArgs),
+    /// Print the light path of one sample of one pixel as JSON, as the
+    /// renderer computes it: the camera basis, the view plane, the pixel's
+    /// 3D point, every ray with what it hit and the course's tests on the
+    /// hit, and every term added towards the sample's value (docs/explain.md).
+    Explain(ExplainArgs),
 }
 
 /// Runs the parsed command line.
@@ -93,6 +99,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Bench(args)) => commands::bench::run(&args),
         Some(Command::Accuracy(args)) => commands::accuracy::run(&args),
         Some(Command::Export(args)) => commands::export::run(&args),
+        Some(Command::Explain(args)) => commands::explain::run(&args),
         None => viewer::run(viewer::ViewerOptions { scene: cli.scene, screenshot: cli.screenshot }),
     }
 }

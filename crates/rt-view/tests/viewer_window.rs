@@ -506,3 +506,82 @@ fn loading_a_heavy_scene_mid_render_never_holds_up_a_frame() {
     let median = sorted[sorted.len() / 2];
     assert!(median < FRAME_LIMIT_MS, "frames came {median:.1} ms apart (median) while the scene loaded");
 }
+
+#[test]
+fn orbiting_the_scene_view_with_a_pixel_pinned_mid_render_never_holds_up_a_frame() {
+    if !can_run() {
+        return;
+    }
+    let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = folder_with_scale(1.0);
+    // effects.ron with 256 samples: still rendering all through the test.
+    let meshes = scenes_dir().join("meshes/");
+    let effects = std::fs::read_to_string(scenes_dir().join("effects.ron")).unwrap();
+    let slow = effects
+        .replace("file: \"meshes/", &format!("file: \"{}", meshes.display()))
+        .replace("samples_per_pixel: 4,", "samples_per_pixel: 256,");
+    let scene = dir.path().join("scene.ron");
+    std::fs::write(&scene, slow).unwrap();
+    let display = Display::start();
+    let mut window = Window::open(&display, &scene, dir.path());
+    window.wait_for("the render under way", 60.0, |lines| {
+        let first = jobs(lines).first().map(|j| j.generation);
+        first.is_some_and(|g| frames(lines).last().is_some_and(|f| rows_of(f, g) >= 60))
+    });
+    // Closed, the scene view renders nothing.
+    assert!(frames(&window.lines()).all(|f| f["scene_view"].is_null()), "the closed view reported renders");
+    // Key 3 opens it beside the image; its first flat render starts.
+    window.focus();
+    window.display.xdotool(&["key", "3"]);
+    window.wait_for("the scene view open", 20.0, |lines| {
+        frames(lines).last().is_some_and(|f| f["scene_view"].as_u64().is_some_and(|n| n >= 1))
+    });
+    // Pin a pixel of the image (now the left half of the space right of
+    // the panel), then orbit the observer with the left button held,
+    // moving 4 pixels every 20 ms, as a hand would.
+    let [x, y, w, h] = window.rect;
+    let image = (x + 300 + (w - 300) / 4, y + (h - 24) / 2);
+    window.display.xdotool(&["mousemove", &image.0.to_string(), &image.1.to_string(), "click", "1"]);
+    let before = frames(&window.lines()).count();
+    let renders_before = frames(&window.lines()).last().unwrap()["scene_view"].as_u64().unwrap();
+    let view = (x + 300 + (w - 300) * 3 / 4, y + (h - 24) / 2);
+    let mut drag =
+        vec!["mousemove".to_owned(), view.0.to_string(), view.1.to_string(), "mousedown".into(), "1".into()];
+    for i in 0..60 {
+        let dx = if i < 30 { "4" } else { "-4" };
+        drag.extend(["mousemove_relative", "--", dx, "1", "sleep", "0.02"].map(str::to_owned));
+    }
+    drag.extend(["mouseup", "1"].map(str::to_owned));
+    let drag: Vec<&str> = drag.iter().map(String::as_str).collect();
+    window.display.xdotool(&drag);
+    let lines = window.wait_for("a frame after the drag", 10.0, |lines| frames(lines).count() > before + 5);
+    let during: Vec<&Value> = frames(&lines).skip(before + 1).collect();
+    let renders_after = during.last().unwrap()["scene_view"].as_u64().unwrap();
+    assert!(
+        renders_after > renders_before + 1,
+        "the orbit started {} flat renders",
+        renders_after - renders_before
+    );
+    let times = |key: &str| -> Vec<f64> { during.iter().map(|f| number(f, key)).collect() };
+    let (updates, intervals) = (times("update_ms"), times("interval_ms"));
+    let slowest = |times: &[f64]| times.iter().copied().fold(0.0, f64::max);
+    let (update, interval) = (slowest(&updates), slowest(&intervals));
+    let mut sorted = intervals.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    eprintln!(
+        "{} frames while orbiting; {} flat renders; slowest update {update:.1} ms, slowest interval \
+         {interval:.1} ms, median interval {median:.1} ms",
+        during.len(),
+        renders_after - renders_before
+    );
+    assert!(update < FREEZE_MS, "the window froze for {update:.1} ms while orbiting");
+    assert!(interval < FREEZE_MS, "no frame for {interval:.1} ms while orbiting");
+    assert!(median < FRAME_LIMIT_MS, "frames came {median:.1} ms apart (median) while orbiting");
+    // The window's own work per frame stays small: the flat renders and the
+    // record run on threads of their own.
+    let mut sorted = updates.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    assert!(median < 10.0, "a frame's update took {median:.1} ms (median) while orbiting");
+}

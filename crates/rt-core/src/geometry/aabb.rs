@@ -2,6 +2,7 @@
 
 use crate::geometry::geometry_error::GeometryError;
 use crate::geometry::hit::PrimitiveHit;
+use crate::geometry::hit_test::{BoxTest, Placement, SlabTest};
 use crate::geometry::surface::SurfacePoint;
 use crate::math::ray::{Interval, Ray};
 use crate::math::real::{Real, Vec3, gamma};
@@ -187,6 +188,46 @@ impl Aabb {
             }
         }
         (span.enter <= span.exit && span.exit.is_finite()).then_some(span)
+    }
+}
+
+impl Aabb {
+    /// The course's slab test for `ray`, which hit this box at `t`
+    /// ([`BoxTest`]): each axis's parameters `(min − o)/d` and `(max − o)/d`,
+    /// the entry and exit of the box from [`Aabb::intersect`]'s own slab span
+    /// (the largest entry, the smallest exit, Kay and Kajiya 1986), and the
+    /// face hit: the entry face when `t` is the entry (from outside), else
+    /// the exit face (from inside).
+    pub fn explain(&self, ray: &Ray, t: Real) -> BoxTest {
+        let slabs = [0, 1, 2].map(|axis| {
+            let (o, d) = (ray.origin[axis], ray.dir[axis]);
+            let (t_min_plane, t_max_plane) = ((self.min[axis] - o) / d, (self.max[axis] - o) / d);
+            SlabTest {
+                axis,
+                t_min_plane,
+                t_max_plane,
+                t_enter: t_min_plane.min(t_max_plane),
+                t_exit: t_min_plane.max(t_max_plane),
+            }
+        });
+        let span = self.slab_span(ray);
+        let (t_enter, t_exit) = span.as_ref().map_or((Real::NAN, Real::NAN), |s| (s.enter, s.exit));
+        let entered = span.as_ref().is_some_and(|s| s.enter == t);
+        let face_axis = span.as_ref().map_or(0, |s| if entered { s.enter_axis } else { s.exit_axis });
+        let along = ray.dir[face_axis];
+        BoxTest {
+            min: self.min,
+            max: self.max,
+            slabs,
+            t_enter,
+            t_exit,
+            origin: if self.contains(ray.origin) { Placement::Inside } else { Placement::Outside },
+            face_axis,
+            // Entering, the face is the one the ray meets head-on: at max
+            // when it travels towards −axis; leaving, the one it runs into.
+            face_max: if entered { along < 0.0 } else { along > 0.0 },
+            entered,
+        }
     }
 }
 

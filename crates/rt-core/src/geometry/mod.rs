@@ -9,6 +9,7 @@
 pub mod aabb;
 pub mod geometry_error;
 pub mod hit;
+pub mod hit_test;
 pub mod mesh;
 pub mod method;
 pub mod object;

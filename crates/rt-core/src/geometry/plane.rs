@@ -2,6 +2,7 @@
 
 use crate::geometry::geometry_error::GeometryError;
 use crate::geometry::hit::PrimitiveHit;
+use crate::geometry::hit_test::{Placement, PlaneTest};
 use crate::geometry::surface::{SurfacePoint, project_onto_plane};
 use crate::math::ray::{Interval, Ray};
 use crate::math::real::{Real, Vec3};
@@ -93,6 +94,28 @@ impl Plane {
         }
         let t = (self.d - ray.origin.dot(self.normal)) / denom;
         range.contains(t).then_some(PrimitiveHit { t, primitive: 0, normal: self.normal })
+    }
+}
+
+impl Plane {
+    /// The course's numbers for `ray` against this plane ([`PlaneTest`]):
+    /// `n·dir`, the origin's signed distance `o·n − d` and its side by
+    /// [`Plane::side`] (exact sign: tolerance 0), and
+    /// `t = (d − o·n)/(n·dir)`, the formula [`Plane::intersect`] evaluates.
+    pub fn explain(&self, ray: &Ray) -> PlaneTest {
+        let n_dot_dir = ray.dir.dot(self.normal);
+        PlaneTest {
+            normal: self.normal,
+            d: self.d,
+            n_dot_dir,
+            origin_distance: self.signed_distance(ray.origin),
+            origin_side: match self.side(ray.origin, 0.0) {
+                Side::Above => Placement::Above,
+                Side::On => Placement::On,
+                Side::Below => Placement::Below,
+            },
+            t: (self.d - ray.origin.dot(self.normal)) / n_dot_dir,
+        }
     }
 }
 

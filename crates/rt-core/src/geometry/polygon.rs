@@ -3,7 +3,9 @@
 use crate::geometry::aabb::Aabb;
 use crate::geometry::geometry_error::GeometryError;
 use crate::geometry::hit::PrimitiveHit;
+use crate::geometry::hit_test::PolygonTest;
 use crate::geometry::surface::{SurfacePoint, project_onto_plane};
+use crate::geometry::triangle::Triangle;
 use crate::math::ray::{Interval, Ray};
 use crate::math::real::{Real, Vec3, magnitude_scale, normalize_robust};
 
@@ -201,6 +203,34 @@ fn newell_normal(points: &[Vec3], center: Vec3) -> Option<Vec3> {
     let area: Vec3 =
         (0..n).map(|i| ((points[i] - center) / m).cross((points[(i + 1) % n] - center) / m)).sum();
     normalize_robust(area)
+}
+
+impl Polygon {
+    /// The course's numbers for the point `p` a ray hit ([`PolygonTest`]):
+    /// the plane, the two axes kept by the projection, the crossing-number
+    /// test of [`Polygon::contains_projected`], and, of the triangles of
+    /// [`Polygon::triangulate`], the one holding `p` (the largest smallest
+    /// barycentric weight) with its own test ([`Triangle::explain`]).
+    pub fn explain(&self, p: Vec3) -> PolygonTest {
+        let triangle = self
+            .triangulate()
+            .into_iter()
+            .flatten()
+            .filter_map(|[a, b, c]| Triangle::new(a, b, c).ok())
+            .map(|t| {
+                let w = t.barycentric(p);
+                (w[0].min(w[1]).min(w[2]), t)
+            })
+            .max_by(|x, y| x.0.total_cmp(&y.0))
+            .map(|(_, t)| t.explain(p));
+        PolygonTest {
+            normal: self.normal,
+            d: self.d,
+            axes: self.axes,
+            inside: self.contains_projected(p),
+            triangle,
+        }
+    }
 }
 
 #[cfg(test)]

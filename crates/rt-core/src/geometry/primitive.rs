@@ -2,6 +2,7 @@
 
 use crate::geometry::aabb::Aabb;
 use crate::geometry::hit::PrimitiveHit;
+use crate::geometry::hit_test::HitTest;
 use crate::geometry::mesh::Mesh;
 use crate::geometry::method::{BoxMethod, Methods, SphereMethod};
 use crate::geometry::plane::Plane;
@@ -110,6 +111,26 @@ impl Primitive {
             Self::Polygon(p) => Some(p.bounds()),
             Self::Mesh(m) => Some(m.bounds()),
         }
+    }
+
+    /// The course's tests on a hit of `ray` at `t` on `primitive` (a mesh's
+    /// triangle index) ([`HitTest`]): each primitive's own `explain`
+    /// ([`Plane::explain`], [`Sphere::explain`], [`Aabb::explain`],
+    /// [`Triangle::explain`], [`Polygon::explain`]; a mesh's triangle as a
+    /// [`Triangle`]). `None` for a mesh triangle too thin to have a normal.
+    pub fn explain(&self, primitive: usize, ray: &Ray, t: Real) -> Option<HitTest> {
+        let p = ray.at(t);
+        Some(match self {
+            Self::Sphere(s) => HitTest::Sphere(s.explain(ray, t)),
+            Self::Plane(pl) => HitTest::Plane(pl.explain(ray)),
+            Self::Aabb(b) => HitTest::Box(b.explain(ray, t)),
+            Self::Triangle(tri) => HitTest::Triangle(tri.explain(p)),
+            Self::Polygon(pg) => HitTest::Polygon(pg.explain(p)),
+            Self::Mesh(m) => {
+                let [a, b, c] = m.triangle(primitive);
+                HitTest::Triangle(Triangle::new(a, b, c).ok()?.explain(p))
+            }
+        })
     }
 
     /// The variant's name as written in scene files.

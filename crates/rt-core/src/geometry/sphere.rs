@@ -3,6 +3,7 @@
 use crate::geometry::aabb::Aabb;
 use crate::geometry::geometry_error::GeometryError;
 use crate::geometry::hit::PrimitiveHit;
+use crate::geometry::hit_test::{Placement, SphereTest};
 use crate::geometry::surface::SurfacePoint;
 use crate::math::ray::{Interval, Ray};
 use crate::math::real::{Real, Vec3, gamma};
@@ -148,6 +149,47 @@ impl Sphere {
         let t = [near, far].into_iter().find(|&t| range.contains(t))?;
         let normal = ((ray.at(t) - self.center) / self.radius).normalize_or(Vec3::X);
         Some(PrimitiveHit { t, primitive: 0, normal })
+    }
+}
+
+impl Sphere {
+    /// The course's numbers for `ray`, which hit this sphere at `t`
+    /// ([`SphereTest`]): whether its origin is inside, on or outside
+    /// ([`Sphere::classify`], within the rounding bound `γ₄(|o − c| + r)` of
+    /// `|o − c| − r`), the course's quadratic and discriminant, and the two
+    /// roots by the stable formulas of [`Sphere::intersect`] (Haines et al.,
+    /// *Ray Tracing Gems* ch. 7), of which `t` is the nearer one.
+    pub fn explain(&self, ray: &Ray, t: Real) -> SphereTest {
+        let f = ray.origin - self.center;
+        let d = ray.dir;
+        let r2 = self.radius * self.radius;
+        let (a, b, c) = (d.dot(d), 2.0 * f.dot(d), f.dot(f) - r2);
+        let origin_distance = f.length() - self.radius;
+        let tolerance = gamma(4) * (f.length() + self.radius);
+        // The stable roots, as `intersect` computes them.
+        let half_b = -f.dot(d);
+        let l = f + (half_b / a) * d;
+        let stable = a * (r2 - l.dot(l));
+        let roots = (stable >= 0.0).then(|| {
+            let root = stable.sqrt();
+            let q = if half_b >= 0.0 { half_b + root } else { half_b - root };
+            let (t0, t1) = (c / q, q / a);
+            if t0 <= t1 { [t0, t1] } else { [t1, t0] }
+        });
+        SphereTest {
+            center: self.center,
+            radius: self.radius,
+            origin_distance,
+            origin: match self.classify(ray.origin, tolerance) {
+                Containment::Inside => Placement::Inside,
+                Containment::On => Placement::On,
+                Containment::Outside => Placement::Outside,
+            },
+            quadratic: [a, b, c],
+            discriminant: b * b - 4.0 * a * c,
+            roots,
+            far_root: roots.is_some_and(|[near, far]| (t - far).abs() < (t - near).abs()),
+        }
     }
 }
 

@@ -4,6 +4,7 @@
 use crate::geometry::aabb::Aabb;
 use crate::geometry::geometry_error::GeometryError;
 use crate::geometry::hit::PrimitiveHit;
+use crate::geometry::hit_test::TriangleTest;
 use crate::geometry::method::TriangleMethod;
 use crate::geometry::surface::{SurfacePoint, project_onto_plane};
 use crate::math::ray::{Interval, Ray};
@@ -353,6 +354,33 @@ pub fn intersect_area_ratio(a: Vec3, b: Vec3, c: Vec3, ray: &Ray, range: Interva
     let wb = (c - p).cross(a - p).length() / area;
     let wc = (a - p).cross(b - p).length() / area;
     (wa + wb + wc <= 1.0 + AREA_RATIO_EPSILON).then_some(TriangleHit { t, barycentric: [wa, wb, wc] })
+}
+
+impl Triangle {
+    /// The course's numbers for the point `p` a ray hit ([`TriangleTest`]):
+    /// the signed barycentric weights of [`Triangle::barycentric`], and the
+    /// unsigned area ratios `|(b−p)×(c−p)|/|n|`, `|(c−p)×(a−p)|/|n|`,
+    /// `|(a−p)×(b−p)|/|n|` of [`intersect_area_ratio`] with its test: the
+    /// sum is 1 inside, so `1 − ε ≤ sum ≤ 1 + ε` ([`AREA_RATIO_EPSILON`]).
+    pub fn explain(&self, p: Vec3) -> TriangleTest {
+        let [a, b, c] = self.corners;
+        let area = (b - a).cross(c - a).length();
+        let area_ratios = [
+            (b - p).cross(c - p).length() / area,
+            (c - p).cross(a - p).length() / area,
+            (a - p).cross(b - p).length() / area,
+        ];
+        let area_ratio_sum = area_ratios[0] + area_ratios[1] + area_ratios[2];
+        TriangleTest {
+            corners: self.corners,
+            normal: self.normal,
+            barycentric: self.barycentric(p),
+            area_ratios,
+            area_ratio_sum,
+            epsilon: AREA_RATIO_EPSILON,
+            inside: (1.0 - AREA_RATIO_EPSILON..=1.0 + AREA_RATIO_EPSILON).contains(&area_ratio_sum),
+        }
+    }
 }
 
 #[cfg(test)]

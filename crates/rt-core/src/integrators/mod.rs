@@ -16,6 +16,7 @@ pub mod path_tracer;
 pub(crate) mod random_walk;
 pub mod tracer;
 
+use crate::explain::recorder::{NoRecorder, Recorder};
 use crate::geometry::hit::Hit;
 use crate::integrators::path_tracer::PathTracer;
 use crate::integrators::tracer::Tracer;
@@ -55,9 +56,23 @@ impl<'s> Integrator<'s> {
         sampler: &mut Sampler,
         counts: &mut RayCounts,
     ) -> Color {
+        self.radiance_recorded(ray, hit, sampler, counts, &mut NoRecorder)
+    }
+
+    /// [`Integrator::radiance`], telling `rec` every ray cast and every term
+    /// added ([`crate::explain`]): the same computation, bit for bit.
+    #[inline]
+    pub fn radiance_recorded<R: Recorder>(
+        &self,
+        ray: &Ray,
+        hit: Option<Hit>,
+        sampler: &mut Sampler,
+        counts: &mut RayCounts,
+        rec: &mut R,
+    ) -> Color {
         match self {
-            Self::Direct(tracer) => tracer.trace_primary_hit(ray, hit, sampler, counts),
-            Self::Path(path_tracer) => path_tracer.trace_primary_hit(ray, hit, sampler, counts),
+            Self::Direct(tracer) => tracer.trace_primary_hit(ray, hit, sampler, counts, rec),
+            Self::Path(path_tracer) => path_tracer.trace_primary_hit(ray, hit, sampler, counts, rec),
         }
     }
 }

@@ -32,6 +32,8 @@
 //! light through itself and focuses it into caustics by this transport alone:
 //! there is no special case for it.
 
+use crate::explain::record::{ContributionKind, Event, SegmentKind};
+use crate::explain::recorder::Recorder;
 use crate::geometry::hit::Hit;
 use crate::geometry::surface::SurfacePoint;
 use crate::integrators::interaction::SurfaceInteraction;
@@ -78,24 +80,28 @@ impl<'s> PathTracer<'s> {
 
     /// The radiance arriving along a camera ray already cast: `hit` is what
     /// [`Scene::cast`] gave for `ray`; `sampler` hands out this pixel
-    /// sample's random numbers.
-    pub fn trace_primary_hit(
+    /// sample's random numbers; `rec` is told every ray and term
+    /// ([`crate::explain::recorder::NoRecorder`] for a render).
+    pub fn trace_primary_hit<R: Recorder>(
         &self,
         ray: &Ray,
         hit: Option<Hit>,
         sampler: &mut Sampler,
         counts: &mut RayCounts,
+        rec: &mut R,
     ) -> Color {
         counts.primary += 1;
-        self.trace_path(*ray, hit, sampler, counts)
+        rec.ray(SegmentKind::Primary, ray, hit.as_ref(), Some(Color::ONE));
+        self.trace_path(*ray, hit, sampler, counts, rec)
     }
 
-    fn trace_path(
+    fn trace_path<R: Recorder>(
         &self,
         mut ray: Ray,
         mut hit: Option<Hit>,
         sampler: &mut Sampler,
         counts: &mut RayCounts,
+        rec: &mut R,
     ) -> Color {
         let scene = self.scene;
         let lights = scene.light_sampler();
@@ -110,7 +116,10 @@ impl<'s> PathTracer<'s> {
                 let w = found_light_weight(previous, |p| {
                     lights.probability(Source::Environment) * environment.pdf(p, d, Real::INFINITY, -d)
                 });
-                radiance += beta * scene.environment().radiance(d) * to_f32(w);
+                let term = beta * scene.environment().radiance(d) * to_f32(w);
+                radiance += term;
+                rec.event(|| Event::LightFound { radiance: scene.environment().radiance(d), mis_weight: w });
+                rec.contribution(ContributionKind::Environment, term);
                 break;
             };
             let si = SurfaceInteraction::along(scene, &ray, d, &h);
@@ -144,12 +153,16 @@ impl<'s> PathTracer<'s> {
                     }
                     None => 0.0,
                 });
-                radiance += beta * m.emission * to_f32(w);
+                let term = beta * m.emission * to_f32(w);
+                radiance += term;
+                rec.event(|| Event::LightFound { radiance: m.emission, mis_weight: w });
+                rec.contribution(ContributionKind::Emission, term);
             }
 
             // 2. The last surface that may scatter.
             bounce += 1;
             if bounce > self.settings.max_bounces {
+                rec.event(|| Event::Stopped { reason: "max_bounces" });
                 break;
             }
             // A translucent object's boundary stays flat: the walk's inside
@@ -158,14 +171,27 @@ impl<'s> PathTracer<'s> {
 
             // 3. Next-event estimation.
             if bsdf.has_smooth_lobes() {
-                radiance += beta * self.next_event(&sp, &bsdf, wo, lights, sampler, counts);
+                let term = beta * self.next_event(&sp, &bsdf, wo, lights, sampler, counts, rec);
+                radiance += term;
+                rec.contribution(ContributionKind::NextEvent, term);
             }
 
             // 4. BSDF sampling.
             let u = sampler.get_1d();
-            let Some(s) = bsdf.sample(wo, u, sampler.get_2d()) else { break };
+            let Some(s) = bsdf.sample(wo, u, sampler.get_2d()) else {
+                rec.event(|| Event::Stopped { reason: "no_scatter" });
+                break;
+            };
             beta *= s.weight;
+            rec.event(|| Event::Scatter {
+                direction: s.wi,
+                pdf: s.pdf,
+                delta: s.lobe.is_delta(),
+                weight: s.weight,
+                throughput: beta,
+            });
             if beta.max_element() <= 0.0 || !beta.is_finite() {
+                rec.event(|| Event::Stopped { reason: "zero_throughput" });
                 break;
             }
             previous =
@@ -176,7 +202,10 @@ impl<'s> PathTracer<'s> {
                 let survive = beta.max_element();
                 if survive < 1.0 {
                     let u = sampler.get_1d();
+                    let survived = to_f32(u) < survive;
+                    rec.event(|| Event::Roulette { survive: survive as Real, survived });
                     if to_f32(u) >= survive {
+                        rec.event(|| Event::Stopped { reason: "roulette" });
                         break;
                     }
                     beta /= survive;
@@ -189,9 +218,12 @@ impl<'s> PathTracer<'s> {
                 && s.wi.dot(sp.normal) < 0.0
             {
                 match RandomWalk::new(scene, self.settings)
-                    .walk(h.object, &medium, m, &sp, s.wi, beta, sampler, counts)
+                    .walk(h.object, &medium, m, &sp, s.wi, beta, sampler, counts, rec)
                 {
-                    WalkEnd::Ended => break,
+                    WalkEnd::Ended => {
+                        rec.event(|| Event::Stopped { reason: "walk_ended" });
+                        break;
+                    }
                     WalkEnd::Out { ray: out, hit: out_hit, weight } => {
                         (ray, hit) = (out, out_hit);
                         beta *= weight;
@@ -208,6 +240,7 @@ impl<'s> PathTracer<'s> {
             counts.bounce += 1;
             ray = Ray::new(sp.spawn_origin(s.wi), s.wi);
             hit = scene.closest_hit(&ray, Interval::new(0.0, Real::INFINITY));
+            rec.ray(SegmentKind::Bounce, &ray, hit.as_ref(), Some(beta));
         }
         radiance
     }
@@ -218,7 +251,8 @@ impl<'s> PathTracer<'s> {
     /// ray finds something in the way, `f·cos θ·weight·w/P(light)` with w the
     /// power heuristic of the light's density against the BSDF's (1 for a
     /// light no ray can find).
-    fn next_event(
+    #[allow(clippy::too_many_arguments)]
+    fn next_event<R: Recorder>(
         &self,
         sp: &SurfacePoint,
         bsdf: &Bsdf,
@@ -226,6 +260,7 @@ impl<'s> PathTracer<'s> {
         lights: &LightSampler,
         sampler: &mut Sampler,
         counts: &mut RayCounts,
+        rec: &mut R,
     ) -> Color {
         let u = sampler.get_1d();
         let uv = sampler.get_2d();
@@ -239,10 +274,25 @@ impl<'s> PathTracer<'s> {
             Some(pdf) => bsdf::power_heuristic(chosen * pdf, bsdf.pdf(wo, s.wi)),
             None => 1.0,
         };
+        rec.event(|| Event::NextEvent {
+            light: match source {
+                Source::Light(i) => format!("light {i}"),
+                Source::Emitter(i) => format!("emitter {i}"),
+                Source::Environment => "environment".to_owned(),
+            },
+            probability: chosen,
+            light_pdf: s.pdf,
+            bsdf_pdf: bsdf.pdf(wo, s.wi),
+            mis_weight: w,
+            bsdf: f,
+            segment: None,
+        });
         if s.shadows {
             counts.next_event += 1;
             let shadow = Ray::new(sp.spawn_origin(s.wi), s.wi);
-            if self.scene.any_hit(&shadow, Interval::new(0.0, s.distance)) {
+            let blocked = self.scene.any_hit(&shadow, Interval::new(0.0, s.distance));
+            rec.probe(SegmentKind::NextEvent { blocked }, &shadow, s.distance);
+            if blocked {
                 return Color::ZERO;
             }
         }
@@ -476,7 +526,13 @@ mod tests {
                     let hit = s.scene.cast(&ray);
                     let mut sampler = Sampler::new(1, 0);
                     sampler.start_pixel_sample(x, y, k);
-                    let c = tracer.trace_primary_hit(&ray, hit, &mut sampler, &mut counts);
+                    let c = tracer.trace_primary_hit(
+                        &ray,
+                        hit,
+                        &mut sampler,
+                        &mut counts,
+                        &mut crate::explain::recorder::NoRecorder,
+                    );
                     match hit {
                         None => assert_eq!(c, Color::ONE, "{effects}: background at ({x}, {y})"),
                         Some(_) => sphere.push(c),

@@ -4,6 +4,8 @@
 //! function, the hero channel's spectral weights) is [`crate::materials::medium`]; this
 //! module moves a walk through the scene's geometry.
 
+use crate::explain::record::{Event, SegmentKind};
+use crate::explain::recorder::Recorder;
 use crate::geometry::hit::Hit;
 use crate::geometry::surface::SurfacePoint;
 use crate::materials::bsdf::Bsdf;
@@ -68,7 +70,7 @@ impl<'s> RandomWalk<'s> {
     /// mean). A surface of another object met inside ends the walk there: a
     /// translucent object's inside is not meant to hold others.
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn walk(
+    pub(crate) fn walk<R: Recorder>(
         &self,
         object: usize,
         medium: &Subsurface,
@@ -78,6 +80,7 @@ impl<'s> RandomWalk<'s> {
         beta: Color,
         sampler: &mut Sampler,
         counts: &mut RayCounts,
+        rec: &mut R,
     ) -> WalkEnd {
         let scene = self.scene;
         let g = medium.anisotropy as Real;
@@ -99,6 +102,9 @@ impl<'s> RandomWalk<'s> {
                 let Some(back) = self.back_inside(object, &ray) else { break };
                 ray = back;
                 hit = scene.closest_hit(&ray, Interval::new(0.0, Real::INFINITY));
+            }
+            if R::ACTIVE {
+                rec.ray(SegmentKind::WalkStep, &ray, hit.as_ref(), Some(beta * spectral.weight()));
             }
             let t = spectral.sample_distance(medium, sampler.get_1d());
             match hit {
@@ -124,6 +130,14 @@ impl<'s> RandomWalk<'s> {
                         counts.bounce += 1;
                         let out = Ray::new(sp.spawn_origin(s.wi), s.wi);
                         let hit = scene.closest_hit(&out, Interval::new(0.0, Real::INFINITY));
+                        if R::ACTIVE {
+                            rec.ray(
+                                SegmentKind::WalkExit,
+                                &out,
+                                hit.as_ref(),
+                                Some(beta * spectral.weight()),
+                            );
+                        }
                         return WalkEnd::Out { ray: out, hit, weight: spectral.weight() };
                     }
                     ray = Ray::new(sp.spawn_origin(s.wi), s.wi);
@@ -143,6 +157,8 @@ impl<'s> RandomWalk<'s> {
                         let survive = (beta * weight).max_element();
                         if survive < 1.0 {
                             let u = sampler.get_1d();
+                            let survived = to_f32(u) < survive;
+                            rec.event(|| Event::Roulette { survive: survive as Real, survived });
                             if to_f32(u) >= survive {
                                 return WalkEnd::Ended;
                             }
@@ -157,6 +173,7 @@ impl<'s> RandomWalk<'s> {
                     let margin = 4.0 * gamma(3) * (ray.origin.abs().max_element() + h.t);
                     let t = if h.t - t < margin { (h.t - margin).max(0.0) } else { t };
                     let at = ray.at(t);
+                    rec.event(|| Event::WalkScatter { point: at, weight: spectral.weight() });
                     ray = Ray::new(at, sample_henyey_greenstein(ray.dir, g, sampler.get_2d()));
                 }
             }
@@ -259,6 +276,7 @@ mod tests {
                         Color::ONE,
                         sampler,
                         &mut counts,
+                        &mut crate::explain::recorder::NoRecorder,
                     );
                     outcomes[match end {
                         WalkEnd::Ended => 0,

@@ -34,6 +34,8 @@
 //! object as opaque, glass too. Secondary rays start at the hit point pushed
 //! off the surface by its error bound ([`crate::geometry::surface`]).
 
+use crate::explain::record::{ContributionKind, SegmentKind};
+use crate::explain::recorder::Recorder;
 use crate::geometry::hit::Hit;
 use crate::geometry::surface::SurfacePoint;
 use crate::integrators::interaction::SurfaceInteraction;
@@ -70,57 +72,89 @@ impl<'s> Tracer<'s> {
     /// The colour seen along a camera ray already cast: `hit` is what
     /// [`Scene::cast`] gave for `ray` (packets of primary rays are cast
     /// together, [`Scene::cast_all`]); `sampler` hands out this pixel
-    /// sample's random numbers.
-    pub fn trace_primary_hit(
+    /// sample's random numbers; `rec` is told every ray and term
+    /// ([`crate::explain::recorder::NoRecorder`] for a render).
+    pub fn trace_primary_hit<R: Recorder>(
         &self,
         ray: &Ray,
         hit: Option<Hit>,
         sampler: &mut Sampler,
         counts: &mut RayCounts,
+        rec: &mut R,
     ) -> Color {
         counts.primary += 1;
+        rec.ray(SegmentKind::Primary, ray, hit.as_ref(), None);
         let Some(hit) = hit else {
-            return self.scene.environment().radiance(ray.dir);
+            let background = self.scene.environment().radiance(ray.dir);
+            rec.contribution(ContributionKind::Environment, background);
+            rec.returned(background);
+            return background;
         };
         if !self.plan.shading {
-            return self.scene.hit_color(&hit, ray);
+            let flat = self.scene.hit_color(&hit, ray);
+            rec.contribution(ContributionKind::Flat, flat);
+            rec.returned(flat);
+            return flat;
         }
-        self.shade(ray, &hit, Path { depth: 0, weight: 1.0 }, sampler, counts)
+        let color = self.shade(ray, &hit, Path { depth: 0, weight: 1.0 }, sampler, counts, rec);
+        rec.returned(color);
+        color
     }
 
     /// The colour seen along a reflected or refracted ray.
-    fn trace_secondary(&self, ray: &Ray, path: Path, sampler: &mut Sampler, counts: &mut RayCounts) -> Color {
-        match self.scene.closest_hit(ray, Interval::new(0.0, Real::INFINITY)) {
-            Some(hit) => self.shade(ray, &hit, path, sampler, counts),
-            None => self.scene.environment().radiance(ray.dir),
+    fn trace_secondary<R: Recorder>(
+        &self,
+        ray: &Ray,
+        path: Path,
+        sampler: &mut Sampler,
+        counts: &mut RayCounts,
+        rec: &mut R,
+    ) -> Color {
+        let hit = self.scene.closest_hit(ray, Interval::new(0.0, Real::INFINITY));
+        rec.found(hit.as_ref());
+        match hit {
+            Some(hit) => self.shade(ray, &hit, path, sampler, counts, rec),
+            None => {
+                let background = self.scene.environment().radiance(ray.dir);
+                rec.contribution(ContributionKind::Environment, background);
+                background
+            }
         }
     }
 
-    fn shade(
+    fn shade<R: Recorder>(
         &self,
         ray: &Ray,
         hit: &Hit,
         path: Path,
         sampler: &mut Sampler,
         counts: &mut RayCounts,
+        rec: &mut R,
     ) -> Color {
         let Some(si) = SurfaceInteraction::new(self.scene, ray, hit) else {
-            return self.scene.environment().radiance(ray.dir);
+            let background = self.scene.environment().radiance(ray.dir);
+            rec.contribution(ContributionKind::Environment, background);
+            return background;
         };
         let (sp, m, wo, d) = (&si.point, &*si.material, si.wo, -si.wo);
         let front = si.front();
         let n = si.facing_normal();
 
         let mut color = si.emitted();
+        if color != Color::ZERO {
+            rec.contribution(ContributionKind::Emission, color);
+        }
         let shading = si.shading_normal;
         let bsdf = si.bsdf();
         if bsdf.has_smooth_lobes() {
             let lambert = bsdf.diffuse_albedo();
             if lambert != Color::ZERO && self.scene.ambient() != Color::ZERO {
-                let ao = self.ambient_occlusion(sp, n, sampler, counts);
-                color += self.scene.ambient() * lambert * ao;
+                let ao = self.ambient_occlusion(sp, n, sampler, counts, rec);
+                let term = self.scene.ambient() * lambert * ao;
+                color += term;
+                rec.contribution(ContributionKind::Ambient { occlusion: ao as Real }, term);
             }
-            for light in self.scene.lights() {
+            for (index, light) in self.scene.lights().iter().enumerate() {
                 let samples = light.sample_count();
                 for k in 0..samples {
                     let jitter = if samples > 1 { sampler.get_2d() } else { (0.5, 0.5) };
@@ -132,11 +166,19 @@ impl<'s> Tracer<'s> {
                     if self.plan.shadows && light.shadows {
                         counts.shadow += 1;
                         let shadow = si.spawn_ray(s.to_light);
-                        if self.scene.any_hit(&shadow, Interval::new(0.0, s.distance)) {
+                        let blocked = self.scene.any_hit(&shadow, Interval::new(0.0, s.distance));
+                        rec.probe(
+                            SegmentKind::Shadow { light: index, sample: k, blocked },
+                            &shadow,
+                            s.distance,
+                        );
+                        if blocked {
                             continue;
                         }
                     }
-                    color += f * s.irradiance * to_f32(bsdf.cosine(s.to_light));
+                    let term = f * s.irradiance * to_f32(bsdf.cosine(s.to_light));
+                    color += term;
+                    rec.contribution(ContributionKind::Light { light: index, sample: k }, term);
                 }
             }
         }
@@ -163,7 +205,12 @@ impl<'s> Tracer<'s> {
                 counts.reflection += 1;
                 let r = Some(reflect(d, ns)).filter(|r| r.dot(n) > 0.0).unwrap_or_else(|| reflect(d, n));
                 let ray = si.spawn_ray(r);
-                color += reflected * self.trace_secondary(&ray, next, sampler, counts);
+                let child = rec.ray(SegmentKind::Reflection, &ray, None, Some(reflected));
+                let brought = self.trace_secondary(&ray, next, sampler, counts, rec);
+                rec.returned(brought);
+                let term = reflected * brought;
+                color += term;
+                rec.contribution(ContributionKind::Reflection { child }, term);
             }
             // The η² factors of entering and leaving cancel along a path, so
             // they do not count towards a ray's weight in the pixel.
@@ -178,7 +225,12 @@ impl<'s> Tracer<'s> {
             {
                 counts.refraction += 1;
                 let ray = si.spawn_ray(t);
-                color += transmitted * self.trace_secondary(&ray, next, sampler, counts);
+                let child = rec.ray(SegmentKind::Refraction, &ray, None, Some(transmitted));
+                let brought = self.trace_secondary(&ray, next, sampler, counts, rec);
+                rec.returned(brought);
+                let term = transmitted * brought;
+                color += term;
+                rec.contribution(ContributionKind::Refraction { child }, term);
             }
         }
         color
@@ -186,12 +238,13 @@ impl<'s> Tracer<'s> {
 
     /// The unblocked fraction of the hemisphere about `n` within the AO
     /// radius, from cosine-distributed, stratified rays; 1 without AO.
-    fn ambient_occlusion(
+    fn ambient_occlusion<R: Recorder>(
         &self,
         sp: &SurfacePoint,
         n: Vec3,
         sampler: &mut Sampler,
         counts: &mut RayCounts,
+        rec: &mut R,
     ) -> f32 {
         let Some(ao) = self.plan.ambient_occlusion else {
             return 1.0;
@@ -201,7 +254,9 @@ impl<'s> Tracer<'s> {
             let dir = cosine_hemisphere(n, stratified(k, ao.samples, sampler.get_2d()));
             let ray = Ray::new(sp.spawn_origin(dir), dir);
             counts.ambient_occlusion += 1;
-            if !self.scene.any_hit(&ray, Interval::new(0.0, ao.radius)) {
+            let blocked = self.scene.any_hit(&ray, Interval::new(0.0, ao.radius));
+            rec.probe(SegmentKind::AmbientOcclusion { blocked }, &ray, ao.radius);
+            if !blocked {
                 open += 1;
             }
         }

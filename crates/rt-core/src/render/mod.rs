@@ -8,6 +8,7 @@
 //! ([`Sampler`]), so the result does not depend on the number of threads or
 //! the order rows finish in, bit for bit.
 
+mod record_sample;
 pub mod settings;
 pub mod view_transform;
 

@@ -3,5 +3,6 @@
 pub mod accuracy;
 pub mod bench;
 pub mod cast;
+pub mod explain;
 pub mod export;
 pub mod render;

@@ -25,6 +25,7 @@ use super::region::Region;
 use super::remembered::{LastScene, Remembered, absolute};
 use super::render_job::{JobSpec, RenderJob};
 use super::scene_source::{SceneChange, SceneSource, load};
+use super::scene_view::{SceneView, ViewInput};
 use super::scheduler::{Kind, Scheduler};
 use super::screenshot::{Outcome, Screenshot};
 use super::trace::{self, Trace};
@@ -92,6 +93,7 @@ pub const SHORTCUTS: &[(&str, &str)] = &[
     (".", "frame the pinned object: it fills the view"),
     ("Alt+click", "pin the pixel and focus the lens on what it sees"),
     ("F", "fit the image to the window"),
+    ("3", "show or hide the scene view: the scene in 3D, the camera and the pinned pixel's path"),
     ("1", "show the image 1:1 (one image pixel per screen pixel)"),
     ("Ctrl+S", "save the finished image (PNG or EXR, by the path's extension)"),
     ("Ctrl+O", "open a scene file"),
@@ -117,6 +119,8 @@ pub struct Viewer {
     image: ImageSettings,
     scheduler: Scheduler,
     view: ImageView,
+    /// The scene in 3D beside the image.
+    scene_view: SceneView,
     /// Exposure, channel views, histogram, reference and comparison.
     display: DisplayPanel,
     /// The path Save PNG and Save EXR write to (with their extension).
@@ -163,6 +167,7 @@ impl Viewer {
             source: SceneSource::new(path, scene, remembered.recent, ctx),
             scheduler: Scheduler::default(),
             view: ImageView::default(),
+            scene_view: SceneView::default(),
             display,
             save_path: "render.png".to_owned(),
             notice: None,
@@ -238,6 +243,7 @@ impl Viewer {
             self.notify(note);
         }
         self.view.unpin();
+        self.scene_view.scene_changed();
         self.start(ctx, Kind::NewScene);
     }
 
@@ -402,6 +408,9 @@ impl Viewer {
         if pressed(Key::F) {
             self.view.fit();
         }
+        if pressed(Key::Num3) {
+            self.scene_view.toggle();
+        }
         if pressed(Key::Num1) {
             let size = self.image.full_size(self.source.scene());
             self.view.one_to_one(ctx.pixels_per_point(), size);
@@ -440,6 +449,7 @@ impl Viewer {
         ui.separator();
         input = input | self.image.ui(ui, &self.source.scene().clone());
         self.region_ui(ui);
+        self.scene_view.toggle_ui(ui);
         ui.horizontal(|ui| {
             ui.add(egui::TextEdit::singleline(&mut self.save_path).desired_width(140.0));
             let ready = self.scheduler.frame_is_final();
@@ -524,6 +534,9 @@ impl Viewer {
         let color_space = self.source.scene().settings.color_space;
         self.scheduler.set_display(self.display.display(color_space));
         self.view.set_reference(self.display.split_texture(&ctx, color_space));
+        if self.scene_view.is_open() {
+            self.scene_view_ui(ui, size);
+        }
         let texture = self.scheduler.texture().cloned();
         let shown = egui::CentralPanel::default().show(ui, |ui| {
             let (scene, scheduler) = (self.source.scene().clone(), &self.scheduler);
@@ -568,6 +581,26 @@ impl Viewer {
         if let Some(screenshot) = &mut self.screenshot {
             screenshot.step(&ctx, self.scheduler.frame_is_final(), &self.outcome);
         }
+    }
+}
+
+impl Viewer {
+    /// The scene view, right of the image, half the space left by default.
+    fn scene_view_ui(&mut self, ui: &mut egui::Ui, image_size: (u32, u32)) {
+        let width = ui.available_width();
+        let scene = self.source.scene().clone();
+        let input = ViewInput {
+            scene: &scene,
+            camera: self.camera.settings().to_camera().ok(),
+            image_size,
+            pinned: self.view.pinned(),
+            spec: self.job_spec(),
+        };
+        egui::Panel::right("scene view")
+            .resizable(true)
+            .default_size(width * 0.5)
+            .size_range(200.0..=(width - 200.0).max(200.0))
+            .show(ui, |ui| self.scene_view.ui(ui, &input));
     }
 }
 
@@ -642,6 +675,7 @@ impl Viewer {
             loading: self.source.is_loading(),
             zoom,
             canvas: self.scheduler.canvas(),
+            scene_view: self.scene_view.is_open().then(|| self.scene_view.renders_started()),
         };
         let written = match self.scheduler.job() {
             Some((job, preview)) => trace.job(job, preview),
@@ -1583,6 +1617,73 @@ mod tests {
         frame(&ctx, &mut v, size, vec![key_with(Key::B, true, Modifiers::SHIFT)]);
         assert_eq!(v.scheduler.region(), None);
         assert!(v.scheduler.status_text(None).starts_with("full "), "{}", v.scheduler.status_text(None));
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn the_scene_view_renders_nothing_while_closed_and_its_job_stops_when_it_closes() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        let size = egui::vec2(1100.0, 700.0);
+        // A pinned pixel records nothing while the view is closed.
+        v.view.pin([100, 80]);
+        for _ in 0..5 {
+            frame(&ctx, &mut v, size, vec![]);
+        }
+        assert!(!v.scene_view.is_open());
+        assert_eq!(v.scene_view.renders_started(), 0, "a closed view started a render");
+        assert!(!v.scene_view.rendering(), "a closed view runs a job");
+        // Key 3 opens it: its first frame starts one flat render, and the
+        // pinned pixel's record, which arrives off the UI thread.
+        frame(&ctx, &mut v, size, vec![key(Key::Num3)]);
+        assert!(v.scene_view.is_open());
+        assert_eq!(v.scene_view.renders_started(), 1);
+        assert!(v.scene_view.rendering());
+        let deadline = Instant::now() + Duration::from_secs(30);
+        while v.scene_view.record_pixel() != Some([100, 80]) {
+            assert!(Instant::now() < deadline, "the record never arrived");
+            frame(&ctx, &mut v, size, vec![]);
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        // Closed again: the job is dropped (cancelled), and no frame starts another.
+        frame(&ctx, &mut v, size, vec![key(Key::Num3)]);
+        assert!(!v.scene_view.is_open());
+        assert!(!v.scene_view.rendering(), "the job outlived the view");
+        for _ in 0..5 {
+            frame(&ctx, &mut v, size, vec![]);
+        }
+        assert_eq!(v.scene_view.renders_started(), 1);
+        drop_textures(&ctx, v);
+    }
+
+    #[test]
+    fn dragging_in_the_scene_view_orbits_the_observer_and_leaves_the_render_camera() {
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(scenes().join("box.ron")));
+        let size = egui::vec2(1100.0, 700.0);
+        v.scene_view.set_open(true);
+        frame(&ctx, &mut v, size, vec![]);
+        frame(&ctx, &mut v, size, vec![]);
+        let observer = *v.scene_view.observer().expect("framed on first show").settings();
+        let camera = *v.camera.settings();
+        // The scene view fills the right part of the window.
+        let (from, to) = (egui::pos2(900.0, 350.0), egui::pos2(980.0, 380.0));
+        let button = |pos, pressed| egui::Event::PointerButton {
+            pos,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        };
+        frame(&ctx, &mut v, size, vec![egui::Event::PointerMoved(from)]);
+        frame(&ctx, &mut v, size, vec![button(from, true)]);
+        for k in 1..=4 {
+            frame(&ctx, &mut v, size, vec![egui::Event::PointerMoved(from + (to - from) * k as f32 / 4.0)]);
+        }
+        frame(&ctx, &mut v, size, vec![button(to, false)]);
+        let moved = *v.scene_view.observer().unwrap().settings();
+        assert_ne!(moved.position, observer.position, "the observer did not orbit");
+        assert_eq!(moved.center_of_interest, observer.center_of_interest);
+        assert_eq!(*v.camera.settings(), camera, "the drag moved the render camera");
         drop_textures(&ctx, v);
     }
 }

@@ -21,6 +21,13 @@
 //!   the comparison views and their metrics (`error_metrics`);
 //! - `image_view`: the image on screen (fit, 1:1, zoom), orbit, pan and
 //!   zoom with the mouse, and pixel inspection;
+//! - `scene_view`: beside the image, the scene seen by an `observer`
+//!   camera (rt-core's flat render, `observer_render`, on a thread of its
+//!   own), the render camera, view plane, frustum and lights drawn over it
+//!   (`camera_overlay`) through the observer's `projection`, and the
+//!   pinned pixel's path (`path_overlay`) from the record of one of its
+//!   samples (`record_job`); [`scene_view_image`] makes the
+//!   same picture without a window, painted on the CPU (`soft_paint`);
 //! - `screenshot`: `--screenshot`, saving the window once the frame is done;
 //! - `trace`: with `RT_VIEW_TRACE=FILE`, a line per frame and per job of
 //!   what the window did and shows, for the tests that drive it;
@@ -36,6 +43,7 @@ mod app;
 pub mod camera_controls;
 mod camera_history;
 mod camera_in_file;
+mod camera_overlay;
 mod camera_panel;
 pub mod canvas;
 pub mod display;
@@ -48,14 +56,22 @@ pub mod histogram;
 mod image_settings;
 mod image_view;
 mod interaction;
+mod observer;
+mod observer_render;
+mod path_overlay;
+mod projection;
+mod record_job;
 pub mod reference;
 pub mod region;
 mod remembered;
 pub mod render_job;
 mod scene_source;
+mod scene_view;
+pub mod scene_view_image;
 pub mod scene_watch;
 mod scheduler;
 mod screenshot;
+mod soft_paint;
 mod trace;
 
 use std::sync::{Arc, Mutex};

@@ -24,7 +24,7 @@
 //!
 //! ```json
 //! {"t":1.220,"frame":42,"update_ms":1.9,"interval_ms":16.5,"scene":"/abs/a.ron",
-//!  "loading":false,"zoom":87.5,"canvas":7,"texture":[[7,180],[5,540]]}
+//!  "loading":false,"zoom":87.5,"canvas":7,"texture":[[7,180],[5,540]],"scene_view":null}
 //! ```
 //!
 //! - `t`: seconds since the viewer started, at the frame's start;
@@ -40,7 +40,9 @@
 //!   top to bottom, as runs `[generation, rows]` — the canvas's own
 //!   generation, an older one's carried over from the image it replaced, or
 //!   0 for rows no job has drawn (black). Every row applied in a frame is
-//!   uploaded in that frame, so this is the texture the frame shows.
+//!   uploaded in that frame, so this is the texture the frame shows;
+//! - `scene_view`: with the scene view open, how many flat renders of it
+//!   have started so far (`null` while it is closed).
 
 use std::fs::{File, OpenOptions};
 use std::hash::{DefaultHasher, Hash, Hasher};
@@ -81,6 +83,9 @@ pub(super) struct Frame<'a> {
     pub zoom: Option<f32>,
     /// The image on screen.
     pub canvas: Option<&'a Canvas>,
+    /// With the scene view open, how many flat renders it has started
+    /// (`None`: closed).
+    pub scene_view: Option<u64>,
 }
 
 impl Trace {
@@ -145,6 +150,7 @@ impl Trace {
             "zoom": frame.zoom,
             "canvas": frame.canvas.map(Canvas::generation),
             "texture": frame.canvas.map(|c| runs(c.display_sources())),
+            "scene_view": frame.scene_view,
         });
         self.write(&line)
     }
