@@ -95,7 +95,7 @@ impl<'s> Renderer<'s> {
             integrator: Integrator::new(scene, plan),
             view: ViewPlane::new(camera, settings.image.width(), settings.image.height())?,
             spp,
-            sampler: Sampler::new(spp, settings.seed),
+            sampler: Sampler::new(spp, settings.seed).with_kind(settings.sampler),
             color_space: settings.color_space,
         })
     }
@@ -108,7 +108,7 @@ impl<'s> Renderer<'s> {
     /// unbiased estimate. Everything else is as before; images differ from
     /// a fixed-count render's, which stratifies over its count.
     pub fn open_ended(self) -> Self {
-        Self { sampler: Sampler::open_ended(self.sampler.seed()), ..self }
+        Self { sampler: self.sampler.to_open_ended(), ..self }
     }
 
     /// The view plane rays are generated from.
@@ -371,6 +371,29 @@ mod tests {
         let r = renderer(&s, 32, 24, 4);
         let run = |threads| crate::testing::test_support::render_on_threads(&r, threads);
         assert_eq!(run(1), run(2));
+    }
+
+    #[test]
+    fn a_sobol_render_is_the_same_for_one_and_two_threads_and_in_steps_and_differs_by_seed() {
+        // Global illumination through a lens: every dimension from Sobol points, which
+        // depend on pixel, sample and seed alone.
+        let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+        let mut s = crate::load_scene(&scenes.join("depth_of_field.ron")).unwrap();
+        s.settings.sampler = crate::sampling::sampler::SamplerKind::Sobol;
+        let r = renderer(&s, 24, 18, 8);
+        let run = |threads| crate::testing::test_support::render_on_threads(&r, threads);
+        let one = run(1);
+        assert_eq!(one, run(2));
+        let mut sums = vec![Color::ZERO; 24];
+        for range in [0..1, 1..2, 2..8] {
+            r.accumulate_row(9, range, &mut sums);
+        }
+        let row: Vec<Color> = sums.iter().map(|&c| c / 8.0).collect();
+        assert_eq!(row, one.pixels[9 * 24..10 * 24]);
+        let file = crate::load_scene(&scenes.join("depth_of_field.ron")).unwrap();
+        assert_ne!(one.pixels, renderer(&file, 24, 18, 8).render(|_| {}).pixels);
+        s.settings.seed = 1;
+        assert_ne!(one.pixels, renderer(&s, 24, 18, 8).render(|_| {}).pixels);
     }
 
     #[test]

@@ -9,7 +9,7 @@ use thiserror::Error;
 use crate::camera::view_plane::{MAX_IMAGE_SIDE, MAX_PIXELS, check_image_size};
 use crate::math::color::ColorSpace;
 use crate::render::view_transform::Display;
-use crate::sampling::sampler::MAX_SAMPLES_PER_PIXEL;
+use crate::sampling::sampler::{MAX_SAMPLES_PER_PIXEL, SamplerKind};
 use crate::scene::effects::{EffectToggles, Effects};
 
 /// Why a render setting is out of range.
@@ -104,6 +104,10 @@ pub struct RenderSettings {
     /// Seed of the random numbers: renders with different seeds are
     /// independent estimates of the same image ([`crate::sampling::sampler::SampleRng::seeded`]); 0 by default.
     pub seed: u64,
+    /// Which points the samples take: stratified jitter with independent
+    /// random numbers, or Owen-scrambled Sobol points
+    /// ([`crate::sampling::sampler::Sampler`]).
+    pub sampler: SamplerKind,
     /// How rendered colours are encoded into 8-bit pixels.
     pub color_space: ColorSpace,
     /// The light transport asked for: recursion depth, ambient occlusion,
@@ -144,6 +148,11 @@ impl RenderSettings {
     /// These settings with another seed.
     pub fn with_seed(self, seed: u64) -> Self {
         Self { seed, ..self }
+    }
+
+    /// These settings with another sampler.
+    pub fn with_sampler(self, sampler: SamplerKind) -> Self {
+        Self { sampler, ..self }
     }
 }
 

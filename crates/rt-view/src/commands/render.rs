@@ -10,6 +10,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rt_core::Renderer;
 use rt_core::render::view_transform::{Display, MAX_EXPOSURE_STOPS, ViewTransform};
+use rt_core::sampling::sampler::SamplerKind;
 use rt_core::scene::effects::{EffectPlan, RayCounts};
 
 use crate::image_out::PendingImage;
@@ -35,6 +36,12 @@ pub struct RenderArgs {
     /// independent estimates of the same image (0 is the default image).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Where the samples go: `stratified` (jittered strata, independent
+    /// random numbers along the path) or `sobol` (Owen-scrambled Sobol
+    /// points in every dimension of the path: less noise at the same
+    /// samples) (default: the scene's `sampler`, else stratified).
+    #[arg(long, value_name = "stratified|sobol")]
+    pub sampler: Option<SamplerKind>,
     /// Print to stderr: scene load and BVH build times, the effects
     /// simulated, the rays cast by kind (primary, shadow, reflection,
     /// refraction, ambient occlusion, and under global illumination bounce
@@ -92,6 +99,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .overridden(args.width, args.height, args.spp)
         .with_context(|| format!("{}: cannot render", args.scene.display()))?
         .with_seed(args.seed);
+    let settings = settings.with_sampler(args.sampler.unwrap_or(settings.sampler));
     let display = display_of(settings.display, args.exposure, args.view_transform)?;
     let (width, height, spp) = (settings.image.width(), settings.image.height(), settings.samples.get());
     let renderer = Renderer::new(scene, loaded.camera, &settings)

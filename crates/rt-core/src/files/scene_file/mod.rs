@@ -30,6 +30,7 @@ use crate::geometry::method::Methods;
 use crate::math::color::ColorSpace;
 use crate::render::settings::RenderSettings;
 use crate::render::view_transform::{Display, ViewTransform};
+use crate::sampling::sampler::SamplerKind;
 use crate::scene::effects::Effects;
 use crate::scene::{Scene, SceneBuildError, SceneBuilder};
 use camera::{CameraDesc, ExposureDesc, ImageDesc, SamplesDesc};
@@ -143,6 +144,7 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<LoadedScen
     let settings = RenderSettings {
         image: desc.image.0,
         samples: desc.samples_per_pixel.0,
+        sampler: desc.sampler,
         color_space: desc.color_space,
         effects,
         display: Display { exposure: desc.exposure.0, view_transform: desc.view_transform },
@@ -229,6 +231,8 @@ struct SceneDesc {
     environment: Option<EnvironmentDesc>,
     #[serde(default)]
     samples_per_pixel: SamplesDesc,
+    #[serde(default)]
+    sampler: SamplerKind,
     #[serde(default)]
     color_space: ColorSpace,
     #[serde(default)]
@@ -333,6 +337,15 @@ mod tests {
         );
         let e = error_after("image:", "methods: (sphere: Exact),\n    image:");
         assert!(e.starts_with("bad.ron:3:") && e.contains("Unexpected variant named `Exact`"), "{e}");
+    }
+
+    #[test]
+    fn the_sampler_defaults_to_stratified_and_can_be_chosen() {
+        assert_eq!(parse(GOOD).unwrap().settings.sampler, SamplerKind::Stratified);
+        let sobol = GOOD.replace("image:", "sampler: Sobol,\n    image:");
+        assert_eq!(parse(&sobol).unwrap().settings.sampler, SamplerKind::Sobol);
+        let e = error_after("image:", "sampler: Halton,\n    image:");
+        assert!(e.starts_with("bad.ron:3:") && e.contains("Unexpected variant named `Halton`"), "{e}");
     }
 
     #[test]
