@@ -8,6 +8,7 @@
 //! ([`Sampler`]), so the result does not depend on the number of threads or
 //! the order rows finish in, bit for bit.
 
+pub mod adaptive;
 pub mod settings;
 pub mod view_transform;
 
@@ -223,8 +224,25 @@ impl<'s> Renderer<'s> {
         sums: &mut [Color],
     ) -> RayCounts {
         assert!(columns.end <= self.view.width(), "columns {columns:?} past the image's width");
+        assert_eq!(sums.len(), rows.len() * columns.len(), "one sum per pixel of the region");
+        self.sample_region(rows, columns, samples, |_| true, |at, _, c| sums[at] += c)
+    }
+
+    /// The samples `samples` of each pixel of the region (`rows` ×
+    /// `columns`) for which `wanted` (given the pixel's index in the region,
+    /// row by row) says so, traced in packets as
+    /// [`Renderer::accumulate_region`] says, each handed to `add` with its
+    /// pixel's index and sample index, in the order given there.
+    #[inline(always)]
+    fn sample_region(
+        &self,
+        rows: Range<u32>,
+        columns: Range<u32>,
+        samples: Range<u32>,
+        wanted: impl Fn(usize) -> bool,
+        mut add: impl FnMut(usize, u32, Color),
+    ) -> RayCounts {
         let width = columns.len();
-        assert_eq!(sums.len(), rows.len() * width, "one sum per pixel of the region");
         let per_pixel = rows.len() * samples.len();
         let tile = (PACKET_RAYS / per_pixel.max(1)).clamp(1, width.max(1)) as u32;
         let mut counts = RayCounts::default();
@@ -232,30 +250,33 @@ impl<'s> Renderer<'s> {
         let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET_RAYS];
         let mut hits = [None; PACKET_RAYS];
         let mut n = 0;
-        let mut flush = |n: usize, packet: &[(u32, u32, u32)], rays: &[Ray], sums: &mut [Color]| {
+        let mut flush = |n: usize, packet: &[(u32, u32, u32)], rays: &[Ray]| {
             self.scene.cast_all(&rays[..n], &mut hits[..n]);
             for i in 0..n {
                 let (x, y, k) = packet[i];
                 let at = (y - rows.start) as usize * width + (x - columns.start) as usize;
-                sums[at] += self.shade_sample(x, y, k, &rays[i], hits[i], &mut counts);
+                add(at, k, self.shade_sample(x, y, k, &rays[i], hits[i], &mut counts));
             }
         };
         for x0 in columns.clone().step_by(tile as usize) {
             for y in rows.clone() {
                 for x in x0..(x0 + tile).min(columns.end) {
+                    if !wanted((y - rows.start) as usize * width + (x - columns.start) as usize) {
+                        continue;
+                    }
                     for k in samples.clone() {
                         packet[n] = (x, y, k);
                         rays[n] = self.primary_ray(x, y, k);
                         n += 1;
                         if n == PACKET_RAYS {
-                            flush(n, &packet, &rays, sums);
+                            flush(n, &packet, &rays);
                             n = 0;
                         }
                     }
                 }
             }
         }
-        flush(n, &packet, &rays, sums);
+        flush(n, &packet, &rays);
         counts
     }
 
