@@ -671,3 +671,35 @@ fn the_environment_scenes_render_and_a_missing_map_is_an_error_naming_it() {
     );
     assert!(!out.exists());
 }
+
+#[test]
+fn the_sobol_sampler_and_adaptive_sampling_are_chosen_on_the_command_line_and_reported_by_stats() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scenes_dir().join("cornell_box.ron");
+    let render = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec!["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()];
+        args.extend(["--width", "32", "--height", "32", "--spp", "32", "--stats"]);
+        args.extend(extra);
+        let o = rt_view(&args, "");
+        (o.status.success(), stderr(&o), out)
+    };
+    let (ok, _, stratified) = render("stratified.png", &[]);
+    assert!(ok);
+    let (ok, err, sobol) = render("sobol.png", &["--sampler", "sobol"]);
+    assert!(ok, "{err}");
+    assert_ne!(read_png(&stratified), read_png(&sobol));
+    let (ok, err, _) = render("adaptive.png", &["--noise-threshold", "0.1", "--min-samples", "8"]);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("adaptive sampling (noise threshold 0.1, at least 8 samples, 3 passes):")
+            && err.contains("of 32768 samples taken")
+            && err.contains("% saved"),
+        "{err}"
+    );
+    let (ok, err, out) = render("refused.png", &["--min-samples", "8"]);
+    assert!(!ok && err.contains("a minimum sample count needs a noise threshold"), "{err}");
+    assert!(!out.exists());
+    let (ok, err, _) = render("refused.png", &["--sampler", "halton"]);
+    assert!(!ok && err.contains("unknown sampler \"halton\": stratified or sobol"), "{err}");
+}

@@ -8,6 +8,7 @@
 //! ([`Sampler`]), so the result does not depend on the number of threads or
 //! the order rows finish in, bit for bit.
 
+pub mod adaptive;
 mod record_sample;
 pub mod settings;
 pub mod view_transform;
@@ -96,7 +97,7 @@ impl<'s> Renderer<'s> {
             integrator: Integrator::new(scene, plan),
             view: ViewPlane::new(camera, settings.image.width(), settings.image.height())?,
             spp,
-            sampler: Sampler::new(spp, settings.seed),
+            sampler: Sampler::new(spp, settings.seed).with_kind(settings.sampler),
             color_space: settings.color_space,
         })
     }
@@ -109,7 +110,7 @@ impl<'s> Renderer<'s> {
     /// unbiased estimate. Everything else is as before; images differ from
     /// a fixed-count render's, which stratifies over its count.
     pub fn open_ended(self) -> Self {
-        Self { sampler: Sampler::open_ended(self.sampler.seed()), ..self }
+        Self { sampler: self.sampler.to_open_ended(), ..self }
     }
 
     /// The view plane rays are generated from.
@@ -224,8 +225,25 @@ impl<'s> Renderer<'s> {
         sums: &mut [Color],
     ) -> RayCounts {
         assert!(columns.end <= self.view.width(), "columns {columns:?} past the image's width");
+        assert_eq!(sums.len(), rows.len() * columns.len(), "one sum per pixel of the region");
+        self.sample_region(rows, columns, samples, |_| true, |at, _, c| sums[at] += c)
+    }
+
+    /// The samples `samples` of each pixel of the region (`rows` ×
+    /// `columns`) for which `wanted` (given the pixel's index in the region,
+    /// row by row) says so, traced in packets as
+    /// [`Renderer::accumulate_region`] says, each handed to `add` with its
+    /// pixel's index and sample index, in the order given there.
+    #[inline(always)]
+    fn sample_region(
+        &self,
+        rows: Range<u32>,
+        columns: Range<u32>,
+        samples: Range<u32>,
+        wanted: impl Fn(usize) -> bool,
+        mut add: impl FnMut(usize, u32, Color),
+    ) -> RayCounts {
         let width = columns.len();
-        assert_eq!(sums.len(), rows.len() * width, "one sum per pixel of the region");
         let per_pixel = rows.len() * samples.len();
         let tile = (PACKET_RAYS / per_pixel.max(1)).clamp(1, width.max(1)) as u32;
         let mut counts = RayCounts::default();
@@ -233,30 +251,33 @@ impl<'s> Renderer<'s> {
         let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET_RAYS];
         let mut hits = [None; PACKET_RAYS];
         let mut n = 0;
-        let mut flush = |n: usize, packet: &[(u32, u32, u32)], rays: &[Ray], sums: &mut [Color]| {
+        let mut flush = |n: usize, packet: &[(u32, u32, u32)], rays: &[Ray]| {
             self.scene.cast_all(&rays[..n], &mut hits[..n]);
             for i in 0..n {
                 let (x, y, k) = packet[i];
                 let at = (y - rows.start) as usize * width + (x - columns.start) as usize;
-                sums[at] += self.shade_sample(x, y, k, &rays[i], hits[i], &mut counts);
+                add(at, k, self.shade_sample(x, y, k, &rays[i], hits[i], &mut counts));
             }
         };
         for x0 in columns.clone().step_by(tile as usize) {
             for y in rows.clone() {
                 for x in x0..(x0 + tile).min(columns.end) {
+                    if !wanted((y - rows.start) as usize * width + (x - columns.start) as usize) {
+                        continue;
+                    }
                     for k in samples.clone() {
                         packet[n] = (x, y, k);
                         rays[n] = self.primary_ray(x, y, k);
                         n += 1;
                         if n == PACKET_RAYS {
-                            flush(n, &packet, &rays, sums);
+                            flush(n, &packet, &rays);
                             n = 0;
                         }
                     }
                 }
             }
         }
-        flush(n, &packet, &rays, sums);
+        flush(n, &packet, &rays);
         counts
     }
 
@@ -372,6 +393,29 @@ mod tests {
         let r = renderer(&s, 32, 24, 4);
         let run = |threads| crate::testing::test_support::render_on_threads(&r, threads);
         assert_eq!(run(1), run(2));
+    }
+
+    #[test]
+    fn a_sobol_render_is_the_same_for_one_and_two_threads_and_in_steps_and_differs_by_seed() {
+        // Global illumination through a lens: every dimension from Sobol points, which
+        // depend on pixel, sample and seed alone.
+        let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+        let mut s = crate::load_scene(&scenes.join("depth_of_field.ron")).unwrap();
+        s.settings.sampler = crate::sampling::sampler::SamplerKind::Sobol;
+        let r = renderer(&s, 24, 18, 8);
+        let run = |threads| crate::testing::test_support::render_on_threads(&r, threads);
+        let one = run(1);
+        assert_eq!(one, run(2));
+        let mut sums = vec![Color::ZERO; 24];
+        for range in [0..1, 1..2, 2..8] {
+            r.accumulate_row(9, range, &mut sums);
+        }
+        let row: Vec<Color> = sums.iter().map(|&c| c / 8.0).collect();
+        assert_eq!(row, one.pixels[9 * 24..10 * 24]);
+        let file = crate::load_scene(&scenes.join("depth_of_field.ron")).unwrap();
+        assert_ne!(one.pixels, renderer(&file, 24, 18, 8).render(|_| {}).pixels);
+        s.settings.seed = 1;
+        assert_ne!(one.pixels, renderer(&s, 24, 18, 8).render(|_| {}).pixels);
     }
 
     #[test]

@@ -21,7 +21,10 @@
 
 use std::ops::Range;
 
+use serde::Deserialize;
+
 use crate::math::real::{Real, Vec3};
+use crate::sampling::sobol;
 
 /// Largest accepted samples-per-pixel count, 2¹⁶.
 pub const MAX_SAMPLES_PER_PIXEL: u32 = 1 << 16;
@@ -190,6 +193,56 @@ pub fn uniform_sphere_pdf() -> Real {
     1.0 / (4.0 * std::f64::consts::PI as Real)
 }
 
+/// Which points a [`Sampler`] hands out: the scene file's `sampler` and the
+/// command line's `--sampler`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum SamplerKind {
+    /// Stratified jitter for the film position, independent random numbers
+    /// ([`SampleRng`]) for the path: what images always were.
+    #[default]
+    Stratified,
+    /// Owen-scrambled Sobol points for the film position, the lens and
+    /// every dimension of the path, each bounce its own
+    /// ([`crate::sampling::sobol`]).
+    Sobol,
+}
+
+impl SamplerKind {
+    /// Its name as the command line writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Stratified => "stratified",
+            Self::Sobol => "sobol",
+        }
+    }
+}
+
+impl std::str::FromStr for SamplerKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.to_ascii_lowercase().as_str() {
+            "stratified" => Ok(Self::Stratified),
+            "sobol" => Ok(Self::Sobol),
+            _ => Err(format!("unknown sampler \"{s}\": stratified or sobol")),
+        }
+    }
+}
+
+/// The Sobol slot of the film position ([`crate::sampling::sobol`]).
+const FILM_SLOT: u32 = 0;
+/// The Sobol slot of the lens position.
+const LENS_SLOT: u32 = 1;
+/// The first Sobol slot of a path's values: those of bounce b start at
+/// `PATH_SLOTS + b·BOUNCE_SLOTS` ([`Sampler::start_bounce`]).
+const PATH_SLOTS: u32 = 2;
+/// Slots per bounce of a path: next-event estimation takes two (light
+/// choice, point on the light), BSDF sampling two (lobe, direction),
+/// Russian roulette one; the rest are spare.
+pub const BOUNCE_SLOTS: u32 = 8;
+/// The first slot of the random walks' values: the walk of bounce b starts
+/// at `WALK_SLOTS + b·2²⁰` ([`Sampler::start_walk`]), far from any bounce's.
+const WALK_SLOTS: u32 = 1 << 31;
+
 /// Where a render's samples come from: for sample k of pixel (x, y) of the
 /// image of seed `seed`, a film position in the pixel and, in the order a
 /// path asks for them, its 1D and 2D values, one dimension after another
@@ -197,42 +250,74 @@ pub fn uniform_sphere_pdf() -> Real {
 /// Values depend only on (pixel, sample, seed, dimension), never on the
 /// thread or the order pixels are rendered in.
 ///
-/// This first implementation is stratified jitter for the film position
-/// ([`Strata::subpixel_offset`]; the pixel centre at one sample per pixel)
-/// and, for the path, the [`SampleRng`] stream of the sample, which draws
-/// values in pairs: a 1D value is the first of a pair whose second is not
-/// used. That keeps the images of earlier versions bit for bit; a
-/// low-discrepancy sampler gives every dimension its own value instead.
+/// Two methods ([`SamplerKind`]):
+///
+/// - **Stratified** (the default): stratified jitter for the film position
+///   ([`Strata::subpixel_offset`]; the pixel centre at one sample per pixel)
+///   and, for the path, the [`SampleRng`] stream of the sample, which draws
+///   values in pairs: a 1D value is the first of a pair whose second is not
+///   used. That keeps the images of earlier versions bit for bit.
+/// - **Sobol**: every value, film and lens position included, from its own
+///   slot of padded, Owen-scrambled Sobol points seeded per pixel
+///   ([`crate::sampling::sobol`]), so each dimension's values over a
+///   pixel's samples are stratified. Each bounce of a path takes its values
+///   from slots of its own ([`Sampler::start_bounce`]), so a value that one
+///   sample draws and another does not (Russian roulette) does not shift
+///   the later bounces' dimensions. At one sample per pixel the film
+///   position is the pixel centre, as for the stratified method.
 #[derive(Clone, Copy, Debug)]
 pub struct Sampler {
+    kind: SamplerKind,
     strata: Strata,
     spp: u32,
     /// Film positions stratified per [`open_ended_block`], not over `spp`.
     open_ended: bool,
     seed: u64,
     stream: SampleRng,
+    /// Sobol: the current pixel's seed, its sample and the next slot.
+    pixel: u64,
+    sample: u32,
+    slot: u32,
 }
 
 impl Sampler {
-    /// A sampler for `spp` samples per pixel (≥ 1) in the image of seed `seed`.
+    /// A stratified sampler for `spp` samples per pixel (≥ 1) in the image of seed `seed`.
     pub fn new(spp: u32, seed: u64) -> Self {
         Self {
+            kind: SamplerKind::Stratified,
             strata: Strata::new(spp),
             spp,
             open_ended: false,
             seed,
             stream: SampleRng::seeded(0, 0, 0, seed),
+            pixel: 0,
+            sample: 0,
+            slot: PATH_SLOTS,
         }
     }
 
-    /// A sampler for a render with no sample count fixed in advance, in the
-    /// image of seed `seed`: sample k's film position is stratified within
-    /// its block ([`open_ended_block`]) instead of over all the pixel's
-    /// samples, and is never the bare pixel centre (a one-sample block is a
-    /// uniform point in the pixel). The path's values are those of
-    /// [`Sampler::new`]. Samples must stay below [`MAX_OPEN_ENDED_SAMPLES`].
+    /// This sampler with the method `kind`.
+    pub fn with_kind(self, kind: SamplerKind) -> Self {
+        Self { kind, ..self }
+    }
+
+    /// A stratified sampler for a render with no sample count fixed in
+    /// advance, in the image of seed `seed`: sample k's film position is
+    /// stratified within its block ([`open_ended_block`]) instead of over
+    /// all the pixel's samples, and is never the bare pixel centre (a
+    /// one-sample block is a uniform point in the pixel). The path's values
+    /// are those of [`Sampler::new`]. Samples must stay below
+    /// [`MAX_OPEN_ENDED_SAMPLES`].
     pub fn open_ended(seed: u64) -> Self {
         Self { open_ended: true, ..Self::new(1, seed) }
+    }
+
+    /// This sampler's method for a render with no sample count fixed in
+    /// advance ([`Sampler::open_ended`]). Sobol points need no blocks: any
+    /// prefix of 2^m samples is stratified; only the film position is never
+    /// the bare pixel centre.
+    pub fn to_open_ended(self) -> Self {
+        Self::open_ended(self.seed).with_kind(self.kind)
     }
 
     /// The seed of the image this sampler samples.
@@ -240,10 +325,42 @@ impl Sampler {
         self.seed
     }
 
+    /// The method of this sampler.
+    pub fn kind(&self) -> SamplerKind {
+        self.kind
+    }
+
     /// Starts sample `k` of pixel (`x`, `y`): the values handed out next are that sample's.
     #[inline]
     pub fn start_pixel_sample(&mut self, x: u32, y: u32, k: u32) {
-        self.stream = SampleRng::seeded(x, y, k, self.seed);
+        match self.kind {
+            SamplerKind::Stratified => self.stream = SampleRng::seeded(x, y, k, self.seed),
+            SamplerKind::Sobol => {
+                (self.pixel, self.sample, self.slot) = (sobol::pixel_seed(x, y, self.seed), k, PATH_SLOTS)
+            }
+        }
+    }
+
+    /// The values handed out next are bounce `bounce`'s (counting the first
+    /// surface a camera ray meets as bounce 1): Sobol slots
+    /// `PATH_SLOTS + bounce·`[`BOUNCE_SLOTS`] on. The stratified method's
+    /// stream just goes on.
+    #[inline]
+    pub fn start_bounce(&mut self, bounce: u32) {
+        if self.kind == SamplerKind::Sobol {
+            self.slot = PATH_SLOTS.wrapping_add(bounce.wrapping_mul(BOUNCE_SLOTS));
+        }
+    }
+
+    /// The values handed out next are those of the random walk that
+    /// bounce `bounce` starts, step after step: slots of their own, apart
+    /// from every bounce's (2²⁰ values per walk before they would reach the
+    /// next walk's). The stratified method's stream just goes on.
+    #[inline]
+    pub fn start_walk(&mut self, bounce: u32) {
+        if self.kind == SamplerKind::Sobol {
+            self.slot = WALK_SLOTS.wrapping_add(bounce.wrapping_mul(1 << 20));
+        }
     }
 
     /// The film position of sample `k` of pixel (`x`, `y`) inside the
@@ -252,6 +369,12 @@ impl Sampler {
     /// before their samples' paths start (packets of camera rays).
     #[inline(always)]
     pub fn film_position(&self, x: u32, y: u32, k: u32) -> (Real, Real) {
+        if self.kind == SamplerKind::Sobol {
+            if self.spp == 1 && !self.open_ended {
+                return (0.5, 0.5);
+            }
+            return sobol::value_2d(sobol::pixel_seed(x, y, self.seed), FILM_SLOT, k);
+        }
         if self.open_ended {
             let block = open_ended_block(k);
             let strata = Strata::new(block.end - block.start);
@@ -266,13 +389,17 @@ impl Sampler {
     /// The lens position of sample `k` of pixel (`x`, `y`), in [0,1)²,
     /// for a camera with a lens
     /// ([`crate::camera::view_plane::ViewPlane::has_lens`]; a pinhole
-    /// ignores it and the renderer does not ask): uniform and independent
-    /// of the film position (a hash of the sample other than the film
-    /// jitter's), not stratified, since pairing film cell k with lens cell
-    /// k would tie the two together. Like the film position it uses up no
-    /// dimension of the path.
+    /// ignores it and the renderer does not ask). Stratified method:
+    /// uniform and independent of the film position (a hash of the sample
+    /// other than the film jitter's), not stratified, since pairing film
+    /// cell k with lens cell k would tie the two together. Sobol: its own
+    /// slot, stratified over the pixel's samples and independent of the
+    /// film's. Like the film position it uses up no dimension of the path.
     #[inline(always)]
     pub fn lens_position(&self, x: u32, y: u32, k: u32) -> (Real, Real) {
+        if self.kind == SamplerKind::Sobol {
+            return sobol::value_2d(sobol::pixel_seed(x, y, self.seed), LENS_SLOT, k);
+        }
         let h = mix(hash(x, y, k) ^ LENS_SALT ^ seed_bits(self.seed));
         (unit_float(h as u32), unit_float((h >> 32) as u32))
     }
@@ -280,13 +407,25 @@ impl Sampler {
     /// The next dimension's value in [0, 1).
     #[inline]
     pub fn get_1d(&mut self) -> Real {
-        self.stream.next_pair().0
+        match self.kind {
+            SamplerKind::Stratified => self.stream.next_pair().0,
+            SamplerKind::Sobol => {
+                self.slot = self.slot.wrapping_add(1);
+                sobol::value_1d(self.pixel, self.slot.wrapping_sub(1), self.sample)
+            }
+        }
     }
 
     /// The next dimension's pair of values in [0, 1)².
     #[inline]
     pub fn get_2d(&mut self) -> (Real, Real) {
-        self.stream.next_pair()
+        match self.kind {
+            SamplerKind::Stratified => self.stream.next_pair(),
+            SamplerKind::Sobol => {
+                self.slot = self.slot.wrapping_add(1);
+                sobol::value_2d(self.pixel, self.slot.wrapping_sub(1), self.sample)
+            }
+        }
     }
 }
 
@@ -376,6 +515,139 @@ mod tests {
         a.start_pixel_sample(5, 6, 2);
         let _ = a.film_position(5, 6, 2);
         assert_eq!(a.get_1d(), first.0);
+    }
+
+    /// Sobol sampler `spp` samples per pixel, seed `seed`.
+    fn sobol(spp: u32, seed: u64) -> Sampler {
+        Sampler::new(spp, seed).with_kind(SamplerKind::Sobol)
+    }
+
+    #[test]
+    fn a_sobol_samples_values_depend_on_its_pixel_index_seed_and_bounce_alone() {
+        // Started twice, a sample hands out the same values; another pixel,
+        // index or seed gives others. A bounce's values do not depend on
+        // how many values earlier bounces drew (Russian roulette draws one
+        // or none), and a walk's are not any bounce's.
+        let draw = |sampler: &mut Sampler, x, y, k| {
+            sampler.start_pixel_sample(x, y, k);
+            (sampler.get_1d(), sampler.get_2d(), sampler.get_1d())
+        };
+        let mut a = sobol(16, 3);
+        let first = draw(&mut a, 5, 6, 2);
+        let _ = draw(&mut a, 9, 9, 0);
+        assert_eq!(draw(&mut a, 5, 6, 2), first);
+        for other in [draw(&mut a, 5, 6, 3), draw(&mut a, 6, 5, 2), draw(&mut sobol(16, 4), 5, 6, 2)] {
+            assert_ne!(other, first);
+        }
+        let bounce = |before: usize| {
+            let mut s = sobol(16, 3);
+            s.start_pixel_sample(5, 6, 2);
+            s.start_bounce(1);
+            for _ in 0..before {
+                s.get_1d();
+            }
+            s.start_bounce(2);
+            (s.get_1d(), s.get_2d())
+        };
+        assert_eq!(bounce(4), bounce(5));
+        let mut s = sobol(16, 3);
+        s.start_pixel_sample(5, 6, 2);
+        s.start_walk(2);
+        assert_ne!((s.get_1d(), s.get_2d()), bounce(4));
+        // The stratified method ignores bounces: its stream goes on.
+        let mut t = Sampler::new(16, 3);
+        t.start_pixel_sample(5, 6, 2);
+        t.start_bounce(7);
+        t.start_walk(7);
+        assert_eq!(t.get_1d(), SampleRng::seeded(5, 6, 2, 3).next_pair().0);
+        // One sample per pixel sees the pixel centre, as with strata; the
+        // open-ended render never does.
+        assert_eq!(sobol(1, 3).film_position(5, 6, 0), (0.5, 0.5));
+        assert_ne!(sobol(1, 3).to_open_ended().film_position(5, 6, 0), (0.5, 0.5));
+        assert_eq!(sobol(1, 3).to_open_ended().kind(), SamplerKind::Sobol);
+    }
+
+    #[test]
+    fn a_pixels_sobol_film_and_lens_positions_fill_every_elementary_interval_of_each_power_of_two_prefix() {
+        // The first 2^m samples of a pixel put one film position (and one
+        // lens position) in each 2^−a × 2^−(m−a) interval, for every split:
+        // what makes Sobol converge faster than jittered strata, whose
+        // prefixes are not stratified at all unless the count is fixed.
+        for (x, y) in [(0, 0), (13, 7)] {
+            let s = sobol(1024, 5).to_open_ended();
+            for m in 0..=10u32 {
+                for a in 0..=m {
+                    for position in [Sampler::film_position, Sampler::lens_position] {
+                        let mut seen = vec![0u8; 1 << m];
+                        for k in 0..1u32 << m {
+                            let (u, v) = position(&s, x, y, k);
+                            let (i, j) = (
+                                (u * (1u32 << a) as Real) as usize,
+                                (v * (1u32 << (m - a)) as Real) as usize,
+                            );
+                            seen[(j << a) | i] += 1;
+                        }
+                        assert!(seen.iter().all(|&n| n == 1), "pixel ({x}, {y}), 2^{m} split {a}");
+                    }
+                }
+            }
+        }
+        assert_eq!(
+            parse_kind(&["sobol", "Stratified", "halton"]),
+            vec![
+                Ok(SamplerKind::Sobol),
+                Ok(SamplerKind::Stratified),
+                Err("unknown sampler \"halton\": stratified or sobol".into())
+            ]
+        );
+    }
+
+    fn parse_kind(names: &[&str]) -> Vec<Result<SamplerKind, String>> {
+        names.iter().map(|n| n.parse()).collect()
+    }
+
+    #[test]
+    fn sobol_values_of_every_kind_of_dimension_are_uniform_and_independent_of_each_other() {
+        // χ² (16 × 16 cells, α ≈ 10⁻⁴) over 100 pixels × 2048 samples of:
+        // the film position; two 1D values of one bounce (light choice and
+        // lobe choice: each uniform, and together uniform on the square,
+        // so independent); a bounce's direction pair; and a walk step's
+        // value against a later bounce's. Stratification only makes the
+        // counts less variable than independent draws, so the bound holds.
+        type Pick = fn(&mut Sampler, u32, u32, u32) -> (Real, Real);
+        let picks: [(&str, Pick); 4] = [
+            ("Sobol film", |s, x, y, k| s.film_position(x, y, k)),
+            ("Sobol light and lobe choice", |s, _, _, _| {
+                s.start_bounce(2);
+                let light = s.get_1d();
+                let _ = s.get_2d();
+                (light, s.get_1d())
+            }),
+            ("Sobol direction", |s, _, _, _| {
+                s.start_bounce(3);
+                let _ = (s.get_1d(), s.get_2d(), s.get_1d());
+                s.get_2d()
+            }),
+            ("Sobol walk step and bounce", |s, _, _, _| {
+                s.start_walk(1);
+                let step = (0..7).map(|_| s.get_1d()).last().unwrap();
+                s.start_bounce(2);
+                (step, s.get_1d())
+            }),
+        ];
+        for (name, pick) in picks {
+            let mut sampler = sobol(2048, 11);
+            let mut i = 0u32;
+            let draw = |_: &mut SampleRng| {
+                let (x, y, k) = ((i / 2048) % 10, i / 20480, i % 2048);
+                i += 1;
+                sampler.start_pixel_sample(x, y, k);
+                let (u, v) = pick(&mut sampler, x, y, k);
+                Draw::At((to_f64(u), to_f64(v)))
+            };
+            let side = Interval { lo: 0.0, hi: 1.0, n: 16 };
+            chi_square::plane(name, Rectangle { s: side, t: side }, 204_800, draw, &|_, _| 1.0);
+        }
     }
 
     #[test]

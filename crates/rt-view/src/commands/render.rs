@@ -9,7 +9,10 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rt_core::Renderer;
+use rt_core::render::adaptive::{AdaptiveFrame, AdaptiveStats, passes};
+use rt_core::render::settings::AdaptiveSampling;
 use rt_core::render::view_transform::{Display, MAX_EXPOSURE_STOPS, ViewTransform};
+use rt_core::sampling::sampler::SamplerKind;
 use rt_core::scene::effects::{EffectPlan, RayCounts};
 
 use crate::image_out::PendingImage;
@@ -35,6 +38,22 @@ pub struct RenderArgs {
     /// independent estimates of the same image (0 is the default image).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Where the samples go: `stratified` (jittered strata, independent
+    /// random numbers along the path) or `sobol` (Owen-scrambled Sobol
+    /// points in every dimension of the path: less noise at the same
+    /// samples) (default: the scene's `sampler`, else stratified).
+    #[arg(long, value_name = "stratified|sobol")]
+    pub sampler: Option<SamplerKind>,
+    /// Adaptive sampling: a pixel stops taking samples once its relative
+    /// noise estimate is below T (e.g. 0.01; --spp is then the most a pixel
+    /// takes; 0 turns off the scene's `adaptive_sampling`) (default: the
+    /// scene's, else off).
+    #[arg(long, value_name = "T")]
+    pub noise_threshold: Option<f32>,
+    /// Adaptive sampling: the samples every pixel takes before its noise is
+    /// first estimated (default: the scene's, else 16).
+    #[arg(long, value_name = "N")]
+    pub min_samples: Option<u32>,
     /// Print to stderr: scene load and BVH build times, the effects
     /// simulated, the rays cast by kind (primary, shadow, reflection,
     /// refraction, ambient occlusion, and under global illumination bounce
@@ -92,6 +111,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .overridden(args.width, args.height, args.spp)
         .with_context(|| format!("{}: cannot render", args.scene.display()))?
         .with_seed(args.seed);
+    let settings = settings
+        .with_sampler(args.sampler.unwrap_or(settings.sampler))
+        .with_adaptive(args.noise_threshold, args.min_samples)
+        .with_context(|| format!("{}: cannot render", args.scene.display()))?;
     let display = display_of(settings.display, args.exposure, args.view_transform)?;
     let (width, height, spp) = (settings.image.width(), settings.image.height(), settings.samples.get());
     let renderer = Renderer::new(scene, loaded.camera, &settings)
@@ -102,14 +125,21 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     // Only fails if a handler is already set (not in this program) or the OS refuses.
     let _ = ctrlc::set_handler(move || handler_stop.store(true, Ordering::Relaxed));
 
-    let bar = ProgressBar::new(height as u64).with_style(
+    let passes = settings.adaptive.map_or(1, |a| passes(a.min_samples(), spp).len() as u64);
+    let bar = ProgressBar::new(height as u64 * passes).with_style(
         ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} rows, {elapsed} (ETA {eta})")
             .expect("valid template")
             .progress_chars("=> "),
     );
     bar.set_message(format!("rendering {width}x{height}, {spp} spp"));
     let start = Instant::now();
-    let frame = renderer.render_until(|_| bar.inc(1), &stop);
+    let (frame, adaptive) = match settings.adaptive {
+        None => (renderer.render_until(|_| bar.inc(1), &stop), None),
+        Some(a) => match renderer.render_adaptive(a, |_| bar.inc(1), &stop) {
+            Some(AdaptiveFrame { frame, stats, .. }) => (Some(frame), Some((a, stats))),
+            None => (None, None),
+        },
+    };
     let elapsed = start.elapsed();
     bar.finish_and_clear();
     let frame = frame.ok_or(Interrupted)?;
@@ -141,6 +171,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             eprintln!(
                 "note: nothing gives off light (no lights, no emissive objects, black background): the image is black"
             );
+        }
+        if let Some((a, stats)) = adaptive {
+            eprintln!("{}", describe_adaptive(a, &stats));
         }
         eprintln!("rays: {}", describe_counts(&frame.rays));
         eprintln!(
@@ -218,6 +251,22 @@ pub fn describe_plan(plan: &EffectPlan) -> String {
         on.push(format!("ambient occlusion ({} samples, radius {})", ao.samples, ao.radius));
     }
     on.join(", ")
+}
+
+/// Adaptive sampling's line of `--stats`: samples taken against the full
+/// count, the share saved, the pixels that stopped early.
+pub fn describe_adaptive(a: AdaptiveSampling, stats: &AdaptiveStats) -> String {
+    format!(
+        "adaptive sampling (noise threshold {}, at least {} samples, {} passes): {} of {} samples taken \
+         ({:.1} % saved), {} pixels converged early",
+        a.threshold(),
+        a.min_samples(),
+        stats.passes,
+        stats.taken,
+        stats.full,
+        100.0 * stats.saved(),
+        stats.converged
+    )
 }
 
 /// The ray counts by kind: "primary 345600, shadow 0, …".

@@ -28,8 +28,9 @@ use crate::camera::Camera;
 use crate::files::model::ModelError;
 use crate::geometry::method::Methods;
 use crate::math::color::ColorSpace;
-use crate::render::settings::RenderSettings;
+use crate::render::settings::{AdaptiveSampling, RenderSettings};
 use crate::render::view_transform::{Display, ViewTransform};
+use crate::sampling::sampler::SamplerKind;
 use crate::scene::effects::Effects;
 use crate::scene::{Scene, SceneBuildError, SceneBuilder};
 use camera::{CameraDesc, ExposureDesc, ImageDesc, SamplesDesc};
@@ -143,6 +144,8 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<LoadedScen
     let settings = RenderSettings {
         image: desc.image.0,
         samples: desc.samples_per_pixel.0,
+        sampler: desc.sampler,
+        adaptive: desc.adaptive_sampling.map(|a| a.0),
         color_space: desc.color_space,
         effects,
         display: Display { exposure: desc.exposure.0, view_transform: desc.view_transform },
@@ -230,6 +233,10 @@ struct SceneDesc {
     #[serde(default)]
     samples_per_pixel: SamplesDesc,
     #[serde(default)]
+    sampler: SamplerKind,
+    #[serde(default, deserialize_with = "environment::present")]
+    adaptive_sampling: Option<AdaptiveDesc>,
+    #[serde(default)]
     color_space: ColorSpace,
     #[serde(default)]
     exposure: ExposureDesc,
@@ -246,6 +253,29 @@ struct SceneDesc {
     effects: EffectsDesc,
     #[serde(default)]
     methods: Methods,
+}
+
+/// `adaptive_sampling: (noise_threshold: T, min_samples: N)`, `min_samples`
+/// defaulting to [`AdaptiveSampling::DEFAULT_MIN_SAMPLES`], each checked by
+/// [`AdaptiveSampling::new`].
+#[derive(Deserialize)]
+#[serde(try_from = "AdaptiveFields")]
+struct AdaptiveDesc(AdaptiveSampling);
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AdaptiveFields {
+    noise_threshold: values::Finite,
+    #[serde(default, deserialize_with = "environment::present")]
+    min_samples: Option<u32>,
+}
+
+impl TryFrom<AdaptiveFields> for AdaptiveDesc {
+    type Error = crate::render::settings::SettingsError;
+    fn try_from(f: AdaptiveFields) -> Result<Self, Self::Error> {
+        let min = f.min_samples.unwrap_or(AdaptiveSampling::DEFAULT_MIN_SAMPLES);
+        AdaptiveSampling::new(crate::math::real::to_f32(f.noise_threshold.0), min).map(Self)
+    }
 }
 
 /// The materials map, refusing a name defined twice (a plain map would keep
@@ -333,6 +363,28 @@ mod tests {
         );
         let e = error_after("image:", "methods: (sphere: Exact),\n    image:");
         assert!(e.starts_with("bad.ron:3:") && e.contains("Unexpected variant named `Exact`"), "{e}");
+    }
+
+    #[test]
+    fn the_sampler_defaults_to_stratified_and_can_be_chosen() {
+        assert_eq!(parse(GOOD).unwrap().settings.sampler, SamplerKind::Stratified);
+        let sobol = GOOD.replace("image:", "sampler: Sobol,\n    image:");
+        assert_eq!(parse(&sobol).unwrap().settings.sampler, SamplerKind::Sobol);
+        let e = error_after("image:", "sampler: Halton,\n    image:");
+        assert!(e.starts_with("bad.ron:3:") && e.contains("Unexpected variant named `Halton`"), "{e}");
+        // Adaptive sampling: off unless asked for; a threshold, and a minimum or the default one.
+        assert_eq!(parse(GOOD).unwrap().settings.adaptive, None);
+        let on = GOOD.replace("image:", "adaptive_sampling: (noise_threshold: 0.02),\n    image:");
+        let a = parse(&on).unwrap().settings.adaptive.unwrap();
+        assert_eq!((a.threshold(), a.min_samples()), (0.02, AdaptiveSampling::DEFAULT_MIN_SAMPLES));
+        let on =
+            GOOD.replace("image:", "adaptive_sampling: (noise_threshold: 0.1, min_samples: 4),\n    image:");
+        assert_eq!(parse(&on).unwrap().settings.adaptive, Some(AdaptiveSampling::new(0.1, 4).unwrap()));
+        let e = error_after("image:", "adaptive_sampling: (noise_threshold: -1),\n    image:");
+        assert!(
+            e.starts_with("bad.ron:3:") && e.contains("noise threshold must be a finite number above 0"),
+            "{e}"
+        );
     }
 
     #[test]

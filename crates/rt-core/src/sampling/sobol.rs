@@ -1,0 +1,162 @@
+//! Owen-scrambled Sobol points, padded to any number of dimensions and
+//! decorrelated between pixels: the values of [`super::sampler::Sampler`]'s
+//! Sobol method ([`super::sampler::SamplerKind::Sobol`]).
+//!
+//! The points are those of the `sobol_burley` crate: the Sobol sequence
+//! (direction numbers of Joe and Kuo), its index shuffled and its values
+//! Owen-scrambled by hashing (Burley, "Practical Hash-based Owen
+//! Scrambling", JCGT 9(4), 2020, §§3–5). Owen scrambling keeps the
+//! sequence's nets: within the first two dimensions, every aligned block of
+//! 2^m points (in particular every prefix of 2^m samples) puts exactly one
+//! point in each elementary interval of area 2^−m, whatever the scramble.
+//! Shuffling the index (a nested uniform scramble of its reversed bits,
+//! Burley §4) maps each aligned block onto another, so this holds for the
+//! shuffled order too.
+//!
+//! **Padding** (Burley §5): a path asks for far more dimensions than a
+//! Sobol table holds, and high Sobol dimensions have poor 2D projections.
+//! So every value a path asks for, a 1D value or a 2D pair, comes from its
+//! own *slot*: the first one or two dimensions of a Sobol sequence whose
+//! shuffle and scramble are seeded by a hash of (pixel, image seed, slot).
+//! Within a slot, a pixel's samples are the stratified 2D sequence above;
+//! between slots, and between pixels, they are independent (only randomly
+//! associated), which is what makes the error noise rather than pattern.
+//! Cycles' Sobol-Burley sampler and pbrt-v4's `ZSobolSampler` pad the same
+//! way. Sample indices run up to 2¹⁶ per sequence (the crate's table); past
+//! that, each further block of 2¹⁶ samples is another independently
+//! seeded sequence (still unbiased, no longer one net).
+
+use crate::math::real::Real;
+
+/// Sample indices one Sobol sequence covers (the `sobol_burley` table).
+pub const SEQUENCE_LENGTH: u32 = 1 << 16;
+
+/// The seed of pixel (`x`, `y`)'s sequences in the image of seed `seed`
+/// (a SplitMix64 hash, [`super::sampler`]'s): every pixel's points are
+/// shuffled and scrambled differently.
+#[inline]
+pub fn pixel_seed(x: u32, y: u32, seed: u64) -> u64 {
+    let z = (x as u64) ^ ((y as u64) << 32) ^ PIXEL_SALT;
+    mix(mix(z) ^ mix(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(1)))
+}
+
+/// The 32-bit seed of slot `slot`'s sequence for the pixel of seed `pixel`,
+/// at sample `k` (whose index past [`SEQUENCE_LENGTH`] picks another
+/// sequence), and the index in it.
+#[inline]
+fn sequence(pixel: u64, slot: u32, k: u32) -> (u32, u32) {
+    let block = (k / SEQUENCE_LENGTH) as u64;
+    let h = mix(pixel ^ mix((slot as u64) | (block << 32)));
+    (k % SEQUENCE_LENGTH, h as u32)
+}
+
+/// Slot `slot`'s 1D value for sample `k` of the pixel of seed `pixel`, in [0, 1).
+#[inline]
+pub fn value_1d(pixel: u64, slot: u32, k: u32) -> Real {
+    let (index, seed) = sequence(pixel, slot, k);
+    sobol_burley::sample(index, 0, seed) as Real
+}
+
+/// Slot `slot`'s 2D value for sample `k` of the pixel of seed `pixel`, in
+/// [0, 1)²: the first two dimensions of one shuffled, scrambled sequence,
+/// so a pixel's samples are stratified in the pair (the module's nets).
+#[inline]
+pub fn value_2d(pixel: u64, slot: u32, k: u32) -> (Real, Real) {
+    let (index, seed) = sequence(pixel, slot, k);
+    // Dimensions 0 and 1 of `sample_4d`, bit for bit those of `sample`,
+    // with the index shuffled once for both.
+    let [u, v, _, _] = sobol_burley::sample_4d(index, 0, seed);
+    (u as Real, v as Real)
+}
+
+/// What sets pixel seeds apart from the stratified sampler's hashes (any
+/// odd constant; these are the first digits of √3).
+const PIXEL_SALT: u64 = 0xBB67_AE85_84CA_A73B;
+
+/// SplitMix64's output function (Steele, Lea, Flood 2014).
+#[inline]
+fn mix(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The cell of `(u, v)` in the elementary intervals of 2^−a by 2^−b.
+    fn cell((u, v): (Real, Real), a: u32, b: u32) -> usize {
+        let (i, j) = ((u * (1u32 << a) as Real) as usize, (v * (1u32 << b) as Real) as usize);
+        (j << a) | i
+    }
+
+    #[test]
+    fn every_power_of_two_prefix_of_a_pixels_pairs_is_a_net() {
+        // For m = 0..=10 and every split a + b = m, the first 2^m samples of
+        // a slot put exactly one point in each 2^−a × 2^−b interval: the
+        // (0, m, 2)-net property, for several pixels, slots and seeds.
+        for (x, y, seed, slot) in [(0, 0, 0, 0), (17, 3, 0, 5), (17, 3, 9, 5), (640, 479, 1, 1000)] {
+            let pixel = pixel_seed(x, y, seed);
+            for m in 0..=10u32 {
+                let points: Vec<_> = (0..1u32 << m).map(|k| value_2d(pixel, slot, k)).collect();
+                for a in 0..=m {
+                    let mut seen = vec![0u8; 1 << m];
+                    for &p in &points {
+                        seen[cell(p, a, m - a)] += 1;
+                    }
+                    assert!(
+                        seen.iter().all(|&n| n == 1),
+                        "pixel ({x}, {y}), seed {seed}, slot {slot}: 2^{m} split {a}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_second_block_of_samples_is_a_net_too() {
+        // Samples 256..512 (an aligned block, what a render adding samples
+        // in doubling passes takes next) are also one per interval.
+        let pixel = pixel_seed(4, 5, 6);
+        let mut seen = vec![0u8; 256];
+        for k in 256..512 {
+            seen[cell(value_2d(pixel, 3, k), 4, 4)] += 1;
+        }
+        assert!(seen.iter().all(|&n| n == 1));
+    }
+
+    #[test]
+    fn values_stay_in_the_half_open_unit_interval_and_past_the_table_go_on() {
+        let pixel = pixel_seed(1, 2, 3);
+        for k in [0, 1, SEQUENCE_LENGTH - 1, SEQUENCE_LENGTH, 3 * SEQUENCE_LENGTH + 7, u32::MAX] {
+            let (u, v) = value_2d(pixel, 9, k);
+            let w = value_1d(pixel, 9, k);
+            assert!([u, v, w].iter().all(|t| (0.0..1.0).contains(t)), "{k}");
+        }
+        // A sample index past the table is another sequence, not sample k mod 2^16 again.
+        assert_ne!(value_2d(pixel, 9, 5), value_2d(pixel, 9, SEQUENCE_LENGTH + 5));
+    }
+
+    #[test]
+    fn a_pair_is_the_first_two_dimensions_of_its_sequence() {
+        let pixel = pixel_seed(8, 9, 10);
+        for k in [0, 1, 77, 4095] {
+            let (index, seed) = sequence(pixel, 4, k);
+            let pair =
+                (sobol_burley::sample(index, 0, seed) as Real, sobol_burley::sample(index, 1, seed) as Real);
+            assert_eq!(value_2d(pixel, 4, k), pair);
+            assert_eq!(value_1d(pixel, 4, k), pair.0);
+        }
+    }
+
+    #[test]
+    fn pixels_slots_and_seeds_get_different_sequences() {
+        let a = pixel_seed(3, 4, 0);
+        assert_ne!(a, pixel_seed(4, 3, 0));
+        assert_ne!(a, pixel_seed(3, 4, 1));
+        assert_ne!(value_2d(a, 0, 0), value_2d(a, 1, 0));
+        assert_ne!(value_2d(a, 0, 0), value_2d(pixel_seed(3, 5, 0), 0, 0));
+        assert_ne!(value_1d(a, 2, 1), value_1d(pixel_seed(3, 4, 7), 2, 1));
+    }
+}
