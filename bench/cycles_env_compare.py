@@ -1,0 +1,517 @@
+#!/usr/bin/env python3
+"""rt-view beside Blender Cycles (and Mitsuba 3) under the same HDR
+environment map, with or without a thin lens; and the skies of the three.
+
+    python3.11 -m venv /work/venv-bpy && /work/venv-bpy/bin/pip install bpy==5.0.1 numpy mitsuba
+    cargo build --release -p rt-view
+    B=/work/venv-bpy/bin/python
+    $B bench/cycles_env_compare.py convention               # where a marked texel lands in each
+    $B bench/cycles_env_compare.py compare bench/scenes/envmap_spheres.ron --mitsuba
+    $B bench/cycles_env_compare.py compare scenes/depth_of_field.ron --mitsuba
+    $B bench/cycles_env_compare.py sky                      # Preetham / Hosek–Wilkie numbers
+
+`compare` exports the scene with `rt-view export` and builds it in Blender
+directly (no file format between them):
+
+- rt-view's world is left-handed with +y up, Blender's right-handed with +z
+  up: a point (x, y, z) is Blender's (−x, −z, y) (the x mirror of
+  bench/mitsuba_compare.py, then y-up to z-up), triangles are rewound.
+  Spheres are UV spheres of 256 × 128 segments, smooth shaded.
+- the map: rt-view's u = ½ looks along +z, which is Blender's −Y; Cycles'
+  Environment Texture puts u = ½ on +X and turns the other way round the
+  same axis, so its lookup vector is the view direction turned about +Z by
+  90° + ρ (a Mapping node), ρ being rt-view's `rotation` (rt-view turns
+  the map about +y, which the mirror makes a turn about Blender's +Z the
+  other way). `convention` checks it: a map with one bright marked texel,
+  looked at by both with and without a rotation, the spot found in each.
+  The map is handed to every renderer as the same float32 OpenEXR (decoded
+  from the scene's .hdr once), so no two RGBE decoders are compared
+  (Blender's adds ½ to each mantissa, the `image` crate's and Mitsuba's do
+  not: a 0.2–0.4 % difference by itself).
+- a material `(1 − ks)·diffuse + ks·GGX` (rt-view's legacy material, no
+  mirror, glass or emission) is a Mix Shader of a Diffuse BSDF (colour
+  kd·colour) and a Glossy BSDF (`GGX`, single scattering, roughness √α
+  with α the export's `roughness`, colour the specular colour: a
+  Fresnel-free conductor as rt-view's glossy lobe).
+- the camera: the same eye, centre of interest and up, vertical field of
+  view; a thin lens of radius A focused at f becomes Cycles' depth of field
+  with `focus_distance` f and `aperture_fstop = focal length / 2A` (Cycles'
+  lens radius is focal length / (2·f-number), the focal length in metres
+  as one scene unit), a round aperture (`aperture_blades` 0).
+- Cycles as bench/cycles_compare.py sets it up: box pixel filter of 1 pixel,
+  no denoising, adaptive sampling, clamping, glossy filter or path guiding;
+  bounces max_bounces − 1.
+
+Statistics as bench/cycles_compare.py: `--batches` independent images a
+renderer, block means over 16×16 pixels, agreement within Z standard errors
+of the difference + `--rel`, whole-image means and their z-score. With
+`--mitsuba` Mitsuba 3 renders the same export (bench/mitsuba_compare.py's
+conversion, the same EXR) as a third opinion.
+
+`sky` compares the skies without rendering a scene: rt-view's baked
+Preetham map (`rt-view export` of a scene with a `Sky`), Cycles' Sky
+Texture (`PREETHAM` and `HOSEK_WILKIE`, still in Blender 5.0 beside the two
+Nishita-based models) seen through an equirectangular panoramic camera, and
+Mitsuba 3.9's `sunsky` (Hosek–Wilkie) evaluated direction by direction.
+"""
+
+import argparse
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+
+def parse_args():
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("mode", choices=["convention", "compare", "sky"])
+    p.add_argument("scene", nargs="?", help="rt-view scene (.ron) with an environment Map, for compare")
+    p.add_argument("--spp", type=int, default=256, help="samples per pixel in all, each renderer")
+    p.add_argument("--batches", type=int, default=8, help="independent images the samples are split into")
+    p.add_argument("--rt-view", default="target/release/rt-view", help="the rt-view binary")
+    p.add_argument("--out", default="cycles-env-out", help="folder for images and the report")
+    p.add_argument("--threads", type=int, default=os.cpu_count(), help="threads for every renderer")
+    p.add_argument("--block", type=int, default=16, help="block side in pixels")
+    p.add_argument("--z", type=float, default=3.0, help="standard errors a block may differ by")
+    p.add_argument("--rel", type=float, default=0.01, help="relative tolerance added to the noise bound")
+    p.add_argument("--width", type=int, help="override the image width")
+    p.add_argument("--height", type=int, help="override the image height")
+    p.add_argument("--mitsuba", action="store_true", help="render a third image with Mitsuba 3")
+    p.add_argument("--turbidity", type=float, default=3.0, help="sky: turbidity")
+    p.add_argument("--elevation", type=float, default=35.0, help="sky: sun elevation in degrees")
+    return p.parse_args()
+
+
+def to_blender(p):
+    """rt-view's left-handed, y-up point or direction in Blender's frame."""
+    return (-p[0], -p[2], p[1])
+
+
+def run(command, threads):
+    env = dict(os.environ, RAYON_NUM_THREADS=str(threads))
+    subprocess.run(command, check=True, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def write_exr(bpy, path, rgb):
+    """A float32 OpenEXR of rows top to bottom (Blender's writer)."""
+    h, w, _ = rgb.shape
+    img = bpy.data.images.new(os.path.basename(path), w, h, alpha=True, float_buffer=True)
+    rgba = np.ones((h, w, 4), dtype=np.float32)
+    rgba[..., :3] = rgb[::-1]
+    img.pixels.foreach_set(rgba.ravel())
+    img.filepath_raw = os.path.abspath(path)
+    img.file_format = "OPEN_EXR"
+    img.use_half_precision = False
+    img.save()
+    bpy.data.images.remove(img)
+
+
+def read_hdr_plain(path):
+    """A Radiance .hdr decoded as the `image` crate and Mitsuba do,
+    m·2^(e−136) (Mitsuba 3's reader)."""
+    import mitsuba as mi
+
+    if not mi.variant():
+        mi.set_variant("scalar_rgb")
+    return np.array(mi.Bitmap(path), dtype=np.float32)[:, :, :3]
+
+
+def cycles_settings(scene, width, height, threads, bounces):
+    """Cycles set up as bench/cycles_compare.py does (see its module comment)."""
+    r = scene.render
+    r.engine = "CYCLES"
+    r.resolution_x, r.resolution_y, r.resolution_percentage = width, height, 100
+    r.threads_mode = "FIXED"
+    r.threads = threads
+    r.film_transparent = False
+    r.use_persistent_data = True
+    r.image_settings.file_format = "OPEN_EXR"
+    r.image_settings.color_depth = "32"
+    r.image_settings.exr_codec = "ZIP"
+    scene.view_settings.view_transform = "Standard"
+    scene.view_settings.look = "None"
+    scene.view_settings.exposure = 0.0
+    scene.view_settings.gamma = 1.0
+    c = scene.cycles
+    c.device = "CPU"
+    c.use_adaptive_sampling = False
+    c.use_denoising = False
+    c.pixel_filter_type = "BOX"
+    c.filter_width = 1.0
+    c.sample_clamp_direct = 0.0
+    c.sample_clamp_indirect = 0.0
+    c.blur_glossy = 0.0
+    c.caustics_reflective = True
+    c.caustics_refractive = True
+    c.light_sampling_threshold = 0.0
+    c.use_guiding = False
+    c.max_bounces = c.diffuse_bounces = c.glossy_bounces = c.transmission_bounces = bounces
+    c.transparent_max_bounces = bounces
+    c.volume_bounces = 0
+    c.use_animated_seed = False
+
+
+def environment_world(bpy, exr, strength, rotation_degrees):
+    """A world of the map `exr` in rt-view's convention (module comment)."""
+    world = bpy.data.worlds.new("environment")
+    world.use_nodes = True
+    nodes, links = world.node_tree.nodes, world.node_tree.links
+    coords = nodes.new("ShaderNodeTexCoord")
+    mapping = nodes.new("ShaderNodeMapping")
+    mapping.vector_type = "POINT"
+    mapping.inputs["Rotation"].default_value = (0.0, 0.0, math.radians(90.0 + rotation_degrees))
+    tex = nodes.new("ShaderNodeTexEnvironment")
+    tex.image = bpy.data.images.load(os.path.abspath(exr), check_existing=True)
+    tex.interpolation = "Linear"
+    tex.projection = "EQUIRECTANGULAR"
+    links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
+    links.new(mapping.outputs["Vector"], tex.inputs["Vector"])
+    links.new(tex.outputs["Color"], nodes["Background"].inputs["Color"])
+    nodes["Background"].inputs["Strength"].default_value = strength
+    return world
+
+
+def blender_camera(bpy, cam_desc, scene):
+    """A camera at rt-view's eye looking at its centre of interest, the same
+    vertical field of view, and its thin lens (module comment)."""
+    from mathutils import Matrix, Vector
+
+    data = bpy.data.cameras.new("camera")
+    obj = bpy.data.objects.new("camera", data)
+    scene.collection.objects.link(obj)
+    eye = Vector(to_blender(cam_desc["position"]))
+    target = Vector(to_blender(cam_desc["center_of_interest"]))
+    up = Vector(to_blender(cam_desc["up"]))
+    forward = (target - eye).normalized()
+    right = forward.cross(up).normalized()
+    true_up = right.cross(forward)
+    rot = Matrix((right, true_up, -forward)).transposed()
+    obj.matrix_world = Matrix.Translation(eye) @ rot.to_4x4()
+    data.sensor_fit = "VERTICAL"
+    data.angle_y = math.radians(cam_desc["fov_y"])
+    data.clip_start = 1e-3
+    data.clip_end = 1e5
+    aperture = cam_desc.get("aperture", 0.0)
+    if aperture > 0:
+        data.dof.use_dof = True
+        data.dof.focus_distance = cam_desc["focus_distance"]
+        data.dof.aperture_fstop = data.lens * 1e-3 / (2.0 * aperture)
+        data.dof.aperture_blades = 0
+        data.dof.aperture_ratio = 1.0
+    scene.camera = obj
+    return obj
+
+
+def blender_material(bpy, m):
+    """The Cycles material of an rt-view legacy material (module comment)."""
+    bad = [k for k in ("reflectivity", "transparency") if m.get(k, 0) > 0]
+    if max(m["emission"]) > 0:
+        bad.append("emission")
+    if m.get("physical") or m.get("textured") or m.get("subsurface"):
+        bad.append("physical, textured or translucent")
+    if bad:
+        sys.exit(f"material {m['name']!r}: {', '.join(bad)}: not converted")
+    mat = bpy.data.materials.new(m["name"])
+    mat.use_nodes = True
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    for n in list(nodes):
+        if n.type != "OUTPUT_MATERIAL":
+            nodes.remove(n)
+    out = next(n for n in nodes if n.type == "OUTPUT_MATERIAL")
+    diffuse = nodes.new("ShaderNodeBsdfDiffuse")
+    diffuse.inputs["Color"].default_value = (*[m["diffuse"] * c for c in m["color"]], 1.0)
+    diffuse.inputs["Roughness"].default_value = 0.0
+    glossy = nodes.new("ShaderNodeBsdfGlossy")
+    glossy.distribution = "GGX"
+    glossy.inputs["Color"].default_value = (*m.get("specular_color", [1.0, 1.0, 1.0]), 1.0)
+    glossy.inputs["Roughness"].default_value = math.sqrt(m["roughness"])
+    mix = nodes.new("ShaderNodeMixShader")
+    mix.inputs["Fac"].default_value = m["specular"]
+    links.new(diffuse.outputs["BSDF"], mix.inputs[1])
+    links.new(glossy.outputs["BSDF"], mix.inputs[2])
+    links.new(mix.outputs["Shader"], out.inputs["Surface"])
+    return mat
+
+
+def read_obj_triangles(path):
+    verts, faces = [], []
+    with open(path) as f:
+        for line in f:
+            parts = line.split()
+            if not parts:
+                continue
+            if parts[0] == "v":
+                verts.append(to_blender([float(t) for t in parts[1:4]]))
+            elif parts[0] == "f":
+                a, b, c = (int(t.split("/")[0]) - 1 for t in parts[1:4])
+                faces.append((a, c, b))  # the mirror turns the winding round
+    return verts, faces
+
+
+def blender_scene(bpy, desc, folder, exr, width, height, threads):
+    """Blender's scene of an rt-view export (module comment)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    if desc["camera"]["projection"] != "Perspective":
+        sys.exit("only perspective cameras are converted")
+    if desc["lights"]:
+        sys.exit("the scene has lights besides the map: not converted")
+    materials = {m["name"]: blender_material(bpy, m) for m in desc["materials"]}
+    for i, o in enumerate(desc["objects"]):
+        if o["kind"] == "Sphere":
+            bpy.ops.mesh.primitive_uv_sphere_add(
+                segments=256, ring_count=128, radius=o["radius"], location=to_blender(o["center"])
+            )
+            obj = bpy.context.active_object
+            bpy.ops.object.shade_smooth()
+        elif o["kind"] == "Triangles":
+            if o.get("smooth"):
+                sys.exit(f"object {i}: vertex normals are not exported")
+            verts, faces = read_obj_triangles(os.path.join(folder, o["file"]))
+            mesh = bpy.data.meshes.new(f"object-{i}")
+            mesh.from_pydata(verts, [], faces)
+            mesh.update()
+            obj = bpy.data.objects.new(f"object-{i}", mesh)
+            scene.collection.objects.link(obj)
+        else:
+            sys.exit(f"object {i}: a {o['kind']} is not converted")
+        obj.data.materials.append(materials[o["material"]])
+    env = desc["environment"]
+    if env.get("sun"):
+        sys.exit("the environment has a sun disc: not converted")
+    scene.world = environment_world(bpy, exr, env["strength"], env["rotation_degrees"])
+    blender_camera(bpy, desc["camera"], scene)
+    cycles_settings(scene, width, height, threads, desc["global_illumination"]["max_bounces"] - 1)
+    return scene
+
+
+def scene_with_map(scene_path, exr, folder):
+    """A copy of the .ron whose Map reads `exr` (an absolute path)."""
+    with open(scene_path) as f:
+        text = f.read()
+    text, n = re.subn(r'(Map\(\s*file:\s*)"[^"]*"', lambda m: f'{m.group(1)}"{os.path.abspath(exr)}"', text)
+    if n != 1:
+        sys.exit(f"{scene_path}: needs exactly one `environment: Map(file: …)`")
+    # Relative paths of meshes stay relative to the original scene's folder.
+    base = os.path.dirname(os.path.abspath(scene_path))
+    text = re.sub(
+        r'(file:\s*)"([^"/][^"]*\.(?:obj|glb|gltf))"', lambda m: f'{m.group(1)}"{os.path.join(base, m.group(2))}"', text
+    )
+    out = os.path.join(folder, "scene.ron")
+    with open(out, "w") as f:
+        f.write(text)
+    return out
+
+
+def render_cycles(bpy, scene, out, spp, seed):
+    scene.cycles.samples = spp
+    scene.cycles.seed = seed
+    scene.render.filepath = os.path.abspath(out)
+    bpy.ops.render.render(write_still=True)
+
+
+def compare(args):
+    import bpy
+    import json
+
+    from cycles_compare import agreement, block_means, read_exr, srgb, write_png
+
+    name = os.path.splitext(os.path.basename(args.scene))[0]
+    folder = os.path.abspath(os.path.join(args.out, name))
+    shutil.rmtree(folder, ignore_errors=True)
+    os.makedirs(folder)
+    with open(args.scene) as f:
+        m = re.search(r'Map\(\s*file:\s*"([^"]+)"', f.read())
+    if not m:
+        sys.exit(f"{args.scene}: has no environment Map")
+    source = os.path.join(os.path.dirname(args.scene), m.group(1))
+    exr = os.path.join(folder, "map.exr")
+    texels = read_hdr_plain(source) if source.endswith(".hdr") else None
+    if texels is None:
+        shutil.copy(source, exr)
+    else:
+        write_exr(bpy, exr, texels)
+    ron = scene_with_map(args.scene, exr, folder)
+    subprocess.run([args.rt_view, "export", ron, "-o", os.path.join(folder, "scene.json")], check=True,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    with open(os.path.join(folder, "scene.json")) as f:
+        desc = json.load(f)
+    width = args.width or desc["width"]
+    height = args.height or desc["height"]
+    per_batch = max(1, args.spp // args.batches)
+    scene = blender_scene(bpy, desc, folder, exr, width, height, args.threads)
+
+    mi_scene = None
+    if args.mitsuba:
+        import drjit as dr
+        import mitsuba as mi
+
+        from mitsuba_compare import mitsuba_scene
+
+        dr.set_thread_count(args.threads)
+        mdesc = json.loads(json.dumps(desc))
+        mdesc["environment"]["file"] = exr  # an absolute path: os.path.join keeps it
+        mi_scene = mi.load_dict(mitsuba_scene(mi, mdesc, folder, width, height, 400.0))
+
+    images = {"rt-view": [], "Cycles": [], "Mitsuba": []}
+    times = dict.fromkeys(images, 0.0)
+    for k in range(args.batches):
+        out = os.path.join(folder, f"rt-{k}.exr")
+        start = time.perf_counter()
+        run([args.rt_view, "render", ron, "-o", out, "--spp", str(per_batch), "--seed", str(k),
+             "--width", str(width), "--height", str(height)], args.threads)
+        times["rt-view"] += time.perf_counter() - start
+        images["rt-view"].append(read_exr(bpy, out))
+        out = os.path.join(folder, f"cycles-{k}.exr")
+        start = time.perf_counter()
+        render_cycles(bpy, scene, out, per_batch, k)
+        times["Cycles"] += time.perf_counter() - start
+        images["Cycles"].append(read_exr(bpy, out))
+        if mi_scene is not None:
+            start = time.perf_counter()
+            images["Mitsuba"].append(np.array(mi.render(mi_scene, spp=per_batch, seed=k), dtype=np.float64)[:, :, :3])
+            times["Mitsuba"] += time.perf_counter() - start
+        print(f"batch {k + 1}/{args.batches}: " + ", ".join(f"{n} {t:.1f} s" for n, t in times.items() if t), flush=True)
+
+    n = args.batches
+    lines = [
+        f"# {name}: rt-view, Blender {bpy.app.version_string} Cycles"
+        + (" and Mitsuba 3" if mi_scene is not None else ""),
+        "",
+        f"- {width}×{height}, {per_batch * n} samples per pixel each, in {n} independent batches; {args.threads} threads;"
+        f" blocks of {args.block}×{args.block} agree within {args.z} standard errors + {100 * args.rel:g} %",
+        "- render time: " + ", ".join(f"{k} {t:.1f} s" for k, t in times.items() if t),
+        "",
+        "| pair | blocks that agree | median / max block \\|z\\| | image mean ratio R, G, B | z of the image means |",
+        "|---|---:|---:|---:|---:|",
+    ]
+    pairs = [("rt-view", "Cycles")]
+    if mi_scene is not None:
+        pairs += [("rt-view", "Mitsuba"), ("Mitsuba", "Cycles")]
+    cy_agree = None
+    for a, b in pairs:
+        agree, ratio = agreement(images[a], images[b], args.block, args.z, args.rel)
+        ba = np.stack([block_means(im, args.block) for im in images[a]])
+        bb = np.stack([block_means(im, args.block) for im in images[b]])
+        z = (ba.mean(0) - bb.mean(0)) / np.maximum(
+            np.sqrt(ba.var(0, ddof=1) / n + bb.var(0, ddof=1) / n), 1e-30
+        )
+        ta = np.array([im.mean(axis=(0, 1)) for im in images[a]])
+        tb = np.array([im.mean(axis=(0, 1)) for im in images[b]])
+        tz = (ta.mean(0) - tb.mean(0)) / np.sqrt(ta.var(0, ddof=1) / n + tb.var(0, ddof=1) / n)
+        lines.append(
+            f"| {a} / {b} | {agree.sum()} of {agree.size} ({100 * agree.mean():.1f} %) |"
+            f" {np.median(np.abs(z)):.2f} / {np.abs(z).max():.1f} |"
+            f" {ratio[0]:.4f}, {ratio[1]:.4f}, {ratio[2]:.4f} | {tz[0]:.1f}, {tz[1]:.1f}, {tz[2]:.1f} |"
+        )
+        if cy_agree is None:
+            cy_agree, cy_z = agree, z
+    report = "\n".join(lines) + "\n"
+    print(report)
+    with open(os.path.join(folder, "report.md"), "w") as f:
+        f.write(report)
+    rt_image = np.mean(images["rt-view"], axis=0)
+    cy_image = np.mean(images["Cycles"], axis=0)
+    marks = srgb(cy_image).copy()
+    for by, bx in zip(*np.nonzero(~cy_agree)):
+        y0, x0 = by * args.block, bx * args.block
+        part = marks[y0 : y0 + args.block, x0 : x0 + args.block]
+        marks[y0 : y0 + args.block, x0 : x0 + args.block] = part // 2 + np.array([127, 0, 0], dtype=np.uint8)
+    zl = cy_z.mean(axis=2)
+    heat = np.zeros(zl.shape + (3,), dtype=np.uint8)
+    heat[..., 0] = np.clip(zl / 5, 0, 1) * 255
+    heat[..., 2] = np.clip(-zl / 5, 0, 1) * 255
+    heat = np.kron(heat, np.ones((args.block, args.block, 1), dtype=np.uint8))
+    full = np.zeros_like(marks)
+    full[: heat.shape[0], : heat.shape[1]] = heat
+    write_png(bpy, os.path.join(folder, "compare.png"), np.concatenate([srgb(rt_image), srgb(cy_image), marks, full], axis=1))
+    for k, ims in images.items():
+        if ims:
+            np.save(os.path.join(folder, f"{k}.npy"), np.mean(ims, axis=0).astype(np.float32))
+
+
+def convention(args):
+    """A map with one bright texel seen by both renderers, for rotations 0
+    and 30°: where does the spot land in each image?"""
+    import bpy
+    import json
+
+    from cycles_compare import read_exr
+
+    folder = os.path.abspath(os.path.join(args.out, "convention"))
+    shutil.rmtree(folder, ignore_errors=True)
+    os.makedirs(folder)
+    w, h = 64, 32
+    texels = np.full((h, w, 3), 0.05, dtype=np.float32)
+    i, j = 26, 11  # u = 26.5/64 ≈ 0.414 (31° left of ahead), v = 11.5/32 ≈ 0.359 (25° up)
+    texels[j, i] = (1000.0, 0.0, 0.0)
+    texels[j + 1, i] = (0.0, 0.0, 300.0)  # a blue texel below it: up and down cannot be swapped unseen
+    exr = os.path.join(folder, "marked.exr")
+    write_exr(bpy, exr, texels)
+    lines = ["# Where the marked texel lands (pixel column, row of the red spot's brightest pixel)", ""]
+    for rotation in (0.0, 30.0):
+        ron = os.path.join(folder, f"marked-{rotation:g}.ron")
+        with open(ron, "w") as f:
+            f.write(
+                "Scene(\n"
+                "    camera: (position: (0, 0, 0), center_of_interest: (0, 0, 1), up: (0, 1, 0), fov_y: 90, near: 1),\n"
+                "    image: (width: 160, height: 120),\n"
+                f'    environment: Map(file: "{exr}", strength: 1, rotation: {rotation}),\n'
+                '    materials: { "grey": (color: (0.5, 0.5, 0.5)) },\n'
+                "    objects: [ Sphere(center: (0, -1000, 0), radius: 1, material: \"grey\") ],\n"
+                "    effects: (global_illumination: (max_bounces: 1)),\n"
+                ")\n"
+            )
+        subprocess.run([args.rt_view, "export", ron, "-o", os.path.join(folder, "scene.json")], check=True,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        with open(os.path.join(folder, "scene.json")) as f:
+            desc = json.load(f)
+        scene = blender_scene(bpy, desc, folder, exr, 160, 120, args.threads)
+        rt = os.path.join(folder, f"rt-{rotation:g}.exr")
+        run([args.rt_view, "render", ron, "-o", rt, "--spp", "16"], args.threads)
+        cy = os.path.join(folder, f"cycles-{rotation:g}.exr")
+        render_cycles(bpy, scene, cy, 16, 0)
+        # Where rt-view's documented convention puts the texel centre.
+        u, v = (i + 0.5) / w, (j + 0.5) / h
+        theta, phi = math.pi * v, 2 * math.pi * u
+        m = np.array([-math.sin(theta) * math.sin(phi), math.cos(theta), -math.sin(theta) * math.cos(phi)])
+        rho = math.radians(rotation)
+        d = np.array([m[0] * math.cos(rho) + m[2] * math.sin(rho), m[1], -m[0] * math.sin(rho) + m[2] * math.cos(rho)])
+        # rt-view's pinhole looking along +z, +x to the right (left-handed), fov 90°.
+        px = (1 + d[0] / d[2] / (160 / 120)) / 2 * 160 if d[2] > 0 else float("nan")
+        py = (1 - d[1] / d[2]) / 2 * 120 if d[2] > 0 else float("nan")
+        spots = []
+        for path in (rt, cy):
+            image = read_exr(bpy, path)
+            red = image[..., 0] - image[..., 2]
+            blue = image[..., 2] - image[..., 0]
+            ry, rx = np.unravel_index(np.argmax(red), red.shape)
+            by, bx = np.unravel_index(np.argmax(blue), blue.shape)
+            spots.append(((int(rx), int(ry)), (int(bx), int(by))))
+        lines.append(
+            f"- rotation {rotation:g}°: documented convention ({px:.1f}, {py:.1f});"
+            f" rt-view red {spots[0][0]} blue {spots[0][1]}; Cycles red {spots[1][0]} blue {spots[1][1]}"
+        )
+    report = "\n".join(lines) + "\n"
+    print(report)
+    with open(os.path.join(folder, "report.md"), "w") as f:
+        f.write(report)
+
+
+if __name__ == "__main__":
+    a = parse_args()
+    if a.mode == "compare":
+        if not a.scene:
+            sys.exit("compare needs a scene")
+        compare(a)
+    elif a.mode == "convention":
+        convention(a)
+    else:
+        import sky_compare  # noqa: F401  (see below)
