@@ -99,18 +99,14 @@ def run(command, threads):
     subprocess.run(command, check=True, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 
-def write_exr(bpy, path, rgb):
-    """A float32 OpenEXR of rows top to bottom (Blender's writer)."""
-    h, w, _ = rgb.shape
-    img = bpy.data.images.new(os.path.basename(path), w, h, alpha=True, float_buffer=True)
-    rgba = np.ones((h, w, 4), dtype=np.float32)
-    rgba[..., :3] = rgb[::-1]
-    img.pixels.foreach_set(rgba.ravel())
-    img.filepath_raw = os.path.abspath(path)
-    img.file_format = "OPEN_EXR"
-    img.use_half_precision = False
-    img.save()
-    bpy.data.images.remove(img)
+def write_exr(path, rgb):
+    """A float32 linear OpenEXR of rows top to bottom (Mitsuba's writer:
+    Blender's `Image.save` writes display-encoded values into an EXR)."""
+    import mitsuba as mi
+
+    if not mi.variant():
+        mi.set_variant("scalar_rgb")
+    mi.Bitmap(np.ascontiguousarray(rgb, dtype=np.float32)).write(path)
 
 
 def read_hdr_plain(path):
@@ -169,6 +165,7 @@ def environment_world(bpy, exr, strength, rotation_degrees):
     mapping.inputs["Rotation"].default_value = (0.0, 0.0, math.radians(90.0 + rotation_degrees))
     tex = nodes.new("ShaderNodeTexEnvironment")
     tex.image = bpy.data.images.load(os.path.abspath(exr), check_existing=True)
+    tex.image.colorspace_settings.name = "Linear Rec.709"
     tex.interpolation = "Linear"
     tex.projection = "EQUIRECTANGULAR"
     links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
@@ -337,7 +334,7 @@ def compare(args):
     if texels is None:
         shutil.copy(source, exr)
     else:
-        write_exr(bpy, exr, texels)
+        write_exr(exr, texels)
     ron = scene_with_map(args.scene, exr, folder)
     subprocess.run([args.rt_view, "export", ron, "-o", os.path.join(folder, "scene.json")], check=True,
                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -454,7 +451,7 @@ def convention(args):
     texels[j, i] = (1000.0, 0.0, 0.0)
     texels[j + 1, i] = (0.0, 0.0, 300.0)  # a blue texel below it: up and down cannot be swapped unseen
     exr = os.path.join(folder, "marked.exr")
-    write_exr(bpy, exr, texels)
+    write_exr(exr, texels)
     lines = ["# Where the marked texel lands (pixel column, row of the red spot's brightest pixel)", ""]
     for rotation in (0.0, 30.0):
         ron = os.path.join(folder, f"marked-{rotation:g}.ron")
@@ -505,6 +502,207 @@ def convention(args):
         f.write(report)
 
 
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])  # Rec.709 / sRGB Y
+
+
+def rt_direction(u, v):
+    """rt-view's direction of map coordinates (u, v) (rotation 0), as an
+    array of shape (..., 3), docs/environment-and-lens.md."""
+    theta, phi = np.pi * v, 2 * np.pi * u
+    return np.stack([-np.sin(theta) * np.sin(phi), np.cos(theta), -np.sin(theta) * np.cos(phi)], axis=-1)
+
+
+def cell_means(image, factor):
+    h, w, _ = image.shape
+    return image.reshape(h // factor, factor, w // factor, factor, 3).mean(axis=(1, 3))
+
+
+def cycles_sky(bpy, kind, sun_blender, turbidity, albedo, width, height, out, threads):
+    """Cycles' Sky Texture of `kind` through an equirectangular camera,
+    turned so that the image is in rt-view's map layout: the camera looks
+    along Blender's −Y (rt-view's +z), +Z up."""
+    from cycles_compare import read_exr
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    world = bpy.data.worlds.new("sky")
+    world.use_nodes = True
+    node = world.node_tree.nodes.new("ShaderNodeTexSky")
+    node.sky_type = kind
+    node.sun_direction = sun_blender
+    node.turbidity = turbidity
+    node.ground_albedo = albedo
+    world.node_tree.links.new(node.outputs["Color"], world.node_tree.nodes["Background"].inputs["Color"])
+    scene.world = world
+    data = bpy.data.cameras.new("pano")
+    data.type = "PANO"
+    data.panorama_type = "EQUIRECTANGULAR"
+    obj = bpy.data.objects.new("pano", data)
+    scene.collection.objects.link(obj)
+    obj.rotation_euler = (math.pi / 2, 0.0, math.pi)  # −Z → +Y, then turned to −Y
+    scene.camera = obj
+    cycles_settings(scene, width, height, threads, 0)
+    render_cycles(bpy, scene, out, 4, 0)
+    return read_exr(bpy, out)
+
+
+def mitsuba_sky(sun_blender, turbidity, albedo, width, height):
+    """Mitsuba 3's `sunsky` (Hosek–Wilkie; its frame is right-handed with +z
+    up, as Blender's) at the centres of a width × height grid in rt-view's
+    map layout, sky only; and the sun's irradiance on a surface facing it
+    (sun only, integrated over a cap of 0.4° around its centre)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    if not mi.variant():
+        mi.set_variant("scalar_rgb")
+
+    def emitter(sun_scale, sky_scale):
+        return mi.load_dict({"type": "sunsky", "sun_direction": list(sun_blender), "turbidity": turbidity,
+                             "albedo": albedo, "sun_scale": sun_scale, "sky_scale": sky_scale})
+
+    def radiance(e, d):
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        si.wi = -mi.Vector3f(*[float(x) for x in d])
+        return np.array(e.eval(si), dtype=np.float64)
+
+    sky_only = emitter(0.0, 1.0)
+    u = (np.arange(width) + 0.5) / width
+    v = (np.arange(height // 2) + 0.5) / height  # the upper hemisphere
+    image = np.zeros((height, width, 3))
+    for j, vj in enumerate(v):
+        for i, ui in enumerate(u):
+            d = rt_direction(ui, vj)
+            image[j, i] = radiance(sky_only, to_blender(d))
+    sun_only = emitter(1.0, 0.0)
+    axis = np.array(sun_blender) / np.linalg.norm(sun_blender)
+    a = np.cross(axis, [0.0, 0.0, 1.0] if abs(axis[2]) < 0.9 else [1.0, 0.0, 0.0])
+    a /= np.linalg.norm(a)
+    b = np.cross(axis, a)
+    cap, n_t, n_p = math.radians(0.4), 80, 48
+    e_sun = np.zeros(3)
+    for k in range(n_t):
+        t = (k + 0.5) / n_t * cap
+        for m in range(n_p):
+            p = (m + 0.5) / n_p * 2 * math.pi
+            d = math.cos(t) * axis + math.sin(t) * (math.cos(p) * a + math.sin(p) * b)
+            e_sun += radiance(sun_only, d) * math.cos(t) * math.sin(t) * (cap / n_t) * (2 * math.pi / n_p)
+    return image, e_sun
+
+
+def hemisphere_facts(image):
+    """(zenith RGB, horizontal irradiance RGB) of an upper-hemisphere map in
+    rt-view's layout: the zenith the mean of the top row, the irradiance
+    Σ L cos θ dω over the rows above the horizon."""
+    h, w, _ = image.shape
+    v = (np.arange(h) + 0.5) / h
+    theta = np.pi * v
+    up = theta < np.pi / 2
+    d_omega = (np.pi / h) * (2 * np.pi / w) * np.sin(theta)
+    e = (image[up] * (np.cos(theta[up]) * d_omega[up])[:, None, None]).sum(axis=(0, 1))
+    return image[0].mean(axis=0), e
+
+
+def sky(args):
+    """Preetham (rt-view, Cycles), Hosek–Wilkie (Cycles, Mitsuba): zenith,
+    horizon, irradiance, shape. Sizes stated; different models differ."""
+    import bpy
+    import json
+
+    folder = os.path.abspath(os.path.join(args.out, "sky"))
+    shutil.rmtree(folder, ignore_errors=True)
+    os.makedirs(folder)
+    T, elev, albedo = args.turbidity, math.radians(args.elevation), 0.3
+    azimuth = math.radians(135.0)  # behind and to the right, as in scenes/outdoor.ron
+    d_rt = (math.cos(elev) * math.sin(azimuth), math.sin(elev), math.cos(elev) * math.cos(azimuth))
+    d_bl = to_blender(d_rt)
+    ron = os.path.join(folder, "sky.ron")
+    with open(ron, "w") as f:
+        f.write(
+            "Scene(\n    camera: (position: (0, 1, 0), center_of_interest: (0, 1, 1), up: (0, 1, 0), fov_y: 60, near: 1),\n"
+            f"    environment: Sky(sun_direction: ({d_rt[0]!r}, {d_rt[1]!r}, {d_rt[2]!r}), turbidity: {T!r},"
+            f" sun_irradiance: (1, 1, 1), ground_albedo: {albedo}),\n"
+            '    materials: { "grey": (color: (0.5, 0.5, 0.5)) },\n'
+            '    objects: [ Sphere(center: (0, -1000, 0), radius: 1, material: "grey") ],\n)\n'
+        )
+    subprocess.run([args.rt_view, "export", ron, "-o", os.path.join(folder, "sky.json")], check=True,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    with open(os.path.join(folder, "sky.json")) as f:
+        desc = json.load(f)
+    rt = read_hdr_plain(os.path.join(folder, desc["environment"]["file"])).astype(np.float64)
+    h, w, _ = rt.shape
+    factor = 4
+    grid_w, grid_h = w // factor, h // factor
+    maps = {"rt-view Preetham": cell_means(rt, factor)}
+    for kind, label in (("PREETHAM", "Cycles Preetham"), ("HOSEK_WILKIE", "Cycles Hosek–Wilkie")):
+        image = cycles_sky(bpy, kind, d_bl, T, albedo, w, h, os.path.join(folder, f"{kind.lower()}.exr"), args.threads)
+        maps[label] = cell_means(image, factor)
+    mi_map, mi_sun = mitsuba_sky(d_bl, T, albedo, grid_w, grid_h)
+    maps["Mitsuba Hosek–Wilkie"] = mi_map
+
+    # Preetham's zenith luminance, the paper's formula (kcd/m²).
+    theta_s = math.pi / 2 - elev
+    chi = (4 / 9 - T / 120) * (math.pi - 2 * theta_s)
+    yz = (4.0453 * T - 4.9710) * math.tan(chi) - 0.2155 * T + 2.4192
+    lines = [
+        f"# Skies at turbidity {T:g}, sun {args.elevation:g}° high, ground albedo {albedo}",
+        "",
+        f"Preetham's zenith luminance (the paper's formula): {yz:.4f} kcd/m²; rt-view's radiance is Y/10 of it.",
+        "",
+        "| sky | zenith RGB | zenith Y | Y at 5° elevation: toward the sun / 90° off / away, ÷ zenith"
+        " | horizontal sky irradiance E_sky (Y) |",
+        "|---|---|---:|---:|---:|",
+    ]
+    v = (np.arange(grid_h) + 0.5) / grid_h
+    u = (np.arange(grid_w) + 0.5) / grid_w
+    row5 = int(np.argmin(np.abs((0.5 - v) * 180 - 5)))
+    sun_u = (math.atan2(-d_rt[0], -d_rt[2]) / (2 * math.pi)) % 1.0
+
+    def column(offset):
+        return int(np.argmin(np.abs(((u - sun_u - offset + 0.5) % 1.0) - 0.5)))
+
+    facts = {}
+    for label, image in maps.items():
+        zen, e = hemisphere_facts(image)
+        lum = image @ LUMINANCE
+        zy = zen @ LUMINANCE
+        ratios = [lum[row5, column(o)] / zy for o in (0.0, 0.25, 0.5)]
+        facts[label] = (zen, zy, e @ LUMINANCE, lum)
+        lines.append(
+            f"| {label} | {zen.round(4).tolist()} | {zy:.4f} | {ratios[0]:.2f} / {ratios[1]:.2f} / {ratios[2]:.2f}"
+            f" | {e @ LUMINANCE:.4f} |"
+        )
+    up = v < 0.5
+    shape = []
+    for a, b in (("rt-view Preetham", "Cycles Preetham"), ("Cycles Hosek–Wilkie", "Mitsuba Hosek–Wilkie"),
+                 ("rt-view Preetham", "Mitsuba Hosek–Wilkie")):
+        la, lb = facts[a][3][up], facts[b][3][up]
+        q = la / np.maximum(lb, 1e-12)
+        scale = facts[a][1] / facts[b][1]
+        rel = q / scale - 1
+        shape.append(
+            f"- {a} / {b}: zenith {scale:.4f}; over the sky above the horizon, after dividing by the zenith ratio,"
+            f" median |difference| {100 * np.median(np.abs(rel)):.1f} %, 95th percentile"
+            f" {100 * np.percentile(np.abs(rel), 95):.1f} %, range {100 * rel.min():+.1f} … {100 * rel.max():+.1f} %"
+        )
+    mi_e = facts["Mitsuba Hosek–Wilkie"][2]
+    lines += [
+        "",
+        *shape,
+        "",
+        f"- Mitsuba's sun: irradiance on a surface facing it {mi_sun.round(4).tolist()} (Y {mi_sun @ LUMINANCE:.4f});"
+        f" on a horizontal surface {mi_sun @ LUMINANCE * math.sin(elev):.4f}, {mi_sun @ LUMINANCE * math.sin(elev) / mi_e:.2f}"
+        " times the sky's",
+        f"- rt-view's sun is given by its irradiance (here 1, 1, 1); with rt-view's sky the horizontal ratio sun : sky"
+        f" for an irradiance E is {math.sin(elev):.3f}·E : {facts['rt-view Preetham'][2]:.4f}",
+    ]
+    report = "\n".join(lines) + "\n"
+    print(report)
+    with open(os.path.join(folder, "report.md"), "w") as f:
+        f.write(report)
+    np.savez(os.path.join(folder, "skies.npz"), **{k.replace(" ", "_"): m for k, m in maps.items()})
+
+
 if __name__ == "__main__":
     a = parse_args()
     if a.mode == "compare":
@@ -514,4 +712,4 @@ if __name__ == "__main__":
     elif a.mode == "convention":
         convention(a)
     else:
-        import sky_compare  # noqa: F401  (see below)
+        sky(a)
