@@ -620,6 +620,7 @@ def sky(args):
     with open(ron, "w") as f:
         f.write(
             "Scene(\n    camera: (position: (0, 1, 0), center_of_interest: (0, 1, 1), up: (0, 1, 0), fov_y: 60, near: 1),\n"
+            "    image: (width: 64, height: 48),\n"
             f"    environment: Sky(sun_direction: ({d_rt[0]!r}, {d_rt[1]!r}, {d_rt[2]!r}), turbidity: {T!r},"
             f" sun_irradiance: (1, 1, 1), ground_albedo: {albedo}),\n"
             '    materials: { "grey": (color: (0.5, 0.5, 0.5)) },\n'
