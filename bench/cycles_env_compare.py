@@ -8,6 +8,8 @@ environment map, with or without a thin lens; and the skies of the three.
     $B bench/cycles_env_compare.py convention               # where a marked texel lands in each
     $B bench/cycles_env_compare.py compare bench/scenes/envmap_spheres.ron --mitsuba
     $B bench/cycles_env_compare.py compare scenes/depth_of_field.ron --mitsuba
+    $B bench/cycles_env_compare.py compare bench/scenes/envmap_floor.ron --mitsuba
+    $B bench/cycles_env_compare.py rows                     # where Mitsuba's envmap puts a texel
     $B bench/cycles_env_compare.py sky                      # Preetham / Hosek–Wilkie numbers
 
 `compare` exports the scene with `rt-view export` and builds it in Blender
@@ -20,10 +22,9 @@ directly (no file format between them):
 - the map: rt-view's u = ½ looks along +z, which is Blender's −Y; Cycles'
   Environment Texture puts u = ½ on +X and turns the other way round the
   same axis, so its lookup vector is the view direction turned about +Z by
-  90° + ρ (a Mapping node), ρ being rt-view's `rotation` (rt-view turns
-  the map about +y, which the mirror makes a turn about Blender's +Z the
-  other way). `convention` checks it: a map with one bright marked texel,
-  looked at by both with and without a rotation, the spot found in each.
+  90° + ρ (a Mapping node), ρ being rt-view's `rotation`. `convention`
+  checks it: a map with one bright marked texel, looked at by both with and
+  without a rotation, the spot found in each.
   The map is handed to every renderer as the same float32 OpenEXR (decoded
   from the scene's .hdr once), so no two RGBE decoders are compared
   (Blender's adds ½ to each mantissa, the `image` crate's and Mitsuba's do
@@ -48,6 +49,10 @@ of the difference + `--rel`, whole-image means and their z-score. With
 `--mitsuba` Mitsuba 3 renders the same export (bench/mitsuba_compare.py's
 conversion, the same EXR) as a third opinion.
 
+`rows` finds where Mitsuba 3's `envmap` puts a texel (row j at
+v = j/(H − 1), where rt-view and Cycles use (j + ½)/H) and what that does
+to the irradiance of scenes/studio.hdr on an upward surface.
+
 `sky` compares the skies without rendering a scene: rt-view's baked
 Preetham map (`rt-view export` of a scene with a `Sky`), Cycles' Sky
 Texture (`PREETHAM` and `HOSEK_WILKIE`, still in Blender 5.0 beside the two
@@ -71,7 +76,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 def parse_args():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("mode", choices=["convention", "compare", "sky"])
+    p.add_argument("mode", choices=["convention", "compare", "sky", "rows"])
     p.add_argument("scene", nargs="?", help="rt-view scene (.ron) with an environment Map, for compare")
     p.add_argument("--spp", type=int, default=256, help="samples per pixel in all, each renderer")
     p.add_argument("--batches", type=int, default=8, help="independent images the samples are split into")
@@ -84,6 +89,9 @@ def parse_args():
     p.add_argument("--width", type=int, help="override the image width")
     p.add_argument("--height", type=int, help="override the image height")
     p.add_argument("--mitsuba", action="store_true", help="render a third image with Mitsuba 3")
+    p.add_argument("--aperture-scale", type=float, default=1.0,
+                   help="multiplies the lens radius Cycles gets: shows that the block test sees a wrong aperture")
+    p.add_argument("--exposure", type=float, default=0.0, help="compare: stops applied to the pictures only")
     p.add_argument("--turbidity", type=float, default=3.0, help="sky: turbidity")
     p.add_argument("--elevation", type=float, default=35.0, help="sky: sun elevation in degrees")
     return p.parse_args()
@@ -175,7 +183,7 @@ def environment_world(bpy, exr, strength, rotation_degrees):
     return world
 
 
-def blender_camera(bpy, cam_desc, scene):
+def blender_camera(bpy, cam_desc, scene, aperture_scale=1.0):
     """A camera at rt-view's eye looking at its centre of interest, the same
     vertical field of view, and its thin lens (module comment)."""
     from mathutils import Matrix, Vector
@@ -195,7 +203,7 @@ def blender_camera(bpy, cam_desc, scene):
     data.angle_y = math.radians(cam_desc["fov_y"])
     data.clip_start = 1e-3
     data.clip_end = 1e5
-    aperture = cam_desc.get("aperture", 0.0)
+    aperture = cam_desc.get("aperture", 0.0) * aperture_scale
     if aperture > 0:
         data.dof.use_dof = True
         data.dof.focus_distance = cam_desc["focus_distance"]
@@ -252,7 +260,7 @@ def read_obj_triangles(path):
     return verts, faces
 
 
-def blender_scene(bpy, desc, folder, exr, width, height, threads):
+def blender_scene(bpy, desc, folder, exr, width, height, threads, aperture_scale=1.0):
     """Blender's scene of an rt-view export (module comment)."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
@@ -284,7 +292,7 @@ def blender_scene(bpy, desc, folder, exr, width, height, threads):
     if env.get("sun"):
         sys.exit("the environment has a sun disc: not converted")
     scene.world = environment_world(bpy, exr, env["strength"], env["rotation_degrees"])
-    blender_camera(bpy, desc["camera"], scene)
+    blender_camera(bpy, desc["camera"], scene, aperture_scale)
     cycles_settings(scene, width, height, threads, desc["global_illumination"]["max_bounces"] - 1)
     return scene
 
@@ -343,7 +351,7 @@ def compare(args):
     width = args.width or desc["width"]
     height = args.height or desc["height"]
     per_batch = max(1, args.spp // args.batches)
-    scene = blender_scene(bpy, desc, folder, exr, width, height, args.threads)
+    scene = blender_scene(bpy, desc, folder, exr, width, height, args.threads, args.aperture_scale)
 
     mi_scene = None
     if args.mitsuba:
@@ -416,7 +424,8 @@ def compare(args):
         f.write(report)
     rt_image = np.mean(images["rt-view"], axis=0)
     cy_image = np.mean(images["Cycles"], axis=0)
-    marks = srgb(cy_image).copy()
+    gain = 2.0**args.exposure
+    marks = srgb(gain * cy_image).copy()
     for by, bx in zip(*np.nonzero(~cy_agree)):
         y0, x0 = by * args.block, bx * args.block
         part = marks[y0 : y0 + args.block, x0 : x0 + args.block]
@@ -428,7 +437,7 @@ def compare(args):
     heat = np.kron(heat, np.ones((args.block, args.block, 1), dtype=np.uint8))
     full = np.zeros_like(marks)
     full[: heat.shape[0], : heat.shape[1]] = heat
-    write_png(bpy, os.path.join(folder, "compare.png"), np.concatenate([srgb(rt_image), srgb(cy_image), marks, full], axis=1))
+    write_png(bpy, os.path.join(folder, "compare.png"), np.concatenate([srgb(gain * rt_image), srgb(gain * cy_image), marks, full], axis=1))
     for k, ims in images.items():
         if ims:
             np.save(os.path.join(folder, f"{k}.npy"), np.mean(ims, axis=0).astype(np.float32))
@@ -702,6 +711,90 @@ def sky(args):
     with open(os.path.join(folder, "report.md"), "w") as f:
         f.write(report)
     np.savez(os.path.join(folder, "skies.npz"), **{k.replace(" ", "_"): m for k, m in maps.items()})
+    # Picture: the skies above the horizon, one under another in the order
+    # of the table, each divided by its own zenith luminance (shape and
+    # colour, not scale), ×0.25, sRGB, each texel 2 × 2 pixels.
+    from cycles_compare import srgb, write_png
+
+    rows = [srgb(0.25 * m[: grid_h // 2] / facts[k][1]) for k, m in maps.items()]
+    picture = np.concatenate(rows, axis=0)
+    picture = np.kron(picture, np.ones((2, 2, 1), dtype=np.uint8))
+    write_png(bpy, os.path.join(folder, "skies.png"), picture)
+
+
+def rows(args):
+    """Where Mitsuba 3's `envmap` puts a map's texels, against the texel
+    centres ((i + ½)/W, (j + ½)/H) of rt-view and Cycles: the peak of one
+    marked texel's lookup, and the irradiance of scenes/studio.hdr on an
+    upward surface by quadrature of each lookup (what
+    bench/scenes/envmap_floor.ron renders, times 0.5/π)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    if not mi.variant():
+        mi.set_variant("scalar_rgb")
+    folder = os.path.abspath(os.path.join(args.out, "rows"))
+    os.makedirs(folder, exist_ok=True)
+
+    def mitsuba_lookup(path):
+        em = mi.load_dict({"type": "envmap", "filename": path})
+
+        def at(u, v):
+            d = rt_direction(u, v)
+            si = dr.zeros(mi.SurfaceInteraction3f)
+            si.wi = -mi.Vector3f(-float(d[0]), float(d[1]), float(d[2]))  # Mitsuba's frame: x mirrored
+            return np.array(em.eval(si), dtype=np.float64)
+
+        return at
+
+    W, H, i, j = 64, 32, 26, 11
+    marked = np.zeros((H, W, 3), dtype=np.float32)
+    marked[j, i] = 1.0
+    path = os.path.join(folder, "one-texel.exr")
+    write_exr(path, marked)
+    at = mitsuba_lookup(path)
+    us = np.linspace((i - 1.5) / W, (i + 2.5) / W, 801)
+    vs = np.linspace((j - 1.5) / H, (j + 2.5) / H, 801)
+    pu = np.array([at(u, (j + 0.5) / H)[0] for u in us])
+    pv = np.array([at((i + 0.5) / W, v)[0] for v in vs])
+    lines = [
+        f"# Texel ({i}, {j}) of a {W} × {H} map",
+        "",
+        f"- Mitsuba's lookup peaks at column {us[pu.argmax()] * W:.3f} (texel centre {i + 0.5}),"
+        f" row {vs[pv.argmax()] * H:.3f} (texel centre {j + 0.5}; j·H/(H − 1) = {j * H / (H - 1):.3f})",
+    ]
+
+    t = read_hdr_plain(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scenes", "studio.hdr"))
+    t = t.astype(np.float64)
+    h, w, _ = t.shape
+    n_u, n_v = 4096, 2048
+    u = (np.arange(n_u) + 0.5) / n_u
+    v = (np.arange(n_v) + 0.5) / n_v * 0.5
+
+    def bilinear(x, y):
+        i0, j0 = np.floor(x).astype(int), np.floor(y).astype(int)
+        fx, fy = x - i0, y - j0
+        rows0, rows1 = t[np.clip(j0, 0, h - 1)], t[np.clip(j0 + 1, 0, h - 1)]
+        a = rows0[:, i0 % w] * (1 - fx)[None, :, None] + rows0[:, (i0 + 1) % w] * fx[None, :, None]
+        b = rows1[:, i0 % w] * (1 - fx)[None, :, None] + rows1[:, (i0 + 1) % w] * fx[None, :, None]
+        return a * (1 - fy)[:, None, None] + b * fy[:, None, None]
+
+    theta = np.pi * v
+    weight = np.sin(theta) * np.cos(theta) * (np.pi * 0.5 / n_v) * (2 * np.pi / n_u)
+    centres = (bilinear(u * w - 0.5, v * h - 0.5) * weight[:, None, None]).sum(axis=(0, 1))
+    vertices = (bilinear(u * w - 0.5, v * (h - 1)) * weight[:, None, None]).sum(axis=(0, 1))
+    lines += [
+        "",
+        "scenes/studio.hdr, irradiance on an upward surface (RGB), 4096 × 1024 quadrature:",
+        f"- texel centres ((i + ½)/W, (j + ½)/H), rt-view and Cycles: {centres.round(4).tolist()};"
+        f" a floor of albedo 0.5 shows {(0.5 / np.pi * centres).round(4).tolist()}",
+        f"- rows at j/(H − 1), Mitsuba: {vertices.round(4).tolist()} ({100 * (vertices / centres - 1).mean():+.2f} %);"
+        f" the floor {(0.5 / np.pi * vertices).round(4).tolist()}",
+    ]
+    report = "\n".join(lines) + "\n"
+    print(report)
+    with open(os.path.join(folder, "report.md"), "w") as f:
+        f.write(report)
 
 
 if __name__ == "__main__":
@@ -712,5 +805,7 @@ if __name__ == "__main__":
         compare(a)
     elif a.mode == "convention":
         convention(a)
+    elif a.mode == "rows":
+        rows(a)
     else:
         sky(a)
