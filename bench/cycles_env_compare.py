@@ -26,9 +26,10 @@ directly (no file format between them):
   checks it: a map with one bright marked texel, looked at by both with and
   without a rotation, the spot found in each.
   The map is handed to every renderer as the same float32 OpenEXR (decoded
-  from the scene's .hdr once), so no two RGBE decoders are compared
-  (Blender's adds ½ to each mantissa, the `image` crate's and Mitsuba's do
-  not: a 0.2–0.4 % difference by itself).
+  from the scene's .hdr once, by Mitsuba's reader, m·2^(e−136) as the
+  `image` crate's), so the comparison does not rest on three RGBE readers
+  agreeing (on scenes/studio.hdr Blender's and Mitsuba's do, to 4·10⁻⁵ in
+  the mean).
 - a material `(1 − ks)·diffuse + ks·GGX` (rt-view's legacy material, no
   mirror, glass or emission) is a Mix Shader of a Diffuse BSDF (colour
   kd·colour) and a Glossy BSDF (`GGX`, single scattering, roughness √α
