@@ -4,4 +4,6 @@ pub mod accuracy;
 pub mod bench;
 pub mod cast;
 pub mod export;
+pub mod merge;
 pub mod render;
+pub mod render_part;
