@@ -268,7 +268,8 @@ mod tests {
     #[test]
     fn parts_of_other_scenes_settings_versions_or_splits_are_refused_saying_which() {
         let base = header(SplitKind::Samples, 0, 2);
-        let cases: Vec<(Box<dyn Fn(&mut PartHeader)>, &str)> = vec![
+        type Change = Box<dyn Fn(&mut PartHeader)>;
+        let cases: Vec<(Change, &str)> = vec![
             (Box::new(|h| h.scene_hash = "bb".into()), "another scene"),
             (Box::new(|h| h.settings.spp = 16), "spp 16 against 8"),
             (Box::new(|h| h.settings.seed = 3), "seed 3 against 0"),
