@@ -116,7 +116,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let renderer = Renderer::new(scene, loaded.camera, &settings)
         .with_context(|| format!("{}: cannot render", args.scene.display()))?;
     if let Some(part) = part {
-        return part.render(args, scene, &renderer, &settings, display, load_start);
+        let written = part.render(&args.scene, scene, &renderer, &settings, display, load_start)?;
+        return if written { Ok(()) } else { Err(Interrupted.into()) };
     }
     let output = output.expect("an image where there is no part");
 

@@ -13,7 +13,6 @@ use rt_core::render::settings::RenderSettings;
 use rt_core::render::view_transform::Display;
 use rt_core::{Renderer, math::color::ColorSpace};
 
-use crate::commands::render::{Interrupted, RenderArgs};
 use crate::content_hash::{content_hash, scene_files};
 use crate::image_out::PendingFile;
 use crate::part_file::{self, PartHeader, PartSettings, Split, SplitKind};
@@ -53,6 +52,7 @@ impl PartOf {
 /// A part file output whose name and directory have been checked, not yet written.
 pub struct PendingPart {
     file: PendingFile,
+    target: std::path::PathBuf,
     split: Split,
 }
 
@@ -62,22 +62,22 @@ impl PendingPart {
         if !target.extension().is_some_and(|e| e.eq_ignore_ascii_case(PART_EXTENSION)) {
             bail!("{}: a part (--part) is written to a .{PART_EXTENSION} file", target.display());
         }
-        Ok(Self { file: PendingFile::create(target)?, split })
+        Ok(Self { file: PendingFile::create(target)?, target: target.to_owned(), split })
     }
 
-    /// Renders this part of the render `renderer` makes of `scene` with
-    /// `settings` (from `args`; the scene loading began at `load_start`)
-    /// and writes it
-    /// atomically: nothing on an error or on Ctrl-C.
+    /// Renders this part of the render `renderer` makes of `scene` (read
+    /// from `scene_file`; its loading began at `load_start`) with `settings`
+    /// and writes it atomically: nothing on an error or on Ctrl-C, which
+    /// returns `false`.
     pub fn render(
         self,
-        args: &RenderArgs,
+        scene_file: &Path,
         scene: &rt_core::Scene,
         renderer: &Renderer,
         settings: &RenderSettings,
         display: Display,
         load_start: Instant,
-    ) -> anyhow::Result<()> {
+    ) -> anyhow::Result<bool> {
         let (width, height, spp) = (settings.image.width(), settings.image.height(), settings.samples.get());
         let split = self.split;
         let (limit, what) = match split.kind {
@@ -93,7 +93,7 @@ impl PendingPart {
                 if split.kind == SplitKind::Samples { " (or --tiles)" } else { "" }
             );
         }
-        let scene_hash = content_hash(&scene_files(&args.scene, scene))?;
+        let scene_hash = content_hash(&scene_files(scene_file, scene))?;
         let load_seconds = load_start.elapsed().as_secs_f64();
         let (rows, samples) = split.ranges(height, spp);
 
@@ -113,11 +113,11 @@ impl PendingPart {
         let result = render_sums(renderer, rows.clone(), samples.clone(), |_| bar.inc(1), &stop);
         let render_seconds = start.elapsed().as_secs_f64();
         bar.finish_and_clear();
-        let (sums, rays) = result.ok_or(Interrupted)?;
+        let Some((sums, rays)) = result else { return Ok(false) };
 
         let header = PartHeader {
             rt_view_version: env!("CARGO_PKG_VERSION").to_owned(),
-            scene: args.scene.display().to_string(),
+            scene: scene_file.display().to_string(),
             scene_hash,
             settings: PartSettings {
                 width,
@@ -140,7 +140,7 @@ impl PendingPart {
         eprintln!(
             "wrote {} (part {}/{} by {}: rows {}..{}, samples {}..{} of {spp}; {width}x{height}) \
              load {load_seconds:.3} s, render {render_seconds:.3} s, write {:.3} s",
-            args.output.display(),
+            self.target.display(),
             split.index,
             split.count,
             split.kind.name(),
@@ -150,7 +150,7 @@ impl PendingPart {
             samples.end,
             write_start.elapsed().as_secs_f64()
         );
-        Ok(())
+        Ok(true)
     }
 }
 
