@@ -162,6 +162,11 @@ impl PartHeader {
         if s.width == 0 || s.height == 0 || s.spp == 0 {
             return Err(format!("image {}x{} at {} spp is empty", s.width, s.height, s.spp));
         }
+        // The largest image rt-view renders (docs/command-line.md's limits),
+        // checked before a merge allocates the image's sums.
+        if s.width > 32_768 || s.height > 32_768 || s.width as u64 * s.height as u64 > 1 << 27 {
+            return Err(format!("image {}x{} is larger than any rt-view renders", s.width, s.height));
+        }
         let (rows, samples) = self.split.ranges(s.height, s.spp);
         if (rows.clone(), samples.clone()) != (self.rows.clone(), self.samples.clone()) {
             return Err(format!(
@@ -244,6 +249,12 @@ pub fn read_header(path: &Path) -> Result<(PartHeader, u64), PartError> {
     read_exact_or_truncated(&mut file, &mut json, len, PREFIX as u64 + header_len)?;
     let header = parse_header(&json)?;
     let want = file_length(header_len, &header);
+    if len < want {
+        return Err(PartError::Truncated { got: len, want });
+    }
+    if len > want {
+        return Err(PartError::TooLong { got: len, want });
+    }
     Ok((header, want))
 }
 
@@ -418,6 +429,14 @@ mod tests {
         let mut long = bytes.clone();
         long.push(0);
         assert!(matches!(decode(&long).unwrap_err(), PartError::TooLong { .. }));
+        // The header alone is read before a merge allocates anything: it
+        // checks the length too.
+        for len in [bytes.len() - 1, bytes.len() - 48] {
+            std::fs::write(&path, &bytes[..len]).unwrap();
+            assert!(matches!(read_header(&path).unwrap_err(), PartError::Truncated { .. }), "{len}");
+        }
+        std::fs::write(&path, &long).unwrap();
+        assert!(matches!(read_header(&path).unwrap_err(), PartError::TooLong { .. }));
     }
 
     #[test]
@@ -446,6 +465,15 @@ mod tests {
             decode(&bytes).unwrap_err().to_string(),
             "part file format version 9; this rt-view reads version 1"
         );
+    }
+
+    #[test]
+    fn a_header_of_an_image_larger_than_any_rendered_is_refused() {
+        let (mut h, _) = part();
+        h.settings.width = 1 << 20;
+        let json = serde_json::to_vec(&h).unwrap();
+        let e = parse_header(&json).unwrap_err();
+        assert!(e.to_string().contains("larger than any rt-view renders"), "{e}");
     }
 
     #[test]
