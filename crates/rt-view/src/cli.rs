@@ -6,7 +6,8 @@ use clap::{Parser, Subcommand};
 
 use crate::commands::explain::ExplainArgs;
 use crate::commands::{
-    self, accuracy::AccuracyArgs, bench::BenchArgs, cast::CastArgs, export::ExportArgs, render::RenderArgs,
+    self, accuracy::AccuracyArgs, bench::BenchArgs, cast::CastArgs, export::ExportArgs, merge::MergeArgs,
+    render::RenderArgs,
 };
 use crate::viewer;
 
@@ -27,6 +28,8 @@ use crate::viewer;
         rt-view scenes/showcase.ron  (the viewer, on a scene file)\n  \
         rt-view render scenes/showcase.ron -o showcase.png\n  \
         rt-view render scenes/sphere.ron -o sphere.png --width 1280 --height 960 --spp 16\n  \
+        rt-view render scenes/cornell_box.ron --part 0/4 -o part0.rtpart   (one part of four)\n  \
+        rt-view merge part*.rtpart -o cornell_box.exr\n  \
         echo '0,0,-5,0,0,1' | rt-view cast scenes/sphere.ron\n  \
         rt-view cast scenes/sphere.ron --pixels > pixels.csv"
 )]
@@ -51,7 +54,19 @@ pub enum Command {
     /// OUT only when complete, so OUT is never left half-written. A .png gets
     /// 8-bit pixels in the scene's colour space (`color_space`: Linear or
     /// Srgb); a .exr gets the linear colours as 32-bit floats, unclamped.
+    ///
+    /// With --part K/N, renders only part K of N into a part file
+    /// (OUT.rtpart) for `rt-view merge`: one task of a render split over a
+    /// cluster (docs/cluster.md).
     Render(RenderArgs),
+    /// Merge the part files of a split render (`render --part K/N`) into
+    /// its image: the very image `render` makes on one machine, bit for bit.
+    ///
+    /// The parts must be of one scene (its content hash), one set of
+    /// settings and one split, each part once; missing parts are named, and
+    /// --partial merges those that are there. Damaged or truncated part files
+    /// are refused.
+    Merge(MergeArgs),
     /// Cast rays into a scene and print what each hits, as CSV on stdout.
     ///
     /// Input: one ray a line, `ox,oy,oz,dx,dy,dz` (blank lines and lines
@@ -95,6 +110,7 @@ pub enum Command {
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Some(Command::Render(args)) => commands::render::run(&args),
+        Some(Command::Merge(args)) => commands::merge::run(&args),
         Some(Command::Cast(args)) => commands::cast::run(&args),
         Some(Command::Bench(args)) => commands::bench::run(&args),
         Some(Command::Accuracy(args)) => commands::accuracy::run(&args),

@@ -11,6 +11,10 @@
 
 pub mod cli;
 pub mod commands;
+pub mod content_hash;
+pub mod exact_sum;
 pub mod image_out;
+pub mod part_file;
+pub mod sum_render;
 pub mod timing;
 pub mod viewer;

@@ -224,9 +224,29 @@ impl<'s> Renderer<'s> {
         samples: Range<u32>,
         sums: &mut [Color],
     ) -> RayCounts {
-        assert!(columns.end <= self.view.width(), "columns {columns:?} past the image's width");
         assert_eq!(sums.len(), rows.len() * columns.len(), "one sum per pixel of the region");
-        self.sample_region(rows, columns, samples, |_| true, |at, _, c| sums[at] += c)
+        self.accumulate_region_with(rows, columns, samples, |at, colour| sums[at] += colour)
+    }
+
+    /// [`Renderer::accumulate_region`], handing each sample's colour to
+    /// `add` with its pixel's index in the region (row-major) instead of
+    /// adding it to an `f32` sum: for sums kept another way, such as the
+    /// exact sums that let a render split over machines merge bit for bit.
+    /// The samples come in the order `accumulate_region` adds them (a
+    /// pixel's in increasing index), cast in the same packets, so
+    /// `|at, c| sums[at] += c` is `accumulate_region` exactly.
+    ///
+    /// # Panics
+    /// If the columns reach past the image's width.
+    pub fn accumulate_region_with(
+        &self,
+        rows: Range<u32>,
+        columns: Range<u32>,
+        samples: Range<u32>,
+        mut add: impl FnMut(usize, Color),
+    ) -> RayCounts {
+        assert!(columns.end <= self.view.width(), "columns {columns:?} past the image's width");
+        self.sample_region(rows, columns, samples, |_| true, |at, _, c| add(at, c))
     }
 
     /// The samples `samples` of each pixel of the region (`rows` ×
@@ -527,6 +547,21 @@ mod tests {
         let (a, b) = (fixed.render(|_| {}).to_rgb8(), open.render(|_| {}).to_rgb8());
         assert_eq!(a[12 * 32 + 16], b[12 * 32 + 16]);
         assert_ne!(a, b);
+    }
+
+    #[test]
+    fn a_region_hands_out_each_sample_as_its_sums_add_them() {
+        let s = scene();
+        let r = renderer(&s, 32, 24, 70);
+        let (rows, columns) = (5..9, 10..15);
+        let mut sums = vec![Color::ZERO; 4 * 5];
+        let counts = r.accumulate_region(rows.clone(), columns.clone(), 3..70, &mut sums);
+        let mut each = vec![Vec::new(); 4 * 5];
+        let counts_with = r.accumulate_region_with(rows, columns, 3..70, |at, c| each[at].push(c));
+        assert_eq!(counts_with, counts);
+        assert!(each.iter().all(|samples| samples.len() == 67));
+        let added: Vec<Color> = each.iter().map(|c| c.iter().fold(Color::ZERO, |a, &b| a + b)).collect();
+        assert_eq!(added, sums);
     }
 
     #[test]

@@ -5,4 +5,6 @@ pub mod bench;
 pub mod cast;
 pub mod explain;
 pub mod export;
+pub mod merge;
 pub mod render;
+pub mod render_part;

@@ -15,7 +15,9 @@ use rt_core::render::view_transform::{Display, MAX_EXPOSURE_STOPS, ViewTransform
 use rt_core::sampling::sampler::SamplerKind;
 use rt_core::scene::effects::{EffectPlan, RayCounts};
 
+use crate::commands::render_part::{self, PartOf};
 use crate::image_out::PendingImage;
+use crate::sum_render;
 
 /// `rt-view render`.
 #[derive(Debug, Args)]
@@ -70,6 +72,15 @@ pub struct RenderArgs {
     /// scene's `view_transform`, else standard). Not applied to EXR.
     #[arg(long, value_name = "standard|agx")]
     pub view_transform: Option<ViewTransform>,
+    /// Render only part K of N (K from 0 to N-1) into a part file OUT.rtpart,
+    /// for `rt-view merge`: sample indices [K·S/N, (K+1)·S/N) of every
+    /// pixel by default, or with --tiles rows [K·H/N, (K+1)·H/N).
+    #[arg(long, value_name = "K/N", value_parser = PartOf::parse)]
+    pub part: Option<PartOf>,
+    /// With --part: split the image into N bands of rows (tiles), each with
+    /// every sample, instead of splitting the samples.
+    #[arg(long, requires = "part")]
+    pub tiles: bool,
 }
 
 /// The display settings of `settings`, with the command line's `exposure`
@@ -96,9 +107,17 @@ pub struct Interrupted;
 
 /// Loads the scene, renders it in parallel (one progress tick per finished
 /// row) and writes the PNG (or linear EXR) atomically. Nothing is written on any error or on
-/// Ctrl-C, which stops the workers after their current row.
+/// Ctrl-C, which stops the workers after their current band of rows.
+///
+/// Each pixel is the mean of the exact sum of its samples
+/// ([`crate::exact_sum`]), so that parts of the render made on other
+/// machines (`--part`, [`render_part`]) merge into this very image.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
-    let output = PendingImage::create(&args.output)?;
+    // A part file or an image, its name checked before any work.
+    let (part, output) = match args.part {
+        Some(part) => (Some(render_part::PendingPart::create(&args.output, part.split(args.tiles))?), None),
+        None => (None, Some(PendingImage::create(&args.output)?)),
+    };
     let load_start = Instant::now();
     let loaded = rt_core::load_scene(&args.scene)?;
     let load_time = load_start.elapsed();
@@ -119,6 +138,18 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let (width, height, spp) = (settings.image.width(), settings.image.height(), settings.samples.get());
     let renderer = Renderer::new(scene, loaded.camera, &settings)
         .with_context(|| format!("{}: cannot render", args.scene.display()))?;
+    if let Some(part) = part {
+        if settings.adaptive.is_some() {
+            anyhow::bail!(
+                "{}: adaptive sampling (a noise threshold) cannot be split into parts: each pixel's \
+                 stopping point depends on all its samples; render the parts without it",
+                args.scene.display()
+            );
+        }
+        let written = part.render(&args.scene, scene, &renderer, &settings, display, load_start)?;
+        return if written { Ok(()) } else { Err(Interrupted.into()) };
+    }
+    let output = output.expect("an image where there is no part");
 
     let stop = Arc::new(AtomicBool::new(false));
     let handler_stop = stop.clone();
@@ -134,7 +165,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     bar.set_message(format!("rendering {width}x{height}, {spp} spp"));
     let start = Instant::now();
     let (frame, adaptive) = match settings.adaptive {
-        None => (renderer.render_until(|_| bar.inc(1), &stop), None),
+        None => {
+            let sums = sum_render::render_sums(&renderer, 0..height, 0..spp, |_| bar.inc(1), &stop);
+            let frame = sums.map(|(sums, rays)| {
+                let pixels = sum_render::means(&sums, spp);
+                rt_core::Frame { width, height, pixels, color_space: settings.color_space, rays }
+            });
+            (frame, None)
+        }
         Some(a) => match renderer.render_adaptive(a, |_| bar.inc(1), &stop) {
             Some(AdaptiveFrame { frame, stats, .. }) => (Some(frame), Some((a, stats))),
             None => (None, None),

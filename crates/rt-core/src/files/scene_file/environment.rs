@@ -222,6 +222,8 @@ mod tests {
         assert_eq!((map.size(), map.strength(), map.rotation_degrees()), ((4, 2), 2.0, 90.0));
         // RGBE has no NaN: the encoder wrote something finite; nothing to warn about.
         assert!(loaded.scene.warnings().is_empty(), "{:?}", loaded.scene.warnings());
+        // A file the scene was read from (hashed by split renders, watched by the viewer).
+        assert_eq!(loaded.scene.source_files(), [d.join("m.hdr")]);
     }
 
     #[test]

@@ -164,6 +164,10 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<LoadedScen
         }
         let (environment, warnings) = environment.build(base_dir).map_err(fail)?;
         scene = warnings.into_iter().fold(scene.environment(environment), SceneBuilder::warning);
+        // The map is a file the scene is read from, as a mesh is.
+        if let Some(EnvironmentDesc::Map { file: map, .. }) = &desc.environment {
+            scene = scene.source_file(base_dir.join(map));
+        }
     }
     for light in desc.lights {
         scene = scene.light(light.0);
