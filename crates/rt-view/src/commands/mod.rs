@@ -5,3 +5,4 @@ pub mod bench;
 pub mod cast;
 pub mod export;
 pub mod render;
+pub mod render_outputs;

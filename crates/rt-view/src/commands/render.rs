@@ -12,7 +12,8 @@ use rt_core::Renderer;
 use rt_core::render::view_transform::{Display, MAX_EXPOSURE_STOPS, ViewTransform};
 use rt_core::scene::effects::{EffectPlan, RayCounts};
 
-use crate::image_out::PendingImage;
+use crate::commands::render_outputs::{self, Denoised, Pass};
+use crate::image_out::{Format, PendingImage};
 
 /// `rt-view render`.
 #[derive(Debug, Args)]
@@ -51,6 +52,32 @@ pub struct RenderArgs {
     /// scene's `view_transform`, else standard). Not applied to EXR.
     #[arg(long, value_name = "standard|agx")]
     pub view_transform: Option<ViewTransform>,
+    /// Feature passes to write as layers of the EXR output (comma-separated):
+    /// albedo and normal of the first non-specular hit (through mirrors and
+    /// clear glass), depth (distance from the camera to the first hit) and
+    /// id (index of the first object hit); see docs/denoising.md. Needs
+    /// `-o OUT.exr`.
+    #[arg(long, value_delimiter = ',', value_name = "albedo,normal,depth,id")]
+    pub passes: Vec<Pass>,
+    /// Every feature pass (`--passes albedo,normal,depth,id`).
+    #[arg(long)]
+    pub aovs: bool,
+    /// Denoise the image with Intel Open Image Denoise, fed the albedo and
+    /// normal passes (`scripts/get_oidn.sh` fetches the library). Without
+    /// the library: a warning saying where it was looked for, and the image
+    /// as rendered. An EXR keeps the noisy colour as `noisy.R/G/B`.
+    #[arg(long)]
+    pub denoise: bool,
+}
+
+impl RenderArgs {
+    /// The passes asked for, each once, in a fixed order.
+    pub fn passes(&self) -> Vec<Pass> {
+        let mut passes = if self.aovs { Pass::ALL.to_vec() } else { self.passes.clone() };
+        passes.sort();
+        passes.dedup();
+        passes
+    }
 }
 
 /// The display settings of `settings`, with the command line's `exposure`
@@ -80,6 +107,14 @@ pub struct Interrupted;
 /// Ctrl-C, which stops the workers after their current row.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let output = PendingImage::create(&args.output)?;
+    let passes = args.passes();
+    if !passes.is_empty() && output.format() != Format::Exr {
+        anyhow::bail!(
+            "{}: feature passes (--passes, --aovs) are written to an .exr output only",
+            args.output.display()
+        );
+    }
+    let with_features = !passes.is_empty() || args.denoise;
     let load_start = Instant::now();
     let loaded = rt_core::load_scene(&args.scene)?;
     let load_time = load_start.elapsed();
@@ -109,12 +144,34 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     );
     bar.set_message(format!("rendering {width}x{height}, {spp} spp"));
     let start = Instant::now();
-    let frame = renderer.render_until(|_| bar.inc(1), &stop);
+    let (frame, features) = if with_features {
+        renderer.render_with_features_until(|_| bar.inc(1), &stop).map(|(f, p)| (f, Some(p))).unzip()
+    } else {
+        (renderer.render_until(|_| bar.inc(1), &stop), None)
+    };
     let elapsed = start.elapsed();
     bar.finish_and_clear();
-    let frame = frame.ok_or(Interrupted)?;
+    let mut frame = frame.ok_or(Interrupted)?;
+    let features = features.flatten();
 
-    output.write_frame(&frame, &display)?;
+    let mut noisy = None;
+    if args.denoise
+        && let Some(features) = &features
+    {
+        match render_outputs::denoise_frame(&mut frame, features) {
+            Denoised::Done { took, noisy: n } => {
+                eprintln!("denoised with OIDN in {:.3} s", took.as_secs_f64());
+                noisy = Some(n);
+            }
+            Denoised::Skipped(why) => eprintln!("warning: not denoised: {why}"),
+        }
+    }
+    if output.format() == Format::Exr && (noisy.is_some() || !passes.is_empty()) {
+        let channels = render_outputs::exr_channels(&frame, noisy.as_deref(), features.as_ref(), &passes);
+        output.write_channels(width, height, channels)?;
+    } else {
+        output.write_frame(&frame, &display)?;
+    }
     eprintln!(
         "wrote {} ({width}x{height}, {spp} spp) in {:.3} s",
         args.output.display(),
