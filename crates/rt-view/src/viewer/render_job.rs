@@ -35,7 +35,7 @@
 //! With denoising on ([`JobSpec::denoise`], a whole-image job, and OIDN
 //! present: [`crate::denoise`]) the bands also sum the feature passes
 //! ([`Renderer::accumulate_region_with_features`]), and once every band
-//! has finished a pass the worker that finished it last denoises the whole
+//! has finished a pass a thread of its own denoises the whole
 //! image (OIDN fed albedo and normal) and sends all its rows: the first
 //! pass streams in noisy as usual, later passes show only denoised images,
 //! one per pass, so what is on screen (and what Save writes) is the
@@ -381,7 +381,7 @@ impl RenderJob {
             generation,
             shared: shared.clone(),
             tx,
-            on_row,
+            on_row: Arc::new(on_row),
             render_band,
             denoiser,
         };
@@ -529,7 +529,8 @@ struct Worker<F> {
     generation: u64,
     shared: Arc<Shared>,
     tx: Sender<Row>,
-    on_row: F,
+    /// Shared with the threads that denoise.
+    on_row: Arc<F>,
     render_band: Box<BandFn>,
     /// OIDN, where the job denoises ([`JobSpec::denoiser`]): the bands
     /// then sum features with [`Renderer::accumulate_region_with_features`]
@@ -537,7 +538,7 @@ struct Worker<F> {
     denoiser: Option<&'static Oidn>,
 }
 
-impl<F: Fn() + Send + Sync> Worker<F> {
+impl<F: Fn() + Send + Sync + 'static> Worker<F> {
     fn run(self) {
         let s = &self.spec;
         let renderer = s.renderer().expect("validated before the thread started");
@@ -562,7 +563,7 @@ impl<F: Fn() + Send + Sync> Worker<F> {
         });
         if !self.shared.cancelled() {
             *self.shared.elapsed.lock().unwrap_or_else(|e| e.into_inner()) = Some(start.elapsed());
-            (self.on_row)();
+            (*self.on_row)();
         }
     }
 
@@ -619,7 +620,7 @@ impl<F: Fn() + Send + Sync> Worker<F> {
                     failure
                         .get_or_insert_with(|| format!("rows {first}–{last}: {}", panic_message(&*payload)));
                     self.shared.cancel.store(true, Ordering::Relaxed);
-                    (self.on_row)(); // Wake the UI so it shows the failure.
+                    (*self.on_row)(); // Wake the UI so it shows the failure.
                     return false;
                 }
             }
@@ -667,7 +668,7 @@ impl<F: Fn() + Send + Sync> Worker<F> {
         }
         drop(sums);
         for _ in 0..sent {
-            (self.on_row)();
+            (*self.on_row)();
         }
         match self.denoiser {
             Some(oidn) if self.pass_is_whole(samples.end) => {
@@ -684,61 +685,73 @@ impl<F: Fn() + Send + Sync> Worker<F> {
 
     /// Denoises the image as the bands hold it (each band's mean over its
     /// own samples so far: at least those of the pass just whole) and sends
-    /// every row of it, unless a worker did for this pass (but the first)
-    /// or a later one;
-    /// false when the job is to end. A failure of OIDN is the job's
+    /// every row of it, unless a denoising of this pass (but the first) or
+    /// a later one went first. On a thread of its own: OIDN takes a while
+    /// and uses every core, and a rayon worker blocked in it would hold up
+    /// the next job's start (a camera move). A failure of OIDN is the job's
     /// failure.
-    fn send_denoised(&self, oidn: &Oidn, renderer: &Renderer, samples: u32, first_pass: bool) -> bool {
-        let mut through = self.shared.denoised_through.lock().unwrap_or_else(|e| e.into_inner());
-        // The first pass's noisy rows of a band may go out after another
-        // worker sent that pass denoised: then it is denoised again.
-        if *through > samples || (*through == samples && !first_pass) {
-            return true; // This pass, or a later one, is on its way already.
-        }
-        *through = samples;
-        let area = self.spec.area();
-        let (width, height) = (area.width(), area.height());
-        let pixels = width as usize * height as usize;
-        let (mut color, mut albedo, mut normal) =
-            (Vec::with_capacity(pixels), Vec::with_capacity(pixels), Vec::with_capacity(pixels));
-        for cell in &self.shared.bands {
-            let band = cell.lock().unwrap_or_else(|e| e.into_inner());
-            let n = band.samples.max(1);
-            color.extend(band.sums.iter().map(|&c| c / n as f32));
-            for f in &band.features {
-                let (a, m) = f.means(n);
-                albedo.push(a);
-                normal.push(m);
+    fn send_denoised(
+        &self,
+        oidn: &'static Oidn,
+        renderer: &Renderer,
+        samples: u32,
+        first_pass: bool,
+    ) -> bool {
+        let (area, generation, color_space) = (self.spec.area(), self.generation, renderer.color_space());
+        let (shared, tx, on_row) = (self.shared.clone(), self.tx.clone(), self.on_row.clone());
+        let denoise = move || {
+            let mut through = shared.denoised_through.lock().unwrap_or_else(|e| e.into_inner());
+            // The first pass's noisy rows of a band may go out after another
+            // worker sent that pass denoised: then it is denoised again.
+            if *through > samples || (*through == samples && !first_pass) || shared.cancelled() {
+                return;
             }
-        }
-        let aux = AuxImages { albedo: Some(&albedo), normal: Some(&normal) };
-        let clean = match oidn.denoise(width, height, &color, aux) {
-            Ok(clean) => clean,
-            Err(e) => {
-                let mut failure = self.shared.failure.lock().unwrap_or_else(|e| e.into_inner());
-                failure.get_or_insert_with(|| format!("denoising: {e}"));
-                self.shared.cancel.store(true, Ordering::Relaxed);
-                (self.on_row)();
-                return false;
+            *through = samples;
+            let (width, height) = (area.width(), area.height());
+            let pixels = width as usize * height as usize;
+            let (mut color, mut albedo, mut normal) =
+                (Vec::with_capacity(pixels), Vec::with_capacity(pixels), Vec::with_capacity(pixels));
+            for cell in &shared.bands {
+                let band = cell.lock().unwrap_or_else(|e| e.into_inner());
+                let n = band.samples.max(1);
+                color.extend(band.sums.iter().map(|&c| c / n as f32));
+                for f in &band.features {
+                    let (a, m) = f.means(n);
+                    albedo.push(a);
+                    normal.push(m);
+                }
             }
+            let aux = AuxImages { albedo: Some(&albedo), normal: Some(&normal) };
+            let clean = match oidn.denoise(width, height, &color, aux) {
+                Ok(clean) => clean,
+                Err(e) => {
+                    let mut failure = shared.failure.lock().unwrap_or_else(|e| e.into_inner());
+                    failure.get_or_insert_with(|| format!("denoising: {e}"));
+                    shared.cancel.store(true, Ordering::Relaxed);
+                    on_row();
+                    return;
+                }
+            };
+            for (y, row) in area.rows.clone().zip(clean.chunks_exact(width as usize)) {
+                let linear: Vec<[f32; 3]> = row.iter().map(|c| c.to_array()).collect();
+                let pixels = row
+                    .iter()
+                    .map(|&c| {
+                        let [r, g, b] = color_space.encode(c);
+                        Color32::from_rgb(r, g, b)
+                    })
+                    .collect();
+                let row = Row { generation, y, samples, pixels, linear };
+                if shared.cancelled() || tx.send(row).is_err() {
+                    return;
+                }
+            }
+            on_row();
         };
-        let color_space = renderer.color_space();
-        for (y, row) in area.rows.clone().zip(clean.chunks_exact(width as usize)) {
-            let linear: Vec<[f32; 3]> = row.iter().map(|c| c.to_array()).collect();
-            let pixels = row
-                .iter()
-                .map(|&c| {
-                    let [r, g, b] = color_space.encode(c);
-                    Color32::from_rgb(r, g, b)
-                })
-                .collect();
-            let row = Row { generation: self.generation, y, samples, pixels, linear };
-            if self.shared.cancelled() || self.tx.send(row).is_err() {
-                self.shared.cancel.store(true, Ordering::Relaxed);
-                return false;
-            }
-        }
-        (self.on_row)();
+        std::thread::Builder::new()
+            .name(format!("denoise-{generation}"))
+            .spawn(denoise)
+            .expect("the OS can start a thread");
         true
     }
 }
