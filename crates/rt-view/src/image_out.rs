@@ -4,7 +4,10 @@
 //! PNG holds 8-bit pixels encoded in the scene's colour space, after the
 //! exposure and view transform ([`rt_core::render::view_transform`]);
 //! OpenEXR holds the linear colours themselves as 32-bit floats (HDR:
-//! nothing is clamped, exposed or transformed).
+//! nothing is clamped, exposed or transformed). An EXR may also hold more
+//! channels than the colour ([`PendingImage::write_channels`]: feature
+//! passes, the noisy image beside a denoised one), named as compositors
+//! expect (`albedo.R`, `N.X`, `Z`, `id`, …).
 //!
 //! # Temporary files
 //!
@@ -231,6 +234,42 @@ impl PendingImage {
         self.write_bytes(|out| image.write_with_encoder(OpenExrEncoder::new(out)))
     }
 
+    /// Writes named channels of 32-bit floats, each `width × height`
+    /// values (row-major, top row first), as one OpenEXR layer (ZIP
+    /// compressed; the channels sorted by name, as the format wants). The
+    /// colour is the channels `R`, `G`, `B`; a layer's channels are
+    /// `layer.X` (OpenEXR's naming convention for multi-part images in one
+    /// part, which Blender and Nuke read as layers).
+    pub fn write_channels(
+        self,
+        width: u32,
+        height: u32,
+        channels: Vec<(String, Vec<f32>)>,
+    ) -> anyhow::Result<()> {
+        use exr::prelude::{
+            AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, WritableImage,
+        };
+        if self.format != Format::Exr {
+            bail!("{}: image layers are written as .exr only", self.file.target.display());
+        }
+        let pixels = width as usize * height as usize;
+        if let Some((name, _)) = channels.iter().find(|(_, v)| v.len() != pixels) {
+            bail!("channel {name} does not have {width}×{height} values");
+        }
+        let list: Vec<AnyChannel<FlatSamples>> = channels
+            .into_iter()
+            .map(|(name, values)| AnyChannel::new(name.as_str(), FlatSamples::F32(values)))
+            .collect();
+        let layer = Layer::new(
+            (width as usize, height as usize),
+            LayerAttributes::default(),
+            Encoding::SMALL_LOSSLESS,
+            AnyChannels::sort(list.into()),
+        );
+        let image = Image::from_layer(layer);
+        self.file.write_with(|out| image.write().to_buffered(out).context("cannot encode image"))
+    }
+
     /// Writes 8-bit pixels (row-major, top row first) as PNG.
     pub fn write_rgb8(self, width: u32, height: u32, pixels: &[Rgb8]) -> anyhow::Result<()> {
         if self.format != Format::Png {
@@ -284,6 +323,45 @@ mod tests {
         // Linear images are not PNGs, nor 8-bit ones EXRs.
         let png = PendingImage::create(&dir.path().join("x.png")).unwrap();
         assert!(png.write_linear(2, 2, &pixels).unwrap_err().to_string().contains(".exr only"));
+    }
+
+    #[test]
+    fn named_channels_read_back_from_exr_by_name() {
+        use exr::prelude::{ReadChannels, ReadLayers};
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("layers.exr");
+        let channels = vec![
+            ("R".to_owned(), vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]),
+            ("albedo.R".to_owned(), vec![0.5; 6]),
+            ("Z".to_owned(), vec![1.0, f32::INFINITY, 2.5, 3.0, 4.0, 5.0]),
+            ("id".to_owned(), vec![-1.0, 0.0, 1.0, 2.0, 3.0, 7.0]),
+        ];
+        PendingImage::create(&target).unwrap().write_channels(3, 2, channels.clone()).unwrap();
+        let image = exr::prelude::read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .from_file(&target)
+            .unwrap();
+        assert_eq!(image.layer_data.size, exr::prelude::Vec2(3, 2));
+        let mut back: Vec<(String, Vec<f32>)> = image
+            .layer_data
+            .channel_data
+            .list
+            .iter()
+            .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+            .collect();
+        back.sort_by(|a, b| a.0.cmp(&b.0));
+        let mut want = channels;
+        want.sort_by(|a, b| a.0.cmp(&b.0));
+        assert_eq!(back, want);
+        // The wrong number of values, or a PNG, is refused.
+        let short = vec![("R".to_owned(), vec![1.0])];
+        assert!(PendingImage::create(&target).unwrap().write_channels(3, 2, short).is_err());
+        let png = PendingImage::create(&dir.path().join("x.png")).unwrap();
+        assert!(png.write_channels(1, 1, vec![]).unwrap_err().to_string().contains(".exr only"));
     }
 
     #[test]

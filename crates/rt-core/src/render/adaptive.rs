@@ -46,7 +46,7 @@ use rayon::prelude::*;
 
 use crate::math::color::Color;
 use crate::render::settings::AdaptiveSampling;
-use crate::render::{BAND_ROWS, Frame, Renderer};
+use crate::render::{BAND_ROWS, Frame, NoFeatures, Renderer};
 use crate::scene::effects::RayCounts;
 
 /// Added to the square root of the intensity in [`relative_error`]
@@ -163,6 +163,7 @@ impl Renderer<'_> {
                             p.halves[(k & 1) as usize] += c;
                             p.taken += 1;
                         },
+                        &mut NoFeatures,
                     );
                     rows.for_each(&row_done);
                     counts

@@ -9,6 +9,7 @@
 //! the order rows finish in, bit for bit.
 
 pub mod adaptive;
+pub mod passes;
 mod record_sample;
 pub mod settings;
 pub mod view_transform;
@@ -27,8 +28,9 @@ use crate::integrators::Integrator;
 use crate::math::color::{Color, ColorSpace};
 use crate::math::ray::Ray;
 use crate::math::real::Vec3;
+use crate::render::passes::{FEATURE_SALT, FeatureFrame, FeatureSums, SampleFeatures};
 use crate::render::settings::RenderSettings;
-use crate::sampling::sampler::Sampler;
+use crate::sampling::sampler::{SampleRng, Sampler};
 use crate::scene::Scene;
 use crate::scene::effects::{EffectPlan, RayCounts};
 
@@ -245,15 +247,50 @@ impl<'s> Renderer<'s> {
         samples: Range<u32>,
         mut add: impl FnMut(usize, Color),
     ) -> RayCounts {
-        assert!(columns.end <= self.view.width(), "columns {columns:?} past the image's width");
-        self.sample_region(rows, columns, samples, |_| true, |at, _, c| add(at, c))
+        self.sample_region(rows, columns, samples, |_| true, |at, _, c| add(at, c), &mut NoFeatures)
+    }
+
+    /// [`Renderer::accumulate_region`] that also adds each sample's
+    /// [`SampleFeatures`] to `features` (one per pixel of the region, laid
+    /// out as `sums`), from the same primary rays and hits: the colour sums
+    /// are the same, bit for bit.
+    ///
+    /// # Panics
+    /// As [`Renderer::accumulate_region`]; also if `features` is not as long
+    /// as `sums`.
+    pub fn accumulate_region_with_features(
+        &self,
+        rows: Range<u32>,
+        columns: Range<u32>,
+        samples: Range<u32>,
+        sums: &mut [Color],
+        features: &mut [FeatureSums],
+    ) -> RayCounts {
+        assert_eq!(sums.len(), rows.len() * columns.len(), "one sum per pixel of the region");
+        assert_eq!(features.len(), sums.len(), "one feature sum per pixel of the region");
+        self.sample_region(
+            rows,
+            columns,
+            samples,
+            |_| true,
+            |at, _, c| sums[at] += c,
+            &mut Features(features),
+        )
+    }
+
+    /// The features of sample `k` of pixel (x, y), whose primary ray `ray`
+    /// was cast already and gave `hit` ([`SampleFeatures::of_camera_ray`]).
+    pub fn sample_features(&self, x: u32, y: u32, k: u32, ray: &Ray, hit: Option<Hit>) -> SampleFeatures {
+        let mut rng = SampleRng::seeded(x, y, k, self.sampler.seed() ^ FEATURE_SALT);
+        SampleFeatures::of_camera_ray(self.scene, ray, hit, &mut rng)
     }
 
     /// The samples `samples` of each pixel of the region (`rows` ×
     /// `columns`) for which `wanted` (given the pixel's index in the region,
     /// row by row) says so, traced in packets as
     /// [`Renderer::accumulate_region`] says, each handed to `add` with its
-    /// pixel's index and sample index, in the order given there.
+    /// pixel's index and sample index, in the order given there, and its
+    /// features to `features` (nothing, compiled away, for [`NoFeatures`]).
     #[inline(always)]
     fn sample_region(
         &self,
@@ -262,7 +299,9 @@ impl<'s> Renderer<'s> {
         samples: Range<u32>,
         wanted: impl Fn(usize) -> bool,
         mut add: impl FnMut(usize, u32, Color),
+        features: &mut impl FeatureSink,
     ) -> RayCounts {
+        assert!(columns.end <= self.view.width(), "columns {columns:?} past the image's width");
         let width = columns.len();
         let per_pixel = rows.len() * samples.len();
         let tile = (PACKET_RAYS / per_pixel.max(1)).clamp(1, width.max(1)) as u32;
@@ -277,6 +316,7 @@ impl<'s> Renderer<'s> {
                 let (x, y, k) = packet[i];
                 let at = (y - rows.start) as usize * width + (x - columns.start) as usize;
                 add(at, k, self.shade_sample(x, y, k, &rays[i], hits[i], &mut counts));
+                features.add(at, || self.sample_features(x, y, k, &rays[i], hits[i]));
             }
         };
         for x0 in columns.clone().step_by(tile as usize) {
@@ -299,6 +339,43 @@ impl<'s> Renderer<'s> {
         }
         flush(n, &packet, &rays);
         counts
+    }
+
+    /// [`Renderer::render_until`] that also records the feature passes
+    /// ([`FeatureFrame`]) in the same loop; the frame is the same, bit for bit.
+    pub fn render_with_features_until(
+        &self,
+        row_done: impl Fn(u32) + Sync,
+        stop: &AtomicBool,
+    ) -> Option<(Frame, FeatureFrame)> {
+        let (width, height) = (self.view.width(), self.view.height());
+        let mut pixels = vec![Color::ZERO; width as usize * height as usize];
+        let mut features = vec![FeatureSums::default(); pixels.len()];
+        let band_rows = (PACKET_RAYS as u32 / self.spp).clamp(1, BAND_ROWS);
+        let band = width as usize * band_rows as usize;
+        let rays = pixels
+            .par_chunks_mut(band)
+            .zip(features.par_chunks_mut(band))
+            .enumerate()
+            .map(|(band, (sums, features))| {
+                if stop.load(Ordering::Relaxed) {
+                    return RayCounts::default();
+                }
+                let first = band as u32 * band_rows;
+                let rows = first..(first + band_rows).min(height);
+                let counts =
+                    self.accumulate_region_with_features(rows.clone(), 0..width, 0..self.spp, sums, features);
+                for out in sums.iter_mut() {
+                    *out /= self.spp as f32;
+                }
+                rows.for_each(&row_done);
+                counts
+            })
+            .sum();
+        (!stop.load(Ordering::Relaxed)).then(|| {
+            let frame = Frame { width, height, pixels, color_space: self.color_space, rays };
+            (frame, FeatureFrame { width, height, samples: self.spp, pixels: features })
+        })
     }
 
     /// Fills `row` (one linear colour per column) with row `y` of the image:
@@ -354,6 +431,30 @@ impl<'s> Renderer<'s> {
             color_space: self.color_space,
             rays,
         })
+    }
+}
+
+/// Where [`Renderer::accumulate_into`] puts each sample's features.
+trait FeatureSink {
+    /// Adds the features `features()` gives to pixel `at` of the region.
+    fn add(&mut self, at: usize, features: impl FnOnce() -> SampleFeatures);
+}
+
+/// No features: nothing is computed.
+struct NoFeatures;
+
+impl FeatureSink for NoFeatures {
+    #[inline(always)]
+    fn add(&mut self, _: usize, _: impl FnOnce() -> SampleFeatures) {}
+}
+
+/// The region's per-pixel feature sums.
+struct Features<'a>(&'a mut [FeatureSums]);
+
+impl FeatureSink for Features<'_> {
+    #[inline]
+    fn add(&mut self, at: usize, features: impl FnOnce() -> SampleFeatures) {
+        self.0[at].add(&features());
     }
 }
 

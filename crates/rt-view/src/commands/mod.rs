@@ -7,4 +7,5 @@ pub mod explain;
 pub mod export;
 pub mod merge;
 pub mod render;
+pub mod render_outputs;
 pub mod render_part;

@@ -9,14 +9,15 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rt_core::Renderer;
-use rt_core::render::adaptive::{AdaptiveFrame, AdaptiveStats, passes};
+use rt_core::render::adaptive::{self, AdaptiveFrame, AdaptiveStats};
 use rt_core::render::settings::AdaptiveSampling;
 use rt_core::render::view_transform::{Display, MAX_EXPOSURE_STOPS, ViewTransform};
 use rt_core::sampling::sampler::SamplerKind;
 use rt_core::scene::effects::{EffectPlan, RayCounts};
 
+use crate::commands::render_outputs::{self, Denoised, Pass};
 use crate::commands::render_part::{self, PartOf};
-use crate::image_out::PendingImage;
+use crate::image_out::{Format, PendingImage};
 use crate::sum_render;
 
 /// `rt-view render`.
@@ -81,6 +82,32 @@ pub struct RenderArgs {
     /// every sample, instead of splitting the samples.
     #[arg(long, requires = "part")]
     pub tiles: bool,
+    /// Feature passes to write as layers of the EXR output (comma-separated):
+    /// albedo and normal of the first non-specular hit (through mirrors and
+    /// clear glass), depth (distance from the camera to the first hit) and
+    /// id (index of the first object hit); see docs/denoising.md. Needs
+    /// `-o OUT.exr`.
+    #[arg(long, value_delimiter = ',', value_name = "albedo,normal,depth,id")]
+    pub passes: Vec<Pass>,
+    /// Every feature pass (`--passes albedo,normal,depth,id`).
+    #[arg(long)]
+    pub aovs: bool,
+    /// Denoise the image with Intel Open Image Denoise, fed the albedo and
+    /// normal passes (`scripts/get_oidn.sh` fetches the library). Without
+    /// the library: a warning saying where it was looked for, and the image
+    /// as rendered. An EXR keeps the noisy colour as `noisy.R/G/B`.
+    #[arg(long)]
+    pub denoise: bool,
+}
+
+impl RenderArgs {
+    /// The passes asked for, each once, in a fixed order.
+    pub fn passes(&self) -> Vec<Pass> {
+        let mut passes = if self.aovs { Pass::ALL.to_vec() } else { self.passes.clone() };
+        passes.sort();
+        passes.dedup();
+        passes
+    }
 }
 
 /// The display settings of `settings`, with the command line's `exposure`
@@ -118,6 +145,20 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         Some(part) => (Some(render_part::PendingPart::create(&args.output, part.split(args.tiles))?), None),
         None => (None, Some(PendingImage::create(&args.output)?)),
     };
+    let passes = args.passes();
+    let with_features = !passes.is_empty() || args.denoise;
+    if with_features && part.is_some() {
+        anyhow::bail!(
+            "{}: feature passes and denoising (--passes, --aovs, --denoise) are not made for parts: merge the parts, then denoise",
+            args.output.display()
+        );
+    }
+    if !passes.is_empty() && output.as_ref().is_some_and(|o| o.format() != Format::Exr) {
+        anyhow::bail!(
+            "{}: feature passes (--passes, --aovs) are written to an .exr output only",
+            args.output.display()
+        );
+    }
     let load_start = Instant::now();
     let loaded = rt_core::load_scene(&args.scene)?;
     let load_time = load_start.elapsed();
@@ -156,33 +197,55 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     // Only fails if a handler is already set (not in this program) or the OS refuses.
     let _ = ctrlc::set_handler(move || handler_stop.store(true, Ordering::Relaxed));
 
-    let passes = settings.adaptive.map_or(1, |a| passes(a.min_samples(), spp).len() as u64);
-    let bar = ProgressBar::new(height as u64 * passes).with_style(
+    let pass_count = settings.adaptive.map_or(1, |a| adaptive::passes(a.min_samples(), spp).len() as u64);
+    let bar = ProgressBar::new(height as u64 * pass_count).with_style(
         ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} rows, {elapsed} (ETA {eta})")
             .expect("valid template")
             .progress_chars("=> "),
     );
     bar.set_message(format!("rendering {width}x{height}, {spp} spp"));
     let start = Instant::now();
-    let (frame, adaptive) = match settings.adaptive {
+    let (frame, adaptive, features) = match settings.adaptive {
+        None if with_features => {
+            let (frame, features) =
+                renderer.render_with_features_until(|_| bar.inc(1), &stop).map(|(f, p)| (f, Some(p))).unzip();
+            (frame, None, features.flatten())
+        }
         None => {
             let sums = sum_render::render_sums(&renderer, 0..height, 0..spp, |_| bar.inc(1), &stop);
             let frame = sums.map(|(sums, rays)| {
                 let pixels = sum_render::means(&sums, spp);
                 rt_core::Frame { width, height, pixels, color_space: settings.color_space, rays }
             });
-            (frame, None)
+            (frame, None, None)
         }
         Some(a) => match renderer.render_adaptive(a, |_| bar.inc(1), &stop) {
-            Some(AdaptiveFrame { frame, stats, .. }) => (Some(frame), Some((a, stats))),
-            None => (None, None),
+            Some(AdaptiveFrame { frame, stats, .. }) => (Some(frame), Some((a, stats)), None),
+            None => (None, None, None),
         },
     };
     let elapsed = start.elapsed();
     bar.finish_and_clear();
-    let frame = frame.ok_or(Interrupted)?;
+    let mut frame = frame.ok_or(Interrupted)?;
 
-    output.write_frame(&frame, &display)?;
+    let mut noisy = None;
+    if args.denoise
+        && let Some(features) = &features
+    {
+        match render_outputs::denoise_frame(&mut frame, features) {
+            Denoised::Done { took, noisy: n } => {
+                eprintln!("denoised with OIDN in {:.3} s", took.as_secs_f64());
+                noisy = Some(n);
+            }
+            Denoised::Skipped(why) => eprintln!("warning: not denoised: {why}"),
+        }
+    }
+    if output.format() == Format::Exr && (noisy.is_some() || !passes.is_empty()) {
+        let channels = render_outputs::exr_channels(&frame, noisy.as_deref(), features.as_ref(), &passes);
+        output.write_channels(width, height, channels)?;
+    } else {
+        output.write_frame(&frame, &display)?;
+    }
     eprintln!(
         "wrote {} ({width}x{height}, {spp} spp) in {:.3} s",
         args.output.display(),

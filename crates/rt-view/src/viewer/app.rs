@@ -208,7 +208,18 @@ impl Viewer {
         let (width, height) = self.image.full_size(scene);
         let toggles = self.image.toggles();
         let (spp, open_ended) = (self.image.spp(), self.image.no_limit());
-        Some(JobSpec { scene: scene.clone(), camera, width, height, spp, open_ended, region: None, toggles })
+        let denoise = self.image.denoise();
+        Some(JobSpec {
+            scene: scene.clone(),
+            camera,
+            width,
+            height,
+            spp,
+            open_ended,
+            region: None,
+            toggles,
+            denoise,
+        })
     }
 
     /// Starts a job of `kind` now.

@@ -37,6 +37,8 @@ pub(super) struct ImageSettings {
     target_spp: u32,
     /// Effects the user has switched off.
     toggles: EffectToggles,
+    /// Denoise each pass of full renders with OIDN (where it is present).
+    denoise: bool,
 }
 
 impl ImageSettings {
@@ -48,6 +50,7 @@ impl ImageSettings {
             no_limit: false,
             target_spp: DEFAULT_TARGET_SPP,
             toggles: EffectToggles::default(),
+            denoise: false,
         }
     }
 
@@ -120,6 +123,31 @@ impl ImageSettings {
         self.toggles
     }
 
+    /// Whether full renders are denoised ([`super::render_job::JobSpec::denoise`]).
+    pub fn denoise(&self) -> bool {
+        self.denoise
+    }
+
+    /// The Denoise checkbox: enabled where `oidn` (whether OIDN loads, or
+    /// why not) is `Ok`, else disabled and unticked with the reason on
+    /// hover. Returns whether it changed.
+    fn denoise_ui(&mut self, ui: &mut egui::Ui, oidn: Result<(), String>) -> bool {
+        let before = self.denoise;
+        match oidn {
+            Ok(()) => {
+                ui.checkbox(&mut self.denoise, "denoise").on_hover_text(
+                    "Denoise each refinement pass with Open Image Denoise, fed the albedo and normal of \
+                     what each pixel sees; Save writes the denoised image shown",
+                );
+            }
+            Err(why) => {
+                self.denoise = false;
+                ui.add_enabled(false, egui::Checkbox::new(&mut false, "denoise")).on_disabled_hover_text(why);
+            }
+        }
+        self.denoise != before
+    }
+
     /// The resolution, sample and effect controls.
     pub fn ui(&mut self, ui: &mut egui::Ui, scene: &LoadedScene) -> Interaction {
         ui.heading("Image");
@@ -154,6 +182,8 @@ impl ImageSettings {
             }
         });
         interaction.changed |= self.effects_ui(ui, &scene.scene.effect_plan(&scene.settings.effects));
+        let oidn = crate::denoise::find_and_load().map(|_| ()).map_err(|e| e.to_string());
+        interaction.changed |= self.denoise_ui(ui, oidn);
         interaction
     }
 
@@ -261,6 +291,55 @@ mod tests {
         assert_eq!(state(&boxes, "global illumination"), (true, true));
         assert!(settings.toggles().global_illumination);
         assert_eq!(state(&boxes, "no limit"), (false, true));
+    }
+
+    /// The Denoise checkbox drawn with `oidn` as the library's state:
+    /// (ticked, enabled, whether clicking it changed the setting).
+    fn denoise_box(
+        settings: &mut ImageSettings,
+        oidn: Result<(), String>,
+        click: bool,
+    ) -> (bool, bool, bool) {
+        let ctx = egui::Context::default();
+        ctx.enable_accesskit();
+        let mut changed = false;
+        let mut run = |input: egui::RawInput, changed: &mut bool| {
+            let mut output = ctx.run_ui(input, |ui| *changed |= settings.denoise_ui(ui, oidn.clone()));
+            output.textures_delta.clear();
+            ctx.tex_manager().write().take_delta().clear();
+            output
+        };
+        let output = run(egui::RawInput::default(), &mut changed);
+        let update = output.platform_output.accesskit_update.expect("accesskit is on");
+        let (id, node) = update.nodes.iter().find(|(_, n)| n.label() == Some("denoise")).expect("the box");
+        let (ticked, enabled) = (node.toggled() == Some(Toggled::True), !node.is_disabled());
+        if click {
+            let request = egui::accesskit::ActionRequest {
+                action: egui::accesskit::Action::Click,
+                target_node: *id,
+                target_tree: egui::accesskit::TreeId::ROOT,
+                data: None,
+            };
+            let input = egui::RawInput {
+                events: vec![egui::Event::AccessKitActionRequest(request)],
+                ..Default::default()
+            };
+            run(input, &mut changed);
+        }
+        (ticked, enabled, changed)
+    }
+
+    #[test]
+    fn the_denoise_box_toggles_where_oidn_loads_and_is_disabled_and_off_where_it_does_not() {
+        let cornell = scene("cornell_box.ron");
+        let mut settings = ImageSettings::new(&cornell);
+        assert_eq!(denoise_box(&mut settings, Ok(()), true), (false, true, true));
+        assert!(settings.denoise());
+        assert_eq!(denoise_box(&mut settings, Ok(()), false), (true, true, false));
+        // Without the library: off, and a click does nothing.
+        let absent = Err("OIDN not found (looked in …); run scripts/get_oidn.sh".to_owned());
+        let (ticked, enabled, _) = denoise_box(&mut settings, absent.clone(), true);
+        assert_eq!((ticked, enabled, settings.denoise()), (false, false, false));
     }
 
     #[test]

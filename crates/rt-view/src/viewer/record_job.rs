@@ -123,6 +123,7 @@ mod tests {
             open_ended: false,
             region: None,
             toggles: Default::default(),
+            denoise: false,
         };
         let key = RecordKey::new(&spec, [32, 24], 0);
         let job = RecordJob::start(&spec, key.clone(), || ());

@@ -32,6 +32,15 @@
 //! a worker), and a long pass (1024 samples of eight rows can take seconds)
 //! can be abandoned between chunks, its band keeping the previous pass.
 //!
+//! With denoising on ([`JobSpec::denoise`], a whole-image job, and OIDN
+//! present: [`crate::denoise`]) the bands also sum the feature passes
+//! ([`Renderer::accumulate_region_with_features`]), and once every band
+//! has finished a pass a thread of its own denoises the whole
+//! image (OIDN fed albedo and normal) and sends all its rows: the first
+//! pass streams in noisy as usual, later passes show only denoised images,
+//! one per pass, so what is on screen (and what Save writes) is the
+//! denoised image of the last whole pass.
+//!
 //! [`RenderJob::stop`] ends a job as it stands: once the first pass is
 //! complete, workers abandon the passes in flight and take no more, each
 //! band keeping the samples of its last whole pass (on screen already), and
@@ -48,10 +57,13 @@ use std::time::{Duration, Instant};
 
 use egui::Color32;
 use rt_core::math::color::Color;
+use rt_core::render::passes::FeatureSums;
 use rt_core::render::{BAND_ROWS, RenderError};
 use rt_core::sampling::sampler::{MAX_OPEN_ENDED_SAMPLES, open_ended_block};
 use rt_core::scene::effects::{EffectToggles, RayCounts};
 use rt_core::{Camera, LoadedScene, RenderSettings, Renderer, SettingsError};
+
+use crate::denoise::{self, AuxImages, Oidn};
 
 use super::eta::{self, BandCost};
 use super::region::Region;
@@ -95,6 +107,9 @@ pub fn open_ended_passes() -> Vec<Range<u32>> {
 struct BandSums {
     samples: u32,
     sums: Vec<Color>,
+    /// The feature passes' sums, pixel by pixel as `sums`, when the job
+    /// denoises (else empty).
+    features: Vec<FeatureSums>,
 }
 
 /// The band function: adds `samples` of the pixels in `columns` of the rows
@@ -121,9 +136,18 @@ pub struct JobSpec {
     pub region: Option<Region>,
     /// The effects the user switched off (the rest of the settings are the file's).
     pub toggles: EffectToggles,
+    /// Denoise each whole pass with OIDN (whole-image jobs only, where
+    /// OIDN is present; see the module's documentation).
+    pub denoise: bool,
 }
 
 impl JobSpec {
+    /// OIDN, where this job denoises: asked for, the whole image, and the
+    /// library present.
+    fn denoiser(&self) -> Option<&'static Oidn> {
+        (self.denoise && self.region.is_none()).then(denoise::find_and_load).and_then(Result::ok)
+    }
+
     fn renderer(&self) -> Result<Renderer<'_>, JobError> {
         let settings = RenderSettings { toggles: self.toggles, ..self.scene.settings }.overridden(
             Some(self.width),
@@ -241,19 +265,24 @@ struct Shared {
     rows_rendered: AtomicU32,
     /// Wall time from start to the last row, once every row is rendered.
     elapsed: Mutex<Option<Duration>>,
+    /// The samples of the last pass denoised and sent (0: none yet),
+    /// locked while a worker denoises and sends, so denoised images go out
+    /// one at a time and in pass order.
+    denoised_through: Mutex<u32>,
     /// "rows A–B: message" of the first band that panicked.
     failure: Mutex<Option<String>>,
 }
 
 impl Shared {
-    fn new(width: u32, height: u32) -> Self {
+    fn new(width: u32, height: u32, features: bool) -> Self {
         let bands = height.div_ceil(BAND_ROWS) as usize;
         Self {
             bands: (0..height)
                 .step_by(BAND_ROWS as usize)
                 .map(|y| {
                     let pixels = (BAND_ROWS.min(height - y) * width) as usize;
-                    Mutex::new(BandSums { samples: 0, sums: vec![Color::ZERO; pixels] })
+                    let features = if features { vec![FeatureSums::default(); pixels] } else { Vec::new() };
+                    Mutex::new(BandSums { samples: 0, sums: vec![Color::ZERO; pixels], features })
                 })
                 .collect(),
             band_done: (0..bands).map(|_| Condvar::new()).collect(),
@@ -265,6 +294,7 @@ impl Shared {
             rays: AtomicU64::new(0),
             rows_rendered: AtomicU32::new(0),
             elapsed: Mutex::new(None),
+            denoised_through: Mutex::new(0),
             failure: Mutex::new(None),
         }
     }
@@ -343,10 +373,18 @@ impl RenderJob {
         if !area.fits(spec.width, spec.height) {
             return Err(JobError::Region(area));
         }
-        let shared = Arc::new(Shared::new(area.width(), area.height()));
+        let shared = Arc::new(Shared::new(area.width(), area.height(), spec.denoiser().is_some()));
         let (tx, rows) = mpsc::channel();
-        let worker =
-            Worker { spec: spec.clone(), generation, shared: shared.clone(), tx, on_row, render_band };
+        let denoiser = spec.denoiser();
+        let worker = Worker {
+            spec: spec.clone(),
+            generation,
+            shared: shared.clone(),
+            tx,
+            on_row: Arc::new(on_row),
+            render_band,
+            denoiser,
+        };
         std::thread::Builder::new()
             .name(format!("render-job-{generation}"))
             .spawn(move || worker.run())
@@ -491,11 +529,16 @@ struct Worker<F> {
     generation: u64,
     shared: Arc<Shared>,
     tx: Sender<Row>,
-    on_row: F,
+    /// Shared with the threads that denoise.
+    on_row: Arc<F>,
     render_band: Box<BandFn>,
+    /// OIDN, where the job denoises ([`JobSpec::denoiser`]): the bands
+    /// then sum features with [`Renderer::accumulate_region_with_features`]
+    /// instead of `render_band`.
+    denoiser: Option<&'static Oidn>,
 }
 
-impl<F: Fn() + Send + Sync> Worker<F> {
+impl<F: Fn() + Send + Sync + 'static> Worker<F> {
     fn run(self) {
         let s = &self.spec;
         let renderer = s.renderer().expect("validated before the thread started");
@@ -520,7 +563,7 @@ impl<F: Fn() + Send + Sync> Worker<F> {
         });
         if !self.shared.cancelled() {
             *self.shared.elapsed.lock().unwrap_or_else(|e| e.into_inner()) = Some(start.elapsed());
-            (self.on_row)();
+            (*self.on_row)();
         }
     }
 
@@ -545,6 +588,7 @@ impl<F: Fn() + Send + Sync> Worker<F> {
         }
         // A copy, so the sums stay readable while the pass renders.
         let mut pass_sums = sums.sums.clone();
+        let mut pass_features = sums.features.clone();
         drop(sums);
         let started = Instant::now();
         let mut counts = RayCounts::default();
@@ -556,7 +600,17 @@ impl<F: Fn() + Send + Sync> Worker<F> {
             let chunk = k..(k + CHUNK_SAMPLES).min(samples.end);
             k = chunk.end;
             let rendered = catch_unwind(AssertUnwindSafe(|| {
-                (self.render_band)(renderer, rows.clone(), area.columns.clone(), chunk, &mut pass_sums)
+                let columns = area.columns.clone();
+                match self.denoiser {
+                    Some(_) => renderer.accumulate_region_with_features(
+                        rows.clone(),
+                        columns,
+                        chunk,
+                        &mut pass_sums,
+                        &mut pass_features,
+                    ),
+                    None => (self.render_band)(renderer, rows.clone(), columns, chunk, &mut pass_sums),
+                }
             }));
             match rendered {
                 Ok(c) => counts += c,
@@ -566,7 +620,7 @@ impl<F: Fn() + Send + Sync> Worker<F> {
                     failure
                         .get_or_insert_with(|| format!("rows {first}–{last}: {}", panic_message(&*payload)));
                     self.shared.cancel.store(true, Ordering::Relaxed);
-                    (self.on_row)(); // Wake the UI so it shows the failure.
+                    (*self.on_row)(); // Wake the UI so it shows the failure.
                     return false;
                 }
             }
@@ -574,6 +628,7 @@ impl<F: Fn() + Send + Sync> Worker<F> {
         let nanos = started.elapsed().as_nanos() as u64;
         let mut sums = lock();
         sums.sums = pass_sums;
+        sums.features = pass_features;
         sums.samples = samples.end;
         done.notify_all();
         let per_sample = nanos as f64 / samples.len().max(1) as f64;
@@ -602,17 +657,101 @@ impl<F: Fn() + Send + Sync> Worker<F> {
         // next pass waits for the lock, so cannot send its rows first. A
         // band's rows arrive in pass order, and the last applied is the final.
         let sent = finished.len();
+        // Denoising, later passes show the denoised image only.
+        let show = self.denoiser.is_none() || samples.start == 0;
         for row in finished {
             self.shared.rows_rendered.fetch_add(1, Ordering::Relaxed);
-            if self.shared.cancelled() || self.tx.send(row).is_err() {
+            if self.shared.cancelled() || (show && self.tx.send(row).is_err()) {
                 self.shared.cancel.store(true, Ordering::Relaxed);
                 return false;
             }
         }
         drop(sums);
         for _ in 0..sent {
-            (self.on_row)();
+            (*self.on_row)();
         }
+        match self.denoiser {
+            Some(oidn) if self.pass_is_whole(samples.end) => {
+                self.send_denoised(oidn, renderer, samples.end, samples.start == 0)
+            }
+            _ => true,
+        }
+    }
+
+    /// Whether every band has `samples` now.
+    fn pass_is_whole(&self, samples: u32) -> bool {
+        self.shared.band_samples.iter().all(|b| b.load(Ordering::Relaxed) >= samples)
+    }
+
+    /// Denoises the image as the bands hold it (each band's mean over its
+    /// own samples so far: at least those of the pass just whole) and sends
+    /// every row of it, unless a denoising of this pass (but the first) or
+    /// a later one went first. On a thread of its own: OIDN takes a while
+    /// and uses every core, and a rayon worker blocked in it would hold up
+    /// the next job's start (a camera move). A failure of OIDN is the job's
+    /// failure.
+    fn send_denoised(
+        &self,
+        oidn: &'static Oidn,
+        renderer: &Renderer,
+        samples: u32,
+        first_pass: bool,
+    ) -> bool {
+        let (area, generation, color_space) = (self.spec.area(), self.generation, renderer.color_space());
+        let (shared, tx, on_row) = (self.shared.clone(), self.tx.clone(), self.on_row.clone());
+        let denoise = move || {
+            let mut through = shared.denoised_through.lock().unwrap_or_else(|e| e.into_inner());
+            // The first pass's noisy rows of a band may go out after another
+            // worker sent that pass denoised: then it is denoised again.
+            if *through > samples || (*through == samples && !first_pass) || shared.cancelled() {
+                return;
+            }
+            *through = samples;
+            let (width, height) = (area.width(), area.height());
+            let pixels = width as usize * height as usize;
+            let (mut color, mut albedo, mut normal) =
+                (Vec::with_capacity(pixels), Vec::with_capacity(pixels), Vec::with_capacity(pixels));
+            for cell in &shared.bands {
+                let band = cell.lock().unwrap_or_else(|e| e.into_inner());
+                let n = band.samples.max(1);
+                color.extend(band.sums.iter().map(|&c| c / n as f32));
+                for f in &band.features {
+                    let (a, m) = f.means(n);
+                    albedo.push(a);
+                    normal.push(m);
+                }
+            }
+            let aux = AuxImages { albedo: Some(&albedo), normal: Some(&normal) };
+            let clean = match oidn.denoise(width, height, &color, aux) {
+                Ok(clean) => clean,
+                Err(e) => {
+                    let mut failure = shared.failure.lock().unwrap_or_else(|e| e.into_inner());
+                    failure.get_or_insert_with(|| format!("denoising: {e}"));
+                    shared.cancel.store(true, Ordering::Relaxed);
+                    on_row();
+                    return;
+                }
+            };
+            for (y, row) in area.rows.clone().zip(clean.chunks_exact(width as usize)) {
+                let linear: Vec<[f32; 3]> = row.iter().map(|c| c.to_array()).collect();
+                let pixels = row
+                    .iter()
+                    .map(|&c| {
+                        let [r, g, b] = color_space.encode(c);
+                        Color32::from_rgb(r, g, b)
+                    })
+                    .collect();
+                let row = Row { generation, y, samples, pixels, linear };
+                if shared.cancelled() || tx.send(row).is_err() {
+                    return;
+                }
+            }
+            on_row();
+        };
+        std::thread::Builder::new()
+            .name(format!("denoise-{generation}"))
+            .spawn(denoise)
+            .expect("the OS can start a thread");
         true
     }
 }
@@ -640,6 +779,7 @@ mod tests {
             open_ended: false,
             region: None,
             toggles: EffectToggles::default(),
+            denoise: false,
         }
     }
 
@@ -714,6 +854,52 @@ mod tests {
         let p = job.progress();
         assert_eq!((p.pass, p.passes, p.samples, p.rows, p.height, p.pass_eta), (2, 3, 4..9, 27, 27, None));
         assert_eq!(job.rays(), 48 * 27 * 9);
+    }
+
+    #[test]
+    fn a_denoising_job_shows_the_first_pass_noisy_then_each_whole_pass_denoised_ending_as_the_denoised_render()
+     {
+        let mut s = spec(48, 27);
+        (s.spp, s.denoise) = (9, true);
+        let renderer = Renderer::new(
+            &s.scene.scene,
+            s.camera,
+            &s.scene.settings.overridden(Some(48), Some(27), Some(9)).unwrap(),
+        )
+        .unwrap();
+        let (frame, features) = renderer.render_with_features_until(|_| {}, &AtomicBool::new(false)).unwrap();
+        let job = RenderJob::start(s, 1, || {}).unwrap();
+        let mut image = vec![[0.0; 3]; 48 * 27];
+        let mut seen = vec![Vec::new(); 27];
+        while let Some(row) = job.next_row_blocking() {
+            let y = row.y as usize;
+            seen[y].push(row.samples);
+            image[y * 48..(y + 1) * 48].copy_from_slice(&row.linear);
+        }
+        assert_eq!(job.failure(), None);
+        let linear = |pixels: &[Color]| pixels.iter().map(|c| c.to_array()).collect::<Vec<_>>();
+        match denoise::find_and_load() {
+            Ok(oidn) => {
+                // Pass 1 noisy, then denoised images of whole passes in
+                // order (a pass whose wholeness a later one overtook is
+                // skipped), the last one's at the end.
+                for s in &seen {
+                    assert!(
+                        s[0] == 1 && s.windows(2).all(|w| w[0] <= w[1]) && s.last() == Some(&9),
+                        "{seen:?}"
+                    );
+                }
+                let aux = AuxImages { albedo: Some(&features.albedo()), normal: Some(&features.normal()) };
+                let clean = oidn.denoise(48, 27, &frame.pixels, aux).unwrap();
+                assert!(image == linear(&clean), "the last image is not the denoised render");
+            }
+            Err(e) => {
+                // No OIDN: the job renders as without denoising.
+                eprintln!("{e}: checked the job renders on without it");
+                assert!(seen.iter().all(|s| s == &[1, 4, 9]), "{seen:?}");
+                assert!(image == linear(&frame.pixels));
+            }
+        }
     }
 
     #[test]

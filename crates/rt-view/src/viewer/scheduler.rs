@@ -129,6 +129,8 @@ impl Scheduler {
             spec.width = (spec.width / PREVIEW_DIVISOR).max(1);
             spec.height = (spec.height / PREVIEW_DIVISOR).max(1);
             spec.spp = 1;
+            // Dragging stays fast: the full render after it is denoised.
+            spec.denoise = false;
         }
         if kind == Kind::NewScene {
             self.refine_pending = false;
@@ -470,6 +472,7 @@ mod tests {
             open_ended: false,
             region: None,
             toggles: Default::default(),
+            denoise: false,
         }
     }
 
