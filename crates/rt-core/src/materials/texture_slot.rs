@@ -26,6 +26,7 @@
 //! slot's set when given.
 
 use crate::materials::texture::Wrap;
+use crate::math::real::Real;
 
 /// How the texels of one image are decoded to the numbers a slot uses.
 ///
@@ -132,9 +133,9 @@ impl UvTransform {
     }
 
     /// `T·R·S·(u, v, 1)`.
-    pub fn apply(&self, [u, v]: [f32; 2]) -> [f32; 2] {
-        let [r0, r1] = self.rows;
-        [r0[0] * u + r0[1] * v + r0[2], r1[0] * u + r1[1] * v + r1[2]]
+    pub fn apply(&self, (u, v): (Real, Real)) -> (Real, Real) {
+        let [r0, r1] = self.rows.map(|r| r.map(Real::from));
+        (r0[0] * u + r0[1] * v + r0[2], r1[0] * u + r1[1] * v + r1[2])
     }
 
     /// How much the transform scales areas, `|det|` of its linear part
@@ -185,12 +186,10 @@ impl TextureSlot {
         }
     }
 
-    /// The coordinates this slot looks up, from the surface's sets `uvs`
-    /// (`uvs[n]` is `TEXCOORD_n`): its set, transformed. `None` when the
-    /// surface has no such set.
-    pub fn uv(&self, uvs: &[Option<[f32; 2]>]) -> Option<[f32; 2]> {
-        let uv = (*uvs.get(self.tex_coord as usize)?)?;
-        Some(if self.transform.is_identity() { uv } else { self.transform.apply(uv) })
+    /// The coordinates this slot looks up, given the surface's coordinates
+    /// `uv` in its set ([`TextureSlot::tex_coord`]): transformed.
+    pub fn transformed(&self, uv: (Real, Real)) -> (Real, Real) {
+        if self.transform.is_identity() { uv } else { self.transform.apply(uv) }
     }
 }
 
@@ -198,8 +197,8 @@ impl TextureSlot {
 mod tests {
     use super::*;
 
-    fn close(a: [f32; 2], b: [f32; 2]) -> bool {
-        (a[0] - b[0]).abs() < 1e-6 && (a[1] - b[1]).abs() < 1e-6
+    fn close(a: (Real, Real), b: (Real, Real)) -> bool {
+        (a.0 - b.0).abs() < 1e-6 && (a.1 - b.1).abs() < 1e-6
     }
 
     #[test]
@@ -208,33 +207,26 @@ mod tests {
         // u' = ½·v, v' = 1 − ½·u.
         let t = UvTransform::new([0.0, 1.0], std::f32::consts::FRAC_PI_2, [0.5, 0.5]).unwrap();
         for (u, v) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.3, 0.7)] {
-            let got = t.apply([u, v]);
-            assert!(close(got, [0.5 * v, 1.0 - 0.5 * u]), "({u}, {v}) → {got:?}");
+            let got = t.apply((u, v));
+            assert!(close(got, (0.5 * v, 1.0 - 0.5 * u)), "({u}, {v}) → {got:?}");
         }
         assert!((t.area_scale() - 0.25).abs() < 1e-6);
         // Offset alone translates; scale alone scales, about the origin.
         let offset = UvTransform::new([0.25, -0.5], 0.0, [1.0, 1.0]).unwrap();
-        assert!(close(offset.apply([0.5, 0.5]), [0.75, 0.0]));
+        assert!(close(offset.apply((0.5, 0.5)), (0.75, 0.0)));
         let scale = UvTransform::new([0.0, 0.0], 0.0, [2.0, 3.0]).unwrap();
-        assert!(close(scale.apply([0.5, 0.5]), [1.0, 1.5]));
+        assert!(close(scale.apply((0.5, 0.5)), (1.0, 1.5)));
         assert!(UvTransform::new([0.0, 0.0], 0.0, [1.0, 1.0]).unwrap().is_identity());
         assert_eq!(UvTransform::new([f32::NAN, 0.0], 0.0, [1.0, 1.0]), None);
         assert_eq!(UvTransform::new([0.0, 0.0], f32::INFINITY, [1.0, 1.0]), None);
     }
 
     #[test]
-    fn a_slot_reads_its_own_coordinate_set_and_nothing_when_the_surface_lacks_it() {
-        let uvs = [Some([0.1, 0.2]), Some([0.7, 0.8])];
+    fn an_untransformed_slot_reads_its_coordinates_as_they_are() {
         let mut slot = TextureSlot::new(0);
-        assert_eq!(slot.uv(&uvs), Some([0.1, 0.2]));
-        slot.tex_coord = 1;
-        assert_eq!(slot.uv(&uvs), Some([0.7, 0.8]));
-        assert_eq!(slot.uv(&[Some([0.1, 0.2]), None]), None);
-        slot.tex_coord = 2;
-        assert_eq!(slot.uv(&uvs), None);
-        slot.tex_coord = 0;
+        assert_eq!(slot.transformed((0.1, 0.2)), (0.1, 0.2));
         slot.transform = UvTransform::new([1.0, 0.0], 0.0, [2.0, 2.0]).unwrap();
-        assert!(close(slot.uv(&uvs).unwrap(), [1.2, 0.4]));
+        assert!(close(slot.transformed((0.1, 0.2)), (1.2, 0.4)));
     }
 
     #[test]
