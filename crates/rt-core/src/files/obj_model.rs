@@ -11,6 +11,7 @@ use crate::files::model::{Model, ModelError};
 use crate::files::mtl::from_mtl;
 use crate::geometry::mesh::Mesh;
 use crate::materials::texture::Texture;
+use crate::materials::texture_slot::TextureSlot;
 use crate::math::real::{Real, Vec3};
 
 /// Reads an OBJ file split by material ([`Mesh::load_obj_parts`]) with its
@@ -82,7 +83,7 @@ pub fn load(path: &Path, scale: Real, translate: Vec3) -> Result<Model, ModelErr
                     file.display()
                 ));
             }
-            m.texture = texture;
+            m.base_color_texture = texture.map(TextureSlot::new);
         }
         index_of.insert(i, materials.len());
         parts.push((mesh, Some(materials.len())));
@@ -137,7 +138,7 @@ mod tests {
             model.parts.iter().map(|(m, i)| (m.triangle_count(), *i)).collect();
         assert_eq!(parts, [(2, Some(0)), (1, Some(1))]);
         assert_eq!(model.materials[0].1.emission, Color::new(0.0, 0.0, 2.0));
-        assert_eq!(model.materials[1].1.texture, Some(0));
+        assert_eq!(model.materials[1].1.base_color_texture, Some(TextureSlot::new(0)));
         assert_eq!(model.textures.len(), 1);
         let orange = model.textures[0].sample(0.5, 0.5);
         assert!(
@@ -162,7 +163,7 @@ mod tests {
             ("m.mtl", b"newmtl red\nnewmtl tex\nKd 0.5 0.5 0.5\nmap_Kd gone.png\n"),
         ]);
         let model = load(&dir.path().join("m.obj"), 1.0, Vec3::ZERO).unwrap();
-        assert_eq!(model.materials[1].1.texture, None);
+        assert_eq!(model.materials[1].1.base_color_texture, None);
         assert_eq!(model.materials[1].1.color, Color::splat(0.5));
         assert!(
             model.warnings.iter().any(|w| w.contains("gone.png") && w.contains("Kd colour")),

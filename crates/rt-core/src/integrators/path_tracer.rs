@@ -864,7 +864,10 @@ mod tests {
                     ior: 0.5 + 3.0 * ior,
                     emission: if e > 0.7 { Color::splat(e * 5.0) } else { Color::ZERO },
                     subsurface: None,
-                    texture: textured[i].then_some(0),
+                    base_color_texture: textured[i].then_some(crate::materials::texture_slot::TextureSlot::new(0)),
+                    metallic_roughness_texture: None,
+                    emissive_texture: None,
+                    occlusion_texture: None,
                     // Half the materials physically based, from the same numbers.
                     physical: (ks > 0.5).then_some(crate::materials::principled::Principled {
                         metallic: kd,

@@ -27,6 +27,8 @@ use crate::lights::light_sampler::{LightSampler, Source};
 use crate::lights::light_source::LightSource;
 use crate::materials::material::Material;
 use crate::materials::texture::Texture;
+use crate::materials::texture_lod::Footprint;
+use crate::materials::texture_slot::TextureSlot;
 use crate::math::color::Color;
 use crate::math::ray::{Interval, Ray, rescale_t};
 use crate::math::real::{Real, Vec3, cast_min_t, scale_pow2};
@@ -206,7 +208,7 @@ impl SceneBuilder {
         self
     }
 
-    /// Adds a texture; the first is texture 0 ([`Material::texture`]).
+    /// Adds a texture; the first is texture 0 ([`TextureSlot::texture`]).
     pub fn texture(mut self, texture: Arc<Texture>) -> Self {
         self.textures.push(texture);
         self
@@ -231,11 +233,15 @@ impl SceneBuilder {
             if material_names[..i].contains(name) {
                 return Err(SceneBuildError::DuplicateMaterial(name.clone()));
             }
-            if let Some(texture) = materials[i].texture
-                && texture as usize >= self.textures.len()
+            if let Some(slot) =
+                materials[i].texture_slots().find(|s| s.texture as usize >= self.textures.len())
             {
                 let count = self.textures.len();
-                return Err(SceneBuildError::UnknownTexture { material: name.clone(), texture, count });
+                return Err(SceneBuildError::UnknownTexture {
+                    material: name.clone(),
+                    texture: slot.texture,
+                    count,
+                });
             }
         }
         let objects = self
@@ -452,27 +458,69 @@ impl Scene {
     /// material's colour, textured where the surface has texture coordinates.
     pub fn hit_color(&self, hit: &Hit, ray: &Ray) -> Color {
         let m = self.object_material(hit.object);
-        if m.texture.is_none() {
+        if m.base_color_texture.is_none() {
             m.color
         } else {
             self.material_at(hit.object, hit.primitive, ray.at(hit.t)).color
         }
     }
 
-    /// The material of `object` at the point `p` of its `primitive`: the
-    /// object's material, with its texture's colour multiplying `color`
-    /// where the surface has texture coordinates ([`crate::materials::texture`]).
-    /// Borrowed when there is nothing to change, so an untextured scene
-    /// pays nothing for textures.
+    /// The material of `object` at the point `p` of its `primitive`, its
+    /// textures read at their full size ([`Scene::material_at_footprint`]
+    /// with a point footprint).
     pub fn material_at(&self, object: usize, primitive: usize, p: Vec3) -> Cow<'_, Material> {
+        self.material_at_footprint(object, primitive, p, Footprint::POINT)
+    }
+
+    /// The material of `object` at the point `p` of its `primitive`, seen
+    /// by a ray whose footprint there is `footprint`: the object's material
+    /// with each texture slot read where the surface has the slot's
+    /// texture coordinates ([`crate::materials::texture_slot`]), at the
+    /// mip-map level the footprint asks for ([`crate::materials::texture_lod`]):
+    /// the base colour multiplies `color`, the metallic-roughness texture's
+    /// blue and green channels the physically based `metallic` and
+    /// `roughness`, the emissive texture `emission`. Borrowed when there is
+    /// nothing to change, so an untextured scene pays nothing for textures.
+    pub fn material_at_footprint(
+        &self,
+        object: usize,
+        primitive: usize,
+        p: Vec3,
+        footprint: Footprint,
+    ) -> Cow<'_, Material> {
         let o = &self.objects[object];
         let m = &self.materials[o.material];
-        match (m.texture, m.texture.and_then(|_| o.primitive.uv(primitive, p))) {
-            (Some(t), Some((u, v))) => {
-                Cow::Owned(Material { color: m.color * self.textures[t as usize].sample(u, v), ..*m })
-            }
-            _ => Cow::Borrowed(m),
+        if !m.is_textured() {
+            return Cow::Borrowed(m);
         }
+        let Primitive::Mesh(mesh) = &o.primitive else { return Cow::Borrowed(m) };
+        let read = |slot: &Option<TextureSlot>| {
+            let slot = slot.as_ref()?;
+            let uv = mesh.uv_of_set(primitive, slot.tex_coord, p)?;
+            let texture = &self.textures[slot.texture as usize];
+            let (w, h) = texture.size();
+            let area = mesh.uv_per_world_area(primitive, slot.tex_coord) * slot.transform.area_scale();
+            let lod = footprint.level_of_detail(w as f32 * h as f32, area);
+            let (u, v) = slot.transformed(uv);
+            Some(texture.lookup(u, v, lod, &slot.sampler))
+        };
+        let (base, metal_rough, emissive) =
+            (read(&m.base_color_texture), read(&m.metallic_roughness_texture), read(&m.emissive_texture));
+        if base.is_none() && metal_rough.is_none() && emissive.is_none() {
+            return Cow::Borrowed(m);
+        }
+        let mut out = *m;
+        if let Some(c) = base {
+            out.color *= c;
+        }
+        if let (Some(c), Some(physical)) = (metal_rough, &mut out.physical) {
+            physical.metallic *= c.z;
+            physical.roughness *= c.y;
+        }
+        if let Some(c) = emissive {
+            out.emission *= c;
+        }
+        Cow::Owned(out)
     }
 
     /// How many textures the scene holds, and their bytes.
@@ -480,7 +528,7 @@ impl Scene {
         (self.textures.len(), self.textures.iter().map(|t| t.memory_bytes()).sum())
     }
 
-    /// Texture `index` ([`Material::texture`]).
+    /// Texture `index` ([`TextureSlot::texture`]).
     pub fn texture(&self, index: usize) -> &Texture {
         &self.textures[index]
     }

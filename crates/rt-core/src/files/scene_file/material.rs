@@ -233,7 +233,10 @@ impl TryFrom<MaterialFields> for MaterialDesc {
                     ior,
                     emission,
                     subsurface,
-                    texture: None,
+                    base_color_texture: None,
+                    metallic_roughness_texture: None,
+                    emissive_texture: None,
+                    occlusion_texture: None,
                     physical: None,
                 };
                 if m.reflectivity + m.transparency > 1.0 {
