@@ -38,6 +38,7 @@ use crate::integrators::interaction::SurfaceInteraction;
 use crate::integrators::random_walk::{RandomWalk, WalkEnd};
 use crate::lights::light_sampler::{LightSampler, Source};
 use crate::materials::bsdf::{self, Bsdf};
+use crate::materials::texture_lod::RayCone;
 use crate::math::color::Color;
 use crate::math::ray::{Interval, Ray};
 use crate::math::real::{Real, Vec3, normalize_robust, to_f32};
@@ -57,6 +58,8 @@ pub struct PathTracer<'s> {
     /// Whether translucent objects get random walks (else their materials
     /// act as plain surfaces).
     subsurface: bool,
+    /// A camera ray's cone, for texture level of detail.
+    cone: RayCone,
 }
 
 /// What the path knows about the scattering that led to the current ray.
@@ -73,7 +76,15 @@ impl<'s> PathTracer<'s> {
     /// A path tracer for `scene` with `settings`; `subsurface` says whether
     /// translucent objects get random walks ([`crate::EffectPlan::subsurface`]).
     pub fn new(scene: &'s Scene, settings: GlobalIllumination, subsurface: bool) -> Self {
-        Self { scene, settings, subsurface }
+        Self { scene, settings, subsurface, cone: RayCone::POINT }
+    }
+
+    /// This path tracer with camera rays of cone `cone` (one pixel's,
+    /// [`RayCone::of_pixel`]): textures are read at the level of detail
+    /// its footprint asks for, along the whole path
+    /// ([`crate::materials::texture_lod`]).
+    pub fn with_cone(self, cone: RayCone) -> Self {
+        Self { cone, ..self }
     }
 
     /// The radiance arriving along a camera ray already cast: `hit` is what
@@ -103,6 +114,8 @@ impl<'s> PathTracer<'s> {
         let mut beta = Color::ONE;
         let mut previous = Previous::Specular;
         let mut bounce = 0;
+        // The path's length so far: its ray cone's width grows with it.
+        let mut travelled: Real = 0.0;
         while let Some(d) = normalize_robust(ray.dir) {
             let Some(h) = hit else {
                 // 1. The environment found by this ray.
@@ -113,7 +126,8 @@ impl<'s> PathTracer<'s> {
                 radiance += beta * scene.environment().radiance(d) * to_f32(w);
                 break;
             };
-            let si = SurfaceInteraction::along(scene, &ray, d, &h);
+            travelled += h.t * ray.dir.length();
+            let si = SurfaceInteraction::along_cone(scene, &ray, d, &h, self.cone.width_at(travelled));
             let (sp, wo) = (si.point, si.wo);
             // A translucent object's surface is its dielectric boundary; the
             // medium inside does the rest (step 6).

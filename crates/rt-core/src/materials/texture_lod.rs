@@ -64,22 +64,30 @@ impl RayCone {
     }
 }
 
-/// A ray's footprint on a surface: the length `w/|cos θ|` the cone covers
-/// there (world units).
+/// A ray's footprint on a surface: a cone `width` wide meeting it at an
+/// angle θ covers a length `w/|cos θ|` there (world units), worked out
+/// only when a texture is read.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Footprint {
-    /// `w/|cos θ|`, with `|cos θ|` held at least [`FOOTPRINT_MIN_COS`].
-    pub length: f32,
+    /// The cone's width `w` at the surface.
+    pub width: f32,
+    /// `cos θ` between the ray and the geometric normal, either sign.
+    pub cos: Real,
 }
 
 impl Footprint {
     /// No footprint: lookups read the full-size image.
-    pub const POINT: Self = Self { length: 0.0 };
+    pub const POINT: Self = Self { width: 0.0, cos: 1.0 };
 
     /// The footprint of a cone `width` wide meeting a surface at `cos`
     /// (the cosine between the ray and the geometric normal, either sign).
     pub fn new(width: f32, cos: Real) -> Self {
-        Self { length: width / to_f32(cos.abs().max(FOOTPRINT_MIN_COS)) }
+        Self { width, cos }
+    }
+
+    /// `w/|cos θ|`, with `|cos θ|` held at least [`FOOTPRINT_MIN_COS`].
+    pub fn length(&self) -> f32 {
+        self.width / to_f32(self.cos.abs().max(FOOTPRINT_MIN_COS))
     }
 
     /// The level of detail λ of a texture of `texels` (W·H) texels for this
@@ -87,11 +95,11 @@ impl Footprint {
     /// `uv_per_world_area` (see the module documentation). −∞ for a point
     /// footprint or a triangle without texture area: the full-size image.
     pub fn level_of_detail(&self, texels: f32, uv_per_world_area: f32) -> f32 {
-        let density = texels * uv_per_world_area;
-        if !(self.length > 0.0 && density > 0.0) {
+        let (density, length) = (texels * uv_per_world_area, self.length());
+        if !(length > 0.0 && density > 0.0) {
             return f32::NEG_INFINITY;
         }
-        0.5 * density.log2() + self.length.log2()
+        0.5 * density.log2() + length.log2()
     }
 }
 
@@ -132,5 +140,90 @@ mod tests {
         assert!(at(1.0, 1.0) > 0.0);
         assert_eq!(Footprint::new(0.01, 0.0).level_of_detail(1.0, 0.0), f32::NEG_INFINITY);
         assert!(at(1.0 / 256.0, 0.0).is_finite());
+    }
+
+    /// A checkerboard floor running to the horizon under a camera 1 unit
+    /// above it, looking level: every far row sees many checks per pixel.
+    /// `mip` is the texture's mip-map filter.
+    fn horizon_scene(mip: Option<crate::materials::texture_slot::Filter>) -> crate::scene::Scene {
+        use crate::geometry::mesh::Mesh;
+        use crate::geometry::primitive::Primitive;
+        use crate::materials::material::Material;
+        use crate::materials::texture::Texture;
+        use crate::materials::texture_slot::{Filter, Sampler, TextureSlot};
+        use crate::math::color::Color;
+        let (w, d) = (1000.0, 2000.0);
+        let floor = Mesh::new(
+            vec![
+                Vec3::new(-w, 0.0, 0.0),
+                Vec3::new(w, 0.0, 0.0),
+                Vec3::new(w, 0.0, d),
+                Vec3::new(-w, 0.0, d),
+            ],
+            vec![[0, 2, 1], [0, 3, 2]],
+        )
+        .unwrap()
+        .with_vertex_attributes(
+            vec![],
+            vec![[0.0, 0.0], [2.0 * w as f32, 0.0], [2.0 * w as f32, d as f32], [0.0, d as f32]],
+        )
+        .unwrap();
+        let checker = Texture::new(2, 2, vec![Color::ZERO, Color::ONE, Color::ONE, Color::ZERO]).unwrap();
+        let slot = TextureSlot {
+            sampler: Sampler { mag: Filter::Nearest, mip, ..Sampler::DEFAULT },
+            ..TextureSlot::new(0)
+        };
+        let material = Material { base_color_texture: Some(slot), ..Material::flat(Color::ONE) };
+        crate::scene::SceneBuilder::new()
+            .texture(std::sync::Arc::new(checker))
+            .material("checker", material)
+            .object(Primitive::Mesh(floor), "checker")
+            .build()
+            .unwrap()
+    }
+
+    #[test]
+    fn a_checkerboard_to_the_horizon_at_one_sample_matches_a_supersampled_reference_without_moire() {
+        use crate::materials::texture_slot::Filter;
+        use crate::scene::effects::Effects;
+        use crate::testing::test_support::renderer_of;
+        let camera = Camera::new(
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(0.0, 1.0, 10.0),
+            Vec3::Y,
+            40.0,
+            0.1,
+            Projection::Perspective,
+        )
+        .unwrap();
+        let (w, h) = (64, 48);
+        let render = |mip, spp| {
+            let scene = horizon_scene(mip);
+            let frame = renderer_of(&scene, camera, Effects::default(), (w, h, spp)).render(|_| {});
+            frame.pixels.iter().map(|c| f64::from(c.x)).collect::<Vec<_>>()
+        };
+        // The reference: the full-size texture, 256 samples a pixel.
+        let reference = render(None, 256);
+        let mipmapped = render(Some(Filter::Linear), 1);
+        let aliased = render(None, 1);
+        // Far rows: just below the horizon (row 24), 10 to 60 units away.
+        let rows = 25..31;
+        let row_mean =
+            |img: &[f64], y: u32| (0..w).map(|x| img[(y * w + x) as usize]).sum::<f64>() / f64::from(w);
+        let pixel_error = |img: &[f64]| {
+            let n = rows.len() as f64 * f64::from(w);
+            rows.clone()
+                .flat_map(|y| (0..w).map(move |x| (y * w + x) as usize))
+                .map(|i| (img[i] - reference[i]).abs())
+                .sum::<f64>()
+                / n
+        };
+        for y in rows.clone() {
+            let (r, m) = (row_mean(&reference, y), row_mean(&mipmapped, y));
+            assert!((r - m).abs() < 0.05, "row {y}: mip-mapped mean {m:.3}, reference {r:.3}");
+        }
+        let (with, without) = (pixel_error(&mipmapped), pixel_error(&aliased));
+        assert!(with < 0.08, "mip-mapped pixels differ from the reference by {with:.3} on average");
+        assert!(without > 3.0 * with, "without mip-maps {without:.3}, with {with:.3}");
     }
 }

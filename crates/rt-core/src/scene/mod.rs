@@ -31,7 +31,7 @@ use crate::materials::texture_lod::Footprint;
 use crate::materials::texture_slot::TextureSlot;
 use crate::math::color::Color;
 use crate::math::ray::{Interval, Ray, rescale_t};
-use crate::math::real::{Real, Vec3, cast_min_t, scale_pow2};
+use crate::math::real::{Real, Vec3, cast_min_t, normalize_robust, scale_pow2};
 use crate::scene::effects::{EffectPlan, Effects};
 
 /// A world ready to render, validated and read-only: every part is read
@@ -454,14 +454,17 @@ impl Scene {
         }
     }
 
-    /// The colour `hit` (found along `ray`) shows without lights: its
+    /// The colour `hit` (found along `ray`, whose cone is `cone_width` wide
+    /// there: [`crate::materials::texture_lod`]) shows without lights: its
     /// material's colour, textured where the surface has texture coordinates.
-    pub fn hit_color(&self, hit: &Hit, ray: &Ray) -> Color {
+    pub fn hit_color(&self, hit: &Hit, ray: &Ray, cone_width: f32) -> Color {
         let m = self.object_material(hit.object);
         if m.base_color_texture.is_none() {
             m.color
         } else {
-            self.material_at(hit.object, hit.primitive, ray.at(hit.t)).color
+            let cos = normalize_robust(ray.dir).map_or(1.0, |d| d.dot(hit.normal));
+            let footprint = Footprint::new(cone_width, cos);
+            self.material_at_footprint(hit.object, hit.primitive, ray.at(hit.t), footprint).color
         }
     }
 
