@@ -254,6 +254,29 @@ impl Texture {
         Self::new(width, height, texels)
     }
 
+    /// One metallic-roughness texture in glTF's layout (green: roughness,
+    /// blue: metallic, red: 1) from separate grey ones (their red channel),
+    /// as MTL's `map_Pr` and `map_Pm` give them: as large as the larger of
+    /// the two, the other read bilinearly at its texel centres; a missing
+    /// one reads 1 (its factor unchanged). `None` when both are missing.
+    pub fn metallic_roughness(roughness: Option<&Texture>, metallic: Option<&Texture>) -> Option<Self> {
+        let (w, h) = match (roughness, metallic) {
+            (None, None) => return None,
+            (Some(t), None) | (None, Some(t)) => t.size(),
+            (Some(a), Some(b)) => (a.size().0.max(b.size().0), a.size().1.max(b.size().1)),
+        };
+        let at = |t: Option<&Texture>, u: Real, v: Real| t.map_or(1.0, |t| t.sample(u, v).x);
+        let texels = (0..h)
+            .flat_map(|j| (0..w).map(move |i| (i, j)))
+            .map(|(i, j)| {
+                let (u, v) = ((f64::from(i) + 0.5) / f64::from(w), (f64::from(j) + 0.5) / f64::from(h));
+                let (u, v) = (u as Real, v as Real);
+                Color::new(1.0, at(roughness, u, v), at(metallic, u, v))
+            })
+            .collect();
+        Self::new(w, h, texels)
+    }
+
     /// The texture with wrap modes `[u, v]`.
     pub fn with_wrap(self, wrap: [Wrap; 2]) -> Self {
         Self { wrap, ..self }
