@@ -1555,31 +1555,7 @@ mod tests {
 
     #[test]
     fn every_texture_slot_is_read_with_its_encoding_set_transform_and_sampler_and_images_decode_once() {
-        let bytes = triangle_glb(|doc, bin| {
-            blender_like(doc, bin);
-            // A second coordinate set, and two textures of one image with
-            // different samplers.
-            let offset = bin.len();
-            bin.extend([0.0f32, 0.0, 0.5, 0.0, 0.0, 0.5].iter().flat_map(|f| f.to_le_bytes()));
-            doc["buffers"][0]["byteLength"] = json!(bin.len());
-            doc["bufferViews"]
-                .as_array_mut()
-                .unwrap()
-                .push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": 24 }));
-            doc["accessors"]
-                .as_array_mut()
-                .unwrap()
-                .push(json!({ "bufferView": 5, "componentType": 5126, "count": 3, "type": "VEC2" }));
-            doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = json!(4);
-            doc["samplers"] = json!([{ "magFilter": 9729, "minFilter": 9987 }, { "magFilter": 9728, "minFilter": 9728, "wrapS": 33071 }]);
-            doc["textures"] = json!([{ "source": 0, "sampler": 0 }, { "source": 0, "sampler": 1 }]);
-            let m = &mut doc["materials"][0];
-            m["pbrMetallicRoughness"]["metallicRoughnessTexture"] = json!({ "index": 1, "texCoord": 1 });
-            m["emissiveTexture"] = json!({ "index": 0, "extensions": { "KHR_texture_transform": {
-                "offset": [0.0, 1.0], "rotation": std::f64::consts::FRAC_PI_2, "scale": [0.5, 0.5], "texCoord": 1 } } });
-            m["emissiveFactor"] = json!([1.0, 1.0, 1.0]);
-            m["occlusionTexture"] = json!({ "index": 1, "strength": 0.5 });
-        });
+        let bytes = triangle_glb(every_texture);
         let model = load_bytes(&bytes).unwrap();
         let m = model.materials[0].1;
         let (base, mr, emissive, occlusion) = (
@@ -1634,6 +1610,35 @@ mod tests {
         ] {
             assert!(all.contains(says), "{says}: {all}");
         }
+    }
+
+    /// [`blender_like`] with every texture slot used: a second coordinate
+    /// set, two samplers of one image, an emissive texture with
+    /// `KHR_texture_transform` and an occlusion texture.
+    fn every_texture(doc: &mut Value, bin: &mut Vec<u8>) {
+        blender_like(doc, bin);
+        // A second coordinate set, and two textures of one image with
+        // different samplers.
+        let offset = bin.len();
+        bin.extend([0.0f32, 0.0, 0.5, 0.0, 0.0, 0.5].iter().flat_map(|f| f.to_le_bytes()));
+        doc["buffers"][0]["byteLength"] = json!(bin.len());
+        doc["bufferViews"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": 24 }));
+        doc["accessors"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({ "bufferView": 5, "componentType": 5126, "count": 3, "type": "VEC2" }));
+        doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = json!(4);
+        doc["samplers"] = json!([{ "magFilter": 9729, "minFilter": 9987 }, { "magFilter": 9728, "minFilter": 9728, "wrapS": 33071 }]);
+        doc["textures"] = json!([{ "source": 0, "sampler": 0 }, { "source": 0, "sampler": 1 }]);
+        let m = &mut doc["materials"][0];
+        m["pbrMetallicRoughness"]["metallicRoughnessTexture"] = json!({ "index": 1, "texCoord": 1 });
+        m["emissiveTexture"] = json!({ "index": 0, "extensions": { "KHR_texture_transform": {
+            "offset": [0.0, 1.0], "rotation": std::f64::consts::FRAC_PI_2, "scale": [0.5, 0.5], "texCoord": 1 } } });
+        m["emissiveFactor"] = json!([1.0, 1.0, 1.0]);
+        m["occlusionTexture"] = json!({ "index": 1, "strength": 0.5 });
     }
 
     /// Loads `bytes` as a file named `name` in a folder that holds `extra`
@@ -2051,7 +2056,7 @@ mod tests {
         // Each mutant: 1 to 4 structure-aware changes (numbers, dropped
         // keys, swapped types, indices past the end) of a Blender-like file,
         // as .glb and as .gltf text with an external buffer, or of a
-        // meshopt-compressed one. The mutants
+        // meshopt-compressed one, or of one using every texture slot. The mutants
         // that load must be consistent. A longer run by hand:
         // RT_GLTF_MUTANTS=200000 cargo test -p rt-core --lib thousands_of_damaged
         use crate::files::gltf_mutation::{Choices, mutate};
@@ -2061,16 +2066,19 @@ mod tests {
         let (text_doc, text_bin) = blender_like_text();
         let packed = triangle_glb(meshopt_compressed);
         let (packed_doc, packed_bin) = (json_of(&packed), bin_of(&packed));
+        let textured = triangle_glb(every_texture);
+        let (textured_doc, textured_bin) = (json_of(&textured), bin_of(&textured));
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(dir.path().join("m.bin"), &text_bin).unwrap();
         let (mut loaded, mut refused) = (0, 0);
         for seed in 0..runs {
             let mut choices = Choices::Seeded(seed);
-            let as_text = seed % 3 == 1;
-            let (mut doc, bin) = match seed % 3 {
+            let as_text = seed % 4 == 1;
+            let (mut doc, bin) = match seed % 4 {
                 0 => (glb_doc.clone(), &glb_bin),
                 1 => (text_doc.clone(), &glb_bin),
-                _ => (packed_doc.clone(), &packed_bin),
+                2 => (packed_doc.clone(), &packed_bin),
+                _ => (textured_doc.clone(), &textured_bin),
             };
             let count = 1 + choices.below(4);
             mutate(&mut doc, count, &mut choices);
@@ -2153,6 +2161,7 @@ mod tests {
         let (doc, _) = blender_like_text();
         std::fs::write(corpus.join("blender-like.gltf"), doc.to_string()).unwrap();
         std::fs::write(corpus.join("meshopt.glb"), triangle_glb(meshopt_compressed)).unwrap();
+        std::fs::write(corpus.join("every-texture.glb"), triangle_glb(every_texture)).unwrap();
     }
 
     proptest! {
