@@ -28,7 +28,8 @@
 //! one bilinear lookup per ray would alias (moiré). Each texture keeps a
 //! mip-map pyramid (Williams, "Pyramidal Parametrics", 1983), built once in
 //! linear space: each level halves the one above by a box filter that is
-//! exact for odd sizes too ([`Level::halved`]). [`Texture::lookup`] reads
+//! exact for odd sizes too (an odd side n halves to ⌊n/2⌋ texels, each the
+//! mean of a span of n/⌊n/2⌋ source texels). [`Texture::lookup`] reads
 //! the level the ray's footprint asks for
 //! ([`crate::materials::texture_lod`]), blending the two around it
 //! (trilinear). The pyramid costs a third more memory than the image.
@@ -183,9 +184,10 @@ fn box_resample(values: &[Color], m: usize) -> Vec<Color> {
         .map(|i| {
             let (a, b) = (i as f64 * s, (i + 1) as f64 * s);
             let mut sum = Color::ZERO;
-            for k in a.floor() as usize..(b.ceil() as usize).min(n) {
+            let (first, end) = (a.floor() as usize, (b.ceil() as usize).min(n));
+            for (k, &value) in values.iter().enumerate().take(end).skip(first) {
                 let overlap = (b.min(k as f64 + 1.0) - a.max(k as f64)).max(0.0);
-                sum += values[k] * (overlap / s) as f32;
+                sum += value * (overlap / s) as f32;
             }
             sum
         })

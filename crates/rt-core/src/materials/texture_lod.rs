@@ -163,10 +163,7 @@ mod tests {
             vec![[0, 2, 1], [0, 3, 2]],
         )
         .unwrap()
-        .with_vertex_attributes(
-            vec![],
-            vec![[0.0, 0.0], [2.0 * w as f32, 0.0], [2.0 * w as f32, d as f32], [0.0, d as f32]],
-        )
+        .with_vertex_attributes(vec![], vec![[0.0, 0.0], [2000.0, 0.0], [2000.0, 2000.0], [0.0, 2000.0]])
         .unwrap();
         let checker = Texture::new(2, 2, vec![Color::ZERO, Color::ONE, Color::ONE, Color::ZERO]).unwrap();
         let slot = TextureSlot {
