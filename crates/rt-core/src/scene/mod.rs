@@ -623,6 +623,47 @@ mod tests {
     use crate::testing::test_support::{primitives_of, random_parts, scene_of, v};
     use proptest::prelude::*;
 
+    #[test]
+    fn each_texture_slot_multiplies_its_own_parameter_and_an_untextured_material_is_borrowed() {
+        use crate::geometry::mesh::Mesh;
+        use crate::materials::principled::Principled;
+        use crate::materials::texture_slot::TextureSlot;
+        let quad = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]])
+            .unwrap()
+            .with_vertex_attributes(vec![], vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+            .unwrap();
+        let flat = |c: Color| Arc::new(Texture::new(1, 1, vec![c]).unwrap());
+        let p = Principled { metallic: 0.8, roughness: 0.6, ..Principled::DIELECTRIC };
+        let textured = Material {
+            emission: Color::splat(2.0),
+            base_color_texture: Some(TextureSlot::new(0)),
+            metallic_roughness_texture: Some(TextureSlot::new(1)),
+            emissive_texture: Some(TextureSlot::new(2)),
+            occlusion_texture: Some(TextureSlot::new(3)),
+            ..Material::principled(Color::splat(0.5), p)
+        };
+        let scene = SceneBuilder::new()
+            .texture(flat(Color::new(1.0, 0.5, 0.25)))
+            .texture(flat(Color::new(0.1, 0.5, 0.25)))
+            .texture(flat(Color::new(0.5, 1.0, 0.0)))
+            .texture(flat(Color::ZERO))
+            .material("t", textured)
+            .material("plain", Material::principled(Color::splat(0.5), p))
+            .object(Primitive::Mesh(quad.clone()), "t")
+            .object(Primitive::Mesh(quad), "plain")
+            .build()
+            .unwrap();
+        let at = Vec3::new(0.25, 0.25, 0.0);
+        let m = scene.material_at_footprint(0, 0, at, Footprint::new(0.01, 1.0));
+        assert_eq!(m.color, Color::new(0.5, 0.25, 0.125));
+        let q = m.physical.unwrap();
+        // Blue → metallic, green → roughness; red (occlusion's channel) unused.
+        assert!((q.metallic - 0.2).abs() < 1e-6 && (q.roughness - 0.3).abs() < 1e-6, "{q:?}");
+        assert_eq!(m.emission, Color::new(1.0, 2.0, 0.0));
+        // The occlusion texture (all black) changes nothing.
+        assert!(matches!(scene.material_at(1, 0, at), Cow::Borrowed(_)));
+    }
+
     proptest! {
         /// Random scenes and rays (including axis-parallel ones with ±0
         /// components): a hit always has a finite t beyond the origin rule, a
