@@ -142,6 +142,17 @@ impl ViewPlane {
         self.pixel
     }
 
+    /// The angle one pixel subtends at a perspective camera's eye,
+    /// `atan(plane_h / (near·H))` = `atan(2·tan(fov_y/2)/H)` (radians): the
+    /// spread of a pixel's ray cone ([`crate::materials::texture_lod`]);
+    /// 0 for an orthographic camera, whose rays are parallel.
+    pub fn spread_angle(&self) -> Real {
+        match self.camera.projection() {
+            Projection::Perspective => (self.pixel.1 / self.camera.near()).atan(),
+            Projection::Orthographic => 0.0,
+        }
+    }
+
     /// `O`, the world point of pixel corner (0, 0): the plane's upper-left corner.
     pub fn upper_left(&self) -> Vec3 {
         self.point(0, 0, 0.0, 0.0)

@@ -62,8 +62,16 @@
 //! stride, and that it lies inside its buffer view and buffer), every index
 //! against the vertex count, and the node hierarchy's depth and instance
 //! count are bounded, so a malformed or truncated file is an
-//! error naming the mesh and primitive, never a panic. A base-colour texture
-//! that cannot be read is a warning; the material keeps its factor.
+//! error naming the mesh and primitive, never a panic. A texture that
+//! cannot be read is a warning naming it and the material; the material
+//! keeps its factor.
+//!
+//! **Textures.** A material's base-colour, metallic-roughness, emissive and
+//! occlusion textures become [`TextureSlot`]s: the texture's sampler
+//! (filters, wraps), its `texCoord` set (0 or 1) and `KHR_texture_transform`.
+//! Each image is decoded once per [`Encoding`] its uses need (sRGB for
+//! colour, linear for data) and shared by every material and sampler that
+//! uses it.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -80,7 +88,8 @@ use crate::geometry::mesh::{MAX_MESH_TRIANGLES, Mesh};
 use crate::lights::light::{Light, LightKind};
 use crate::materials::material::Material;
 use crate::materials::principled::Principled;
-use crate::materials::texture::{Texture, Wrap};
+use crate::materials::texture::{MAX_TEXTURE_SIDE, Texture, Wrap};
+use crate::materials::texture_slot::{Encoding, Sampler, TextureSlot, UvTransform};
 use crate::math::color::Color;
 use crate::math::real::{Real, Vec3, narrow, to_f64};
 
@@ -324,11 +333,13 @@ fn read(
 
     let mut materials = Vec::new();
     let mut textures = Vec::new();
-    let mut texture_of: HashMap<usize, Option<u32>> = HashMap::new();
+    // Each image decoded once per encoding its uses need, shared.
+    let mut decoded: HashMap<(usize, Encoding), Option<u32>> = HashMap::new();
     let mut parts = Vec::new();
     for g in groups {
         let mesh = Mesh::new(g.positions, g.triangles)
             .and_then(|m| m.with_vertex_attributes(g.normals, g.uvs))
+            .and_then(|m| m.with_second_uvs(g.uvs1))
             .ok_or_else(|| err("a mesh has no triangles".into()))?;
         let Some(index) = g.material.filter(|_| with_materials) else {
             parts.push((mesh, None));
@@ -344,27 +355,45 @@ fn read(
             .filter(|n| document.materials().filter(|o| o.name() == Some(n)).count() == 1)
             .map_or_else(|| format!("material {index}"), str::to_owned);
         let (mut material, mut notes) = map_material(&m);
-        if let Some(info) = m.pbr_metallic_roughness().base_color_texture() {
-            if info.tex_coord() != 0 {
-                notes.push(format!("its base colour texture uses TEXCOORD_{}", info.tex_coord()));
-            } else {
-                let t = info.texture();
-                material.texture = *texture_of.entry(t.index()).or_insert_with(|| {
-                    match read_texture(&t, document.as_json(), base, &buffer_data) {
-                        Ok(texture) => {
-                            textures.push(texture);
-                            Some(textures.len() as u32 - 1)
-                        }
-                        Err(reason) => {
-                            warnings.push(format!(
-                                "texture {}: {reason}: its materials show their base colour factor instead",
-                                t.index()
-                            ));
-                            None
-                        }
-                    }
-                });
-            }
+        let mut images = Images {
+            document: document.as_json(),
+            base,
+            buffers: &buffer_data,
+            textures: &mut textures,
+            decoded: &mut decoded,
+            warnings: &mut warnings,
+            uv_sets: [mesh.has_uv_set(0), mesh.has_uv_set(1)],
+            material: &name,
+            notes: &mut notes,
+        };
+        let pbr = m.pbr_metallic_roughness();
+        let transform = "KHR_texture_transform";
+        material.base_color_texture = pbr.base_color_texture().and_then(|i| {
+            let ext = i.extension_value(transform);
+            images.slot("baseColorTexture", &i.texture(), i.tex_coord(), ext, Encoding::Srgb)
+        });
+        material.metallic_roughness_texture = pbr.metallic_roughness_texture().and_then(|i| {
+            let ext = i.extension_value(transform);
+            images.slot("metallicRoughnessTexture", &i.texture(), i.tex_coord(), ext, Encoding::Linear)
+        });
+        material.emissive_texture = m.emissive_texture().and_then(|i| {
+            let ext = i.extension_value(transform);
+            images.slot("emissiveTexture", &i.texture(), i.tex_coord(), ext, Encoding::Srgb)
+        });
+        material.occlusion_texture = m.occlusion_texture().and_then(|i| {
+            let ext = i.extension_value(transform);
+            let slot = images.slot("occlusionTexture", &i.texture(), i.tex_coord(), ext, Encoding::Linear)?;
+            let strength = i.strength();
+            Some(TextureSlot {
+                scale: if strength.is_finite() { strength.clamp(0.0, 1.0) } else { 1.0 },
+                ..slot
+            })
+        });
+        if material.occlusion_texture.is_some() {
+            notes.push(
+                "occlusionTexture (read, not applied: global illumination computes the occlusion it bakes)"
+                    .into(),
+            );
         }
         if !notes.is_empty() {
             warnings.push(format!("material \"{name}\": not used: {}", notes.join(", ")));
@@ -637,10 +666,14 @@ struct Group {
     positions: Vec<Vec3>,
     normals: Vec<Vec3>,
     uvs: Vec<[f32; 2]>,
+    /// `TEXCOORD_1`, kept beside `uvs` the same way.
+    uvs1: Vec<[f32; 2]>,
     triangles: Vec<[u32; 3]>,
-    /// Whether any primitive so far had normals / texture coordinates.
+    /// Whether any primitive so far had normals / texture coordinates
+    /// (sets 0 and 1).
     has_normals: bool,
     has_uvs: bool,
+    has_uvs1: bool,
 }
 
 /// `uri` with its `%XX` escapes decoded, if that is UTF-8 text.
@@ -713,6 +746,10 @@ fn read_primitive(
     if let Some(a) = &texcoord {
         check_accessor(a, "TEXCOORD_0", Dimensions::Vec2, &[F32, I8, U8, I16, U16], buffers)?;
     }
+    let texcoord1 = primitive.get(&::gltf::Semantic::TexCoords(1));
+    if let Some(a) = &texcoord1 {
+        check_accessor(a, "TEXCOORD_1", Dimensions::Vec2, &[F32, I8, U8, I16, U16], buffers)?;
+    }
     if let Some(a) = primitive.indices() {
         check_accessor(
             &a,
@@ -726,6 +763,7 @@ fn read_primitive(
     let count = position.count();
     if normal.as_ref().is_some_and(|a| a.count() != count)
         || texcoord.as_ref().is_some_and(|a| a.count() != count)
+        || texcoord1.as_ref().is_some_and(|a| a.count() != count)
     {
         return Err("its attributes have different counts".into());
     }
@@ -760,20 +798,12 @@ fn read_primitive(
         None if group.has_normals => group.normals.resize(base + count, Vec3::ZERO),
         None => {}
     }
-    match &texcoord {
-        Some(a) => {
-            if !group.has_uvs {
-                group.uvs.resize(base, [0.0; 2]);
-                group.has_uvs = true;
-            }
-            group.uvs.extend(read_vectors::<2>(a, buffers).into_iter().map(|uv| uv.map(|x| x as f32)));
-        }
-        None if group.has_uvs => group.uvs.resize(base + count, [0.0; 2]),
-        None => {}
-    }
+    read_uv_set(texcoord.as_ref(), buffers, &mut group.uvs, &mut group.has_uvs, base, count);
+    read_uv_set(texcoord1.as_ref(), buffers, &mut group.uvs1, &mut group.has_uvs1, base, count);
     if group.positions.len() != base + count
         || (group.has_normals && group.normals.len() != base + count)
         || (group.has_uvs && group.uvs.len() != base + count)
+        || (group.has_uvs1 && group.uvs1.len() != base + count)
     {
         return Err("an attribute holds fewer values than its count".into());
     }
@@ -801,6 +831,30 @@ fn read_primitive(
         corners.into_iter().map(|[x, y, z]| if flip { [b + x, b + z, b + y] } else { [b + x, b + y, b + z] }),
     );
     Ok(group.triangles.len() - before)
+}
+
+/// Appends one primitive's texture coordinates of one set (`count`
+/// vertices from `base`) to a group's `uvs`: zeros for a primitive without
+/// them once any primitive of the group had them (earlier ones padded then).
+fn read_uv_set(
+    accessor: Option<&::gltf::Accessor>,
+    buffers: &[&[u8]],
+    uvs: &mut Vec<[f32; 2]>,
+    has: &mut bool,
+    base: usize,
+    count: usize,
+) {
+    match accessor {
+        Some(a) => {
+            if !*has {
+                uvs.resize(base, [0.0; 2]);
+                *has = true;
+            }
+            uvs.extend(read_vectors::<2>(a, buffers).into_iter().map(|uv| uv.map(|x| x as f32)));
+        }
+        None if *has => uvs.resize(base + count, [0.0; 2]),
+        None => {}
+    }
 }
 
 /// The `N`-vectors of accessor `a`, which [`check_accessor`] accepted (so
@@ -942,17 +996,8 @@ fn map_material(m: &::gltf::Material) -> (Material, Vec<String>) {
     let material =
         Material { ior, emission: Color::new(e(r), e(g), e(b)) * strength, ..Material::principled(base, p) };
     let mut notes = notes.into_inner();
-    if pbr.metallic_roughness_texture().is_some() {
-        notes.push("metallicRoughnessTexture".to_owned());
-    }
     if m.normal_texture().is_some() {
         notes.push("normalTexture".to_owned());
-    }
-    if m.occlusion_texture().is_some() {
-        notes.push("occlusionTexture".to_owned());
-    }
-    if m.emissive_texture().is_some() {
-        notes.push("emissiveTexture".to_owned());
     }
     if m.transmission().is_some_and(|t| t.transmission_texture().is_some()) {
         notes.push("transmissionTexture".to_owned());
@@ -974,12 +1019,119 @@ fn map_material(m: &::gltf::Material) -> (Material, Vec<String>) {
     (material, notes)
 }
 
-/// The texture's image, decoded, with its sampler's wrap modes.
-fn read_texture(
+/// What reading a material's textures needs: the file, the textures
+/// decoded so far (each image once per [`Encoding`]) and where to say what
+/// went wrong.
+struct Images<'a> {
+    document: &'a ::gltf::json::Root,
+    base: &'a Path,
+    buffers: &'a [::gltf::buffer::Data],
+    textures: &'a mut Vec<Texture>,
+    decoded: &'a mut HashMap<(usize, Encoding), Option<u32>>,
+    warnings: &'a mut Vec<String>,
+    /// Which texture-coordinate sets the material's mesh has.
+    uv_sets: [bool; 2],
+    /// The material's name, and its notes (what it holds that is not used).
+    material: &'a str,
+    notes: &'a mut Vec<String>,
+}
+
+impl Images<'_> {
+    /// The slot of the material's `field`, a use of texture `t` through
+    /// coordinate set `tex_coord` and the `KHR_texture_transform` extension
+    /// value `transform`, its image decoded by `encoding`: `None`, with a
+    /// note or a warning naming the field, when the transform is malformed,
+    /// the set is one meshes here do not keep or this mesh lacks, or the
+    /// image cannot be read.
+    fn slot(
+        &mut self,
+        field: &str,
+        t: &::gltf::Texture,
+        tex_coord: u32,
+        transform: Option<&::gltf::json::Value>,
+        encoding: Encoding,
+    ) -> Option<TextureSlot> {
+        let (transform, tex_coord) = match transform.map(texture_transform) {
+            None => (UvTransform::IDENTITY, tex_coord),
+            Some(Ok((transform, set))) => (transform, set.unwrap_or(tex_coord)),
+            Some(Err(reason)) => {
+                self.notes.push(format!("{field} (its KHR_texture_transform {reason})"));
+                return None;
+            }
+        };
+        if tex_coord > 1 {
+            self.notes
+                .push(format!("{field} (it reads TEXCOORD_{tex_coord}: only TEXCOORD_0 and _1 are kept)"));
+            return None;
+        }
+        if !self.uv_sets[tex_coord as usize] {
+            self.notes.push(format!("{field} (it reads TEXCOORD_{tex_coord}, which the meshes do not have)"));
+            return None;
+        }
+        let image = t.source().index();
+        let decoded = *self.decoded.entry((image, encoding)).or_insert_with(|| {
+            match read_image(t, self.document, self.base, self.buffers, encoding) {
+                Ok(texture) => {
+                    self.textures.push(texture);
+                    Some(self.textures.len() as u32 - 1)
+                }
+                Err(reason) => {
+                    self.warnings.push(format!(
+                        "texture {}: {reason}: material \"{}\" shows its {field} factor instead",
+                        t.index(),
+                        self.material
+                    ));
+                    None
+                }
+            }
+        });
+        let texture = decoded?;
+        let sampler = t.sampler();
+        let wrap = |m: WrappingMode| match m {
+            WrappingMode::Repeat => Wrap::Repeat,
+            WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+            WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+        };
+        let sampler = Sampler::from_gl(
+            sampler.mag_filter().map(|f| f.as_gl_enum()),
+            sampler.min_filter().map(|f| f.as_gl_enum()),
+            [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())],
+        );
+        Some(TextureSlot { texture, tex_coord, transform, sampler, scale: 1.0 })
+    }
+}
+
+/// A `KHR_texture_transform` object: its transform (`offset`, `rotation`,
+/// `scale`, defaults (0, 0), 0, (1, 1)) and its `texCoord` override, or
+/// what is wrong with it.
+fn texture_transform(value: &::gltf::json::Value) -> Result<(UvTransform, Option<u32>), String> {
+    let pair = |key: &str, default: [f32; 2]| match value.get(key) {
+        None => Ok(default),
+        Some(v) => match v.as_array().map(|a| a.iter().map(|x| x.as_f64()).collect::<Vec<_>>()).as_deref() {
+            Some([Some(x), Some(y)]) => Ok([*x as f32, *y as f32]),
+            _ => Err(format!("{key} is not two numbers")),
+        },
+    };
+    let rotation = match value.get("rotation") {
+        None => 0.0,
+        Some(v) => v.as_f64().ok_or("rotation is not a number")? as f32,
+    };
+    let tex_coord = match value.get("texCoord") {
+        None => None,
+        Some(v) => Some(v.as_u64().and_then(|n| u32::try_from(n).ok()).ok_or("texCoord is not a set index")?),
+    };
+    let transform = UvTransform::new(pair("offset", [0.0; 2])?, rotation, pair("scale", [1.0; 2])?)
+        .ok_or("is not finite")?;
+    Ok((transform, tex_coord))
+}
+
+/// The texture's image, decoded by `encoding`.
+fn read_image(
     t: &::gltf::Texture,
     document: &::gltf::json::Root,
     base: &Path,
     buffers: &[::gltf::buffer::Data],
+    encoding: Encoding,
 ) -> Result<Texture, String> {
     let image = t.source();
     // `Image::source` unwraps a missing `mimeType` beside a `bufferView`,
@@ -1008,8 +1160,12 @@ fn read_texture(
             return Err(format!("image {} runs past the end of its buffer", image.index()));
         }
     }
-    let decoded =
-        ::gltf::image::Data::from_source(image.source(), Some(base), buffers).map_err(|e| e.to_string())?;
+    let decoded = ::gltf::image::Data::from_source(image.source(), Some(base), buffers).map_err(|e| {
+        match &json.uri {
+            Some(uri) if !uri.starts_with("data:") => format!("image {} ({uri}): {e}", image.index()),
+            _ => format!("image {}: {e}", image.index()),
+        }
+    })?;
     use ::gltf::image::Format;
     let (channels, wide) = match decoded.format {
         Format::R8 => (1, false),
@@ -1031,14 +1187,13 @@ fn read_texture(
     } else {
         decoded.pixels.iter().map(|&b| f32::from(b) / 255.0).collect()
     };
-    let wrap = |m: WrappingMode| match m {
-        WrappingMode::Repeat => Wrap::Repeat,
-        WrappingMode::ClampToEdge => Wrap::ClampToEdge,
-        WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
-    };
-    let sampler = t.sampler();
-    Texture::from_srgb(decoded.width, decoded.height, channels, &values)
-        .map(|tex| tex.with_wrap([wrap(sampler.wrap_s()), wrap(sampler.wrap_t())]))
+    if decoded.width.max(decoded.height) > MAX_TEXTURE_SIDE {
+        return Err(format!(
+            "it is {}×{} texels, more than the {MAX_TEXTURE_SIDE} a side may have",
+            decoded.width, decoded.height
+        ));
+    }
+    Texture::from_values(decoded.width, decoded.height, channels, &values, encoding)
         .ok_or_else(|| "its decoded size does not match its pixels".into())
 }
 
@@ -1070,6 +1225,7 @@ pub fn encode_glb(json: &str, bin: &[u8]) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::materials::texture::srgb_decode;
     use std::f64::consts::FRAC_1_SQRT_2;
 
     use proptest::prelude::*;
@@ -1253,11 +1409,13 @@ mod tests {
             doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": 0 });
         });
         let model = load_bytes(&bytes).unwrap();
-        assert_eq!(model.materials[0].1.texture, Some(0));
+        assert_eq!(model.materials[0].1.base_color_texture.map(|s| s.texture), Some(0));
         let t = &model.textures[0];
+        let slot = model.materials[0].1.base_color_texture.unwrap();
+        assert_eq!(slot.sampler.wrap, [Wrap::ClampToEdge, Wrap::MirroredRepeat]);
         // Clamped in u: far right is the white texel, far left the black one.
-        assert_eq!(t.sample(5.0, 0.5), Color::ONE);
-        assert_eq!(t.sample(-5.0, 0.5), Color::ZERO);
+        assert_eq!(t.lookup(5.0, 0.5, 0.0, &slot.sampler), Color::ONE);
+        assert_eq!(t.lookup(-5.0, 0.5, 0.0, &slot.sampler), Color::ZERO);
     }
 
     #[test]
@@ -1268,10 +1426,11 @@ mod tests {
             doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": 0 });
         });
         let model = load_bytes(&bytes).unwrap();
-        assert_eq!(model.materials[0].1.texture, None);
+        assert_eq!(model.materials[0].1.base_color_texture, None);
         assert_eq!(model.materials[0].1.color, Color::new(0.5, 0.25, 1.0));
         assert!(
-            model.warnings.iter().any(|w| w.starts_with("texture 0:") && w.contains("base colour factor")),
+            model.warnings.iter().any(|w| w.starts_with("texture 0: image 0 (nowhere.png): ")
+                && w.contains("material \"paint\" shows its baseColorTexture factor instead")),
             "{:?}",
             model.warnings
         );
@@ -1394,6 +1553,94 @@ mod tests {
         doc["scenes"] = json!([{ "name": "Scene", "nodes": [0, 1, 2] }]);
     }
 
+    #[test]
+    fn every_texture_slot_is_read_with_its_encoding_set_transform_and_sampler_and_images_decode_once() {
+        let bytes = triangle_glb(every_texture);
+        let model = load_bytes(&bytes).unwrap();
+        let m = model.materials[0].1;
+        let (base, mr, emissive, occlusion) = (
+            m.base_color_texture.unwrap(),
+            m.metallic_roughness_texture.unwrap(),
+            m.emissive_texture.unwrap(),
+            m.occlusion_texture.unwrap(),
+        );
+        // One image, two encodings: decoded twice, each shared by its uses.
+        assert_eq!(model.textures.len(), 2, "{:?}", model.warnings);
+        assert_eq!((base.texture, emissive.texture), (0, 0));
+        assert_eq!((mr.texture, occlusion.texture), (1, 1));
+        let (srgb, linear) = (model.textures[0].sample(0.25, 0.25), model.textures[1].sample(0.25, 0.25));
+        assert!(
+            (srgb.x - srgb_decode(230.0 / 255.0)).abs() < 1e-6 && (linear.x - 230.0 / 255.0).abs() < 1e-6
+        );
+        // Sets, transform, samplers, strength.
+        assert_eq!((base.tex_coord, mr.tex_coord, emissive.tex_coord, occlusion.tex_coord), (0, 1, 1, 0));
+        assert!(base.transform.is_identity() && !emissive.transform.is_identity());
+        let (u, v) = emissive.transformed((1.0, 0.0));
+        assert!(u.abs() < 1e-6 && (v - 0.5).abs() < 1e-6, "({u}, {v})");
+        assert_eq!(base.sampler, Sampler::DEFAULT);
+        assert_eq!(mr.sampler.mip, None);
+        assert_eq!(mr.sampler.wrap, [Wrap::ClampToEdge, Wrap::Repeat]);
+        assert_eq!(occlusion.scale, 0.5);
+        let all = model.warnings.join("\n");
+        assert!(!all.contains("metallicRoughnessTexture") && !all.contains("emissiveTexture"), "{all}");
+        assert!(all.contains("occlusionTexture (read, not applied"), "{all}");
+    }
+
+    #[test]
+    fn a_texture_reading_a_set_the_mesh_lacks_or_a_broken_transform_is_named_and_not_applied() {
+        let bytes = triangle_glb(|doc, bin| {
+            blender_like(doc, bin);
+            let m = &mut doc["materials"][0];
+            m["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": 0, "texCoord": 1 });
+            m["pbrMetallicRoughness"]["metallicRoughnessTexture"] =
+                json!({ "index": 0, "extensions": { "KHR_texture_transform": { "scale": [1.0] } } });
+            m["emissiveTexture"] = json!({ "index": 0, "texCoord": 3 });
+        });
+        let model = load_bytes(&bytes).unwrap();
+        let m = model.materials[0].1;
+        assert_eq!(
+            (m.base_color_texture, m.metallic_roughness_texture, m.emissive_texture),
+            (None, None, None)
+        );
+        let all = model.warnings.join("\n");
+        for says in [
+            "baseColorTexture (it reads TEXCOORD_1, which the meshes do not have)",
+            "metallicRoughnessTexture (its KHR_texture_transform scale is not two numbers)",
+            "emissiveTexture (it reads TEXCOORD_3: only TEXCOORD_0 and _1 are kept)",
+        ] {
+            assert!(all.contains(says), "{says}: {all}");
+        }
+    }
+
+    /// [`blender_like`] with every texture slot used: a second coordinate
+    /// set, two samplers of one image, an emissive texture with
+    /// `KHR_texture_transform` and an occlusion texture.
+    fn every_texture(doc: &mut Value, bin: &mut Vec<u8>) {
+        blender_like(doc, bin);
+        // A second coordinate set, and two textures of one image with
+        // different samplers.
+        let offset = bin.len();
+        bin.extend([0.0f32, 0.0, 0.5, 0.0, 0.0, 0.5].iter().flat_map(|f| f.to_le_bytes()));
+        doc["buffers"][0]["byteLength"] = json!(bin.len());
+        doc["bufferViews"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": 24 }));
+        doc["accessors"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({ "bufferView": 5, "componentType": 5126, "count": 3, "type": "VEC2" }));
+        doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = json!(4);
+        doc["samplers"] = json!([{ "magFilter": 9729, "minFilter": 9987 }, { "magFilter": 9728, "minFilter": 9728, "wrapS": 33071 }]);
+        doc["textures"] = json!([{ "source": 0, "sampler": 0 }, { "source": 0, "sampler": 1 }]);
+        let m = &mut doc["materials"][0];
+        m["pbrMetallicRoughness"]["metallicRoughnessTexture"] = json!({ "index": 1, "texCoord": 1 });
+        m["emissiveTexture"] = json!({ "index": 0, "extensions": { "KHR_texture_transform": {
+            "offset": [0.0, 1.0], "rotation": std::f64::consts::FRAC_PI_2, "scale": [0.5, 0.5], "texCoord": 1 } } });
+        m["emissiveFactor"] = json!([1.0, 1.0, 1.0]);
+        m["occlusionTexture"] = json!({ "index": 1, "strength": 0.5 });
+    }
+
     /// Loads `bytes` as a file named `name` in a folder that holds `extra`
     /// files; whatever it returns, it must return.
     fn load_named(
@@ -1426,7 +1673,7 @@ mod tests {
                 doc["images"][0] = image.clone();
             });
             let model = load_bytes(&bytes).unwrap();
-            assert_eq!(model.materials[0].1.texture, None);
+            assert_eq!(model.materials[0].1.base_color_texture, None);
             assert!(
                 model.warnings.iter().any(|w| w.starts_with("texture 0: ") && w.contains(says)),
                 "{:?}",
@@ -1435,7 +1682,7 @@ mod tests {
         }
         // The well-formed file decodes its texture.
         let model = load_bytes(&triangle_glb(blender_like)).unwrap();
-        assert_eq!(model.materials[0].1.texture, Some(0));
+        assert_eq!(model.materials[0].1.base_color_texture.map(|s| s.texture), Some(0));
     }
 
     #[test]
@@ -1809,7 +2056,7 @@ mod tests {
         // Each mutant: 1 to 4 structure-aware changes (numbers, dropped
         // keys, swapped types, indices past the end) of a Blender-like file,
         // as .glb and as .gltf text with an external buffer, or of a
-        // meshopt-compressed one. The mutants
+        // meshopt-compressed one, or of one using every texture slot. The mutants
         // that load must be consistent. A longer run by hand:
         // RT_GLTF_MUTANTS=200000 cargo test -p rt-core --lib thousands_of_damaged
         use crate::files::gltf_mutation::{Choices, mutate};
@@ -1819,16 +2066,19 @@ mod tests {
         let (text_doc, text_bin) = blender_like_text();
         let packed = triangle_glb(meshopt_compressed);
         let (packed_doc, packed_bin) = (json_of(&packed), bin_of(&packed));
+        let textured = triangle_glb(every_texture);
+        let (textured_doc, textured_bin) = (json_of(&textured), bin_of(&textured));
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(dir.path().join("m.bin"), &text_bin).unwrap();
         let (mut loaded, mut refused) = (0, 0);
         for seed in 0..runs {
             let mut choices = Choices::Seeded(seed);
-            let as_text = seed % 3 == 1;
-            let (mut doc, bin) = match seed % 3 {
+            let as_text = seed % 4 == 1;
+            let (mut doc, bin) = match seed % 4 {
                 0 => (glb_doc.clone(), &glb_bin),
                 1 => (text_doc.clone(), &glb_bin),
-                _ => (packed_doc.clone(), &packed_bin),
+                2 => (packed_doc.clone(), &packed_bin),
+                _ => (textured_doc.clone(), &textured_bin),
             };
             let count = 1 + choices.below(4);
             mutate(&mut doc, count, &mut choices);
@@ -1911,6 +2161,7 @@ mod tests {
         let (doc, _) = blender_like_text();
         std::fs::write(corpus.join("blender-like.gltf"), doc.to_string()).unwrap();
         std::fs::write(corpus.join("meshopt.glb"), triangle_glb(meshopt_compressed)).unwrap();
+        std::fs::write(corpus.join("every-texture.glb"), triangle_glb(every_texture)).unwrap();
     }
 
     proptest! {

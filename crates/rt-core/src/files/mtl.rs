@@ -9,7 +9,7 @@
 //! | MTL | rt-view | rule |
 //! |---|---|---|
 //! | `Kd` | `color` | each component clamped to [0, 1] (default 0.8, Blender's) |
-//! | `map_Kd` | `texture` | sRGB image, multiplies `Kd` ([`crate::materials::texture`]) |
+//! | `map_Kd` | `base_color_texture` | sRGB image, multiplies `Kd` ([`crate::materials::texture`]) |
 //! | `Ks` | `specular` (or `reflectivity` with `illum` 3, 5, 7) and `specular_color` | its largest component, clamped to [0, 1], is the weight; `Ks` over it the tint |
 //! | `Ns` | `shininess` | clamped to [0, 10 000] (default 32) |
 //! | `Ni` | `ior` | must be above 0 and at most 100 (default 1.5) |
@@ -26,9 +26,15 @@
 //! `roughness` `Pr`, `clearcoat` `Pc`, `clearcoat_roughness` `Pcr`, `ior`
 //! `Ni`, `transmission` `1 − d` (or `Tr`), `emission` `Ke` (each of
 //! `Pr`, `Pm`, `Pc`, `Pcr` from 0 to 1); `Ks`, `Ns` and `illum` are then
-//! not used (and named). Everything else (`Ka`, `map_Ks`,
-//! `map_Bump`, `map_d`, `norm`, …) is not used and named in the part's
-//! warnings, never dropped silently.
+//! not used (and named). Its textures: `map_Pr` and `map_Pm` (linear
+//! grey images, their first channel) replace `Pr` and `Pm`, as Blender's
+//! importer reads them (they become one metallic-roughness texture,
+//! glTF's layout); `map_Ke` (sRGB) multiplies `Ke`, or white when the file
+//! gives no `Ke`. `Ps` (sheen) and `aniso`/`anisor` (anisotropy) have no
+//! counterpart in the material (its GGX lobe is isotropic and has no sheen)
+//! and are named; so is `norm` (a normal map), as is everything else
+//! (`Ka`, `map_Ks`, `map_Bump`, `map_d`, …): named in the part's warnings,
+//! never dropped silently.
 
 use std::path::{Path, PathBuf};
 
@@ -43,6 +49,13 @@ pub struct MtlMaterial {
     pub material: Material,
     /// The `map_Kd` image, resolved against the OBJ file's folder.
     pub texture: Option<PathBuf>,
+    /// The PBR extension's `map_Pr` (roughness) and `map_Pm` (metallic)
+    /// images, resolved the same way: linear grey.
+    pub roughness_texture: Option<PathBuf>,
+    /// See `roughness_texture`.
+    pub metallic_texture: Option<PathBuf>,
+    /// The `map_Ke` image (sRGB), resolved the same way.
+    pub emissive_texture: Option<PathBuf>,
     /// MTL statements read but not used, in a sentence each.
     pub ignored: Vec<String>,
 }
@@ -122,6 +135,23 @@ pub fn from_mtl(m: &tobj::Material, dir: &Path) -> Result<MtlMaterial, String> {
         }
     };
     let (pr, pm, pc, pcr) = (pbr_value("Pr")?, pbr_value("Pm")?, pbr_value("Pc")?, pbr_value("Pcr")?);
+    let map = |key: &str| -> Result<Option<PathBuf>, String> {
+        match m.unknown_param.get(key).map(|v| texture_file(v)) {
+            None => Ok(None),
+            Some("") => Err(format!("{key} names no file")),
+            Some(file) => Ok(Some(dir.join(file))),
+        }
+    };
+    let (roughness_texture, metallic_texture) = (map("map_Pr")?, map("map_Pm")?);
+    let emissive_texture = map("map_Ke")?;
+    if emissive_texture.is_some() && m.emissive.is_none() {
+        material.emission = Color::ONE;
+    }
+    // A texture replaces its factor (as Blender's importer reads it).
+    let (pr, pm) = (
+        if roughness_texture.is_some() { Some(1.0) } else { pr },
+        if metallic_texture.is_some() { Some(1.0) } else { pm },
+    );
     if pr.is_some() || pm.is_some() {
         let d = Principled::DIELECTRIC;
         let p = Principled {
@@ -159,11 +189,21 @@ pub fn from_mtl(m: &tobj::Material, dir: &Path) -> Result<MtlMaterial, String> {
             ignored.push(name.to_owned());
         }
     }
-    let read = ["Tr", "Pr", "Pm", "Pc", "Pcr"];
+    for (key, why) in [
+        ("Ps", "sheen: the material has no sheen lobe"),
+        ("aniso", "anisotropy: the material's GGX lobe is isotropic"),
+        ("anisor", "anisotropy: the material's GGX lobe is isotropic"),
+        ("norm", "a normal map: not read from MTL files"),
+    ] {
+        if m.unknown_param.contains_key(key) {
+            ignored.push(format!("{key} ({why})"));
+        }
+    }
+    let read = ["Tr", "Pr", "Pm", "Pc", "Pcr", "map_Pr", "map_Pm", "map_Ke", "Ps", "aniso", "anisor", "norm"];
     let mut unknown: Vec<&String> = m.unknown_param.keys().filter(|k| !read.contains(&k.as_str())).collect();
     unknown.sort();
     ignored.extend(unknown.into_iter().cloned());
-    Ok(MtlMaterial { material, texture, ignored })
+    Ok(MtlMaterial { material, texture, roughness_texture, metallic_texture, emissive_texture, ignored })
 }
 
 /// The file name of a texture statement's value: MTL allows options before
@@ -179,6 +219,28 @@ mod tests {
     fn parse(text: &str) -> tobj::Material {
         let (mut materials, _) = tobj::load_mtl_buf(&mut text.as_bytes()).unwrap();
         materials.remove(0)
+    }
+
+    #[test]
+    fn pbr_maps_replace_their_factors_and_what_has_no_counterpart_is_named() {
+        let m = parse(
+            "newmtl a\nKd 1 1 1\nPr 0.3\nmap_Pr r.png\nmap_Pm -bm 1 m.png\nmap_Ke e.png\nPs 0.2\naniso 0.5\nnorm n.png\n",
+        );
+        let got = from_mtl(&m, Path::new("models")).unwrap();
+        let p = got.material.physical.unwrap();
+        assert_eq!((p.roughness, p.metallic), (1.0, 1.0));
+        assert_eq!(got.material.emission, Color::ONE);
+        assert_eq!(got.roughness_texture, Some(PathBuf::from("models/r.png")));
+        assert_eq!(got.metallic_texture, Some(PathBuf::from("models/m.png")));
+        assert_eq!(got.emissive_texture, Some(PathBuf::from("models/e.png")));
+        let ignored = got.ignored.join("; ");
+        for name in ["Ps (sheen", "aniso (anisotropy", "norm (a normal map"] {
+            assert!(ignored.contains(name), "{name}: {ignored}");
+        }
+        assert!(!ignored.contains("map_P") && !ignored.contains("map_Ke"), "{ignored}");
+        // Ke is kept and multiplied by its map.
+        let got = from_mtl(&parse("newmtl a\nKe 2 2 2\nmap_Ke e.png\n"), Path::new(".")).unwrap();
+        assert_eq!(got.material.emission, Color::splat(2.0));
     }
 
     #[test]
@@ -235,7 +297,10 @@ mod tests {
     fn unused_statements_are_named_and_bad_values_are_errors_naming_the_field() {
         let m = parse("newmtl a\nKa 1 1 1\nmap_Bump n.png\naniso 0.5\n");
         let got = from_mtl(&m, Path::new(".")).unwrap();
-        assert_eq!(got.ignored, ["Ka", "map_Bump/norm", "aniso"]);
+        assert_eq!(
+            got.ignored,
+            ["Ka", "map_Bump/norm", "aniso (anisotropy: the material's GGX lobe is isotropic)"]
+        );
         for (text, field) in
             [("Kd -1 0 0", "Kd"), ("Ke 0 -2 0", "Ke"), ("Ni 0", "Ni"), ("Ni 500", "Ni"), ("Tr x", "Tr")]
         {

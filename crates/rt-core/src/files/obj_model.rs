@@ -11,6 +11,7 @@ use crate::files::model::{Model, ModelError};
 use crate::files::mtl::from_mtl;
 use crate::geometry::mesh::Mesh;
 use crate::materials::texture::Texture;
+use crate::materials::texture_slot::{Encoding, TextureSlot};
 use crate::math::real::{Real, Vec3};
 
 /// Reads an OBJ file split by material ([`Mesh::load_obj_parts`]) with its
@@ -39,7 +40,7 @@ pub fn load(path: &Path, scale: Real, translate: Vec3) -> Result<Model, ModelErr
     let mut index_of: HashMap<usize, usize> = HashMap::new();
     let mut materials = Vec::new();
     let mut textures = Vec::new();
-    let mut texture_of: HashMap<PathBuf, Option<u32>> = HashMap::new();
+    let mut texture_of: HashMap<(PathBuf, Encoding), Option<u32>> = HashMap::new();
     let mut parts = Vec::new();
     let mut faces_without = false;
     for (mesh, material) in obj.parts {
@@ -62,18 +63,62 @@ pub fn load(path: &Path, scale: Real, translate: Vec3) -> Result<Model, ModelErr
             warnings.push(format!("material \"{name}\": not used: {}", mapped.ignored.join(", ")));
         }
         let mut m = mapped.material;
+        // The PBR extension's maps: each image decoded once per encoding.
+        let pbr_maps = [&mapped.roughness_texture, &mapped.metallic_texture, &mapped.emissive_texture];
+        if pbr_maps.iter().any(|t| t.is_some()) && !mesh.has_uvs() {
+            warnings.push(format!(
+                "material \"{name}\": its map_Pr/map_Pm/map_Ke are not used: its faces have no texture coordinates"
+            ));
+        }
+        let mut decode = |file: &PathBuf, encoding: Encoding, field: &str| {
+            if !files.contains(file) {
+                files.push(file.clone());
+            }
+            match Texture::load_as(file, encoding) {
+                Ok(t) => Some(t),
+                Err(e) => {
+                    warnings.push(format!("{e}: material \"{name}\" shows its {field} factor instead"));
+                    None
+                }
+            }
+        };
+        let has_uvs = mesh.has_uvs();
+        let slot_of = |texture: Option<Texture>, textures: &mut Vec<Texture>| {
+            let texture = texture.filter(|_| has_uvs)?;
+            textures.push(texture);
+            Some(TextureSlot::new(textures.len() as u32 - 1))
+        };
+        if mapped.roughness_texture.is_some() || mapped.metallic_texture.is_some() {
+            let roughness = mapped.roughness_texture.as_ref().and_then(|f| decode(f, Encoding::Linear, "Pr"));
+            let metallic = mapped.metallic_texture.as_ref().and_then(|f| decode(f, Encoding::Linear, "Pm"));
+            let combined = Texture::metallic_roughness(roughness.as_ref(), metallic.as_ref());
+            m.metallic_roughness_texture = slot_of(combined, &mut textures);
+        }
+        if let Some(file) = &mapped.emissive_texture {
+            let key = (file.clone(), Encoding::Srgb);
+            m.emissive_texture = match texture_of.get(&key) {
+                Some(index) => index.map(TextureSlot::new),
+                None => {
+                    let slot = slot_of(decode(file, Encoding::Srgb, "Ke"), &mut textures);
+                    texture_of.insert(key, slot.map(|s| s.texture));
+                    slot
+                }
+            };
+        }
         if let Some(file) = mapped.texture {
             if !files.contains(&file) {
                 files.push(file.clone());
             }
-            let texture = *texture_of.entry(file.clone()).or_insert_with(|| match Texture::load(&file) {
-                Ok(t) => {
-                    textures.push(t);
-                    Some(textures.len() as u32 - 1)
-                }
-                Err(e) => {
-                    warnings.push(format!("{e}: its materials show their Kd colour instead"));
-                    None
+            let texture = *texture_of.entry((file.clone(), Encoding::Srgb)).or_insert_with(|| {
+                match Texture::load(&file) {
+                    Ok(t) => {
+                        textures.push(t);
+                        Some(textures.len() as u32 - 1)
+                    }
+                    Err(e) => {
+                        warnings.push(format!("{e}: its materials show their Kd colour instead"));
+                        None
+                    }
                 }
             });
             if texture.is_some() && !mesh.has_uvs() {
@@ -82,7 +127,7 @@ pub fn load(path: &Path, scale: Real, translate: Vec3) -> Result<Model, ModelErr
                     file.display()
                 ));
             }
-            m.texture = texture;
+            m.base_color_texture = texture.map(TextureSlot::new);
         }
         index_of.insert(i, materials.len());
         parts.push((mesh, Some(materials.len())));
@@ -137,7 +182,7 @@ mod tests {
             model.parts.iter().map(|(m, i)| (m.triangle_count(), *i)).collect();
         assert_eq!(parts, [(2, Some(0)), (1, Some(1))]);
         assert_eq!(model.materials[0].1.emission, Color::new(0.0, 0.0, 2.0));
-        assert_eq!(model.materials[1].1.texture, Some(0));
+        assert_eq!(model.materials[1].1.base_color_texture, Some(TextureSlot::new(0)));
         assert_eq!(model.textures.len(), 1);
         let orange = model.textures[0].sample(0.5, 0.5);
         assert!(
@@ -145,6 +190,40 @@ mod tests {
                 < 1e-6
         );
         assert_eq!(model.warnings, ["material \"tex\": not used: map_Bump/norm"]);
+    }
+
+    #[test]
+    fn mtl_roughness_and_metallic_maps_become_one_linear_texture_and_emission_an_srgb_one() {
+        let dir = folder(&[
+            ("m.obj", TWO_MATERIALS),
+            (
+                "m.mtl",
+                b"newmtl red\nKd 1 0 0\nnewmtl tex\nKd 1 1 1\nmap_Pr r.png\nmap_Pm m.png\nmap_Ke e.png\n",
+            ),
+        ]);
+        image::GrayImage::from_pixel(2, 2, image::Luma([64])).save(dir.path().join("r.png")).unwrap();
+        image::GrayImage::from_pixel(4, 1, image::Luma([255])).save(dir.path().join("m.png")).unwrap();
+        png(dir.path(), "e.png");
+        let model = load(&dir.path().join("m.obj"), 1.0, Vec3::ZERO).unwrap();
+        let m = model.materials[1].1;
+        let (mr, e) = (m.metallic_roughness_texture.unwrap(), m.emissive_texture.unwrap());
+        let combined = &model.textures[mr.texture as usize];
+        assert_eq!(combined.size(), (4, 2));
+        assert_eq!(combined.sample(0.5, 0.5), Color::new(1.0, 64.0 / 255.0, 1.0));
+        let glow = model.textures[e.texture as usize].sample(0.5, 0.5);
+        assert!((glow.y - crate::materials::texture::srgb_decode(128.0 / 255.0)).abs() < 1e-6);
+        assert!(model.warnings.is_empty(), "{:?}", model.warnings);
+        // A missing map is a warning naming it and the material.
+        std::fs::remove_file(dir.path().join("r.png")).unwrap();
+        let model = load(&dir.path().join("m.obj"), 1.0, Vec3::ZERO).unwrap();
+        assert!(
+            model
+                .warnings
+                .iter()
+                .any(|w| w.contains("r.png") && w.contains("material \"tex\" shows its Pr factor")),
+            "{:?}",
+            model.warnings
+        );
     }
 
     #[test]
@@ -162,7 +241,7 @@ mod tests {
             ("m.mtl", b"newmtl red\nnewmtl tex\nKd 0.5 0.5 0.5\nmap_Kd gone.png\n"),
         ]);
         let model = load(&dir.path().join("m.obj"), 1.0, Vec3::ZERO).unwrap();
-        assert_eq!(model.materials[1].1.texture, None);
+        assert_eq!(model.materials[1].1.base_color_texture, None);
         assert_eq!(model.materials[1].1.color, Color::splat(0.5));
         assert!(
             model.warnings.iter().any(|w| w.contains("gone.png") && w.contains("Kd colour")),

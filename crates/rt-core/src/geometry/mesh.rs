@@ -97,6 +97,9 @@ struct VertexAttributes {
     /// Texture coordinates `(u, v)` with `v` down the image
     /// ([`crate::materials::texture`]), empty when the file has none.
     uvs: Vec<[f32; 2]>,
+    /// A second set of texture coordinates (glTF's `TEXCOORD_1`), empty
+    /// when the file has none.
+    uvs1: Vec<[f32; 2]>,
 }
 
 impl Mesh {
@@ -149,7 +152,22 @@ impl Mesh {
             .with_min_len(4096)
             .map(|n| normalize_robust(n).unwrap_or(Vec3::ZERO))
             .collect();
-        self.attributes = Some(Box::new(VertexAttributes { normals, uvs }));
+        self.attributes = Some(Box::new(VertexAttributes { normals, uvs, uvs1: Vec::new() }));
+        Some(self)
+    }
+
+    /// The mesh with a second set of texture coordinates (glTF's
+    /// `TEXCOORD_1`; empty, or one per vertex), `v` down the image as for
+    /// the first. `None` if the list has the wrong length.
+    pub fn with_second_uvs(mut self, uvs1: Vec<[f32; 2]>) -> Option<Self> {
+        if !(uvs1.is_empty() || uvs1.len() == self.positions.len()) {
+            return None;
+        }
+        if !uvs1.is_empty() {
+            self.attributes.get_or_insert_with(Box::default).uvs1 = uvs1;
+        } else if let Some(a) = &mut self.attributes {
+            a.uvs1 = uvs1;
+        }
         Some(self)
     }
 
@@ -162,7 +180,9 @@ impl Mesh {
         }
         let normals = meshes.iter().any(Mesh::has_vertex_normals);
         let uvs = meshes.iter().any(Mesh::has_uvs);
+        let uvs1 = meshes.iter().any(|m| !m.uvs_of_set(1).is_empty());
         let mut all = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut all_uvs1 = Vec::new();
         for m in meshes {
             let base = u32::try_from(all.0.len()).ok()?;
             let n = m.positions.len();
@@ -175,9 +195,12 @@ impl Mesh {
             if uvs {
                 all.3.extend(if a.uvs.is_empty() { vec![[0.0; 2]; n] } else { a.uvs });
             }
+            if uvs1 {
+                all_uvs1.extend(if a.uvs1.is_empty() { vec![[0.0; 2]; n] } else { a.uvs1 });
+            }
         }
         u32::try_from(all.0.len()).ok()?;
-        Self::new(all.0, all.1)?.with_vertex_attributes(all.2, all.3)
+        Self::new(all.0, all.1)?.with_vertex_attributes(all.2, all.3)?.with_second_uvs(all_uvs1)
     }
 
     /// Loads an OBJ file with tobj as one mesh, then scales every vertex by
@@ -234,6 +257,7 @@ impl Mesh {
             + self.normals.len() * size_of::<Vec3>()
             + size_of_val(self.vertex_normals())
             + size_of_val(self.uvs())
+            + size_of_val(self.uvs_of_set(1))
     }
 
     /// Whether the mesh has per-vertex shading normals.
@@ -247,6 +271,21 @@ impl Mesh {
 
     fn uvs(&self) -> &[[f32; 2]] {
         self.attributes.as_ref().map_or(&[], |a| &a.uvs)
+    }
+
+    /// Texture-coordinate set `set` (0 or 1; empty for any other or when
+    /// the mesh has none).
+    fn uvs_of_set(&self, set: u32) -> &[[f32; 2]] {
+        match (set, self.attributes.as_ref()) {
+            (0, Some(a)) => &a.uvs,
+            (1, Some(a)) => &a.uvs1,
+            _ => &[],
+        }
+    }
+
+    /// Whether the mesh has texture-coordinate set `set` (`TEXCOORD_set`).
+    pub fn has_uv_set(&self, set: u32) -> bool {
+        !self.uvs_of_set(set).is_empty()
     }
 
     /// Whether the mesh has texture coordinates.
@@ -381,7 +420,13 @@ impl Mesh {
     /// The texture coordinates at `p` on triangle `i`, interpolated like
     /// the normals; `None` when the mesh has none.
     pub fn uv(&self, i: usize, p: Vec3) -> Option<(Real, Real)> {
-        let uvs = self.uvs();
+        self.uv_of_set(i, 0, p)
+    }
+
+    /// The coordinates of texture-coordinate set `set` at `p` on triangle
+    /// `i` ([`Mesh::uv`] for set 0); `None` when the mesh has no such set.
+    pub fn uv_of_set(&self, i: usize, set: u32, p: Vec3) -> Option<(Real, Real)> {
+        let uvs = self.uvs_of_set(set);
         if uvs.is_empty() {
             return None;
         }
@@ -389,6 +434,24 @@ impl Mesh {
         let [b0, b1, b2] = self.barycentric(i, p);
         let at = |k: usize| (b0 * corners[0][k] + b1 * corners[1][k] + b2 * corners[2][k]) as Real;
         Some((at(0), at(1)))
+    }
+
+    /// The ratio of triangle `i`'s area in texture-coordinate set `set` to
+    /// its area in the world, `|Δuv₀₁ × Δuv₀₂| / |Δp₀₁ × Δp₀₂|`: how many
+    /// units of texture area a unit of surface covers, for choosing a
+    /// mip-map level ([`crate::materials::texture_lod`]). 0 for a
+    /// degenerate triangle or a missing set.
+    pub fn uv_per_world_area(&self, i: usize, set: u32) -> f32 {
+        let uvs = self.uvs_of_set(set);
+        if uvs.is_empty() {
+            return 0.0;
+        }
+        let [t0, t1, t2] = self.triangles[i].map(|v| uvs[v as usize].map(f64::from));
+        let uv = ((t1[0] - t0[0]) * (t2[1] - t0[1]) - (t1[1] - t0[1]) * (t2[0] - t0[0])).abs();
+        let [p0, p1, p2] = self.triangle(i).map(widen);
+        let world = (p1 - p0).cross(p2 - p0).length();
+        let ratio = uv / world;
+        if ratio.is_finite() { ratio as f32 } else { 0.0 }
     }
 
     /// The tangents `(∂p/∂u, ∂p/∂v)` of triangle `i` along its texture
@@ -951,5 +1014,47 @@ mod tests {
         assert!(c.shading_normal(0, Vec3::new(0.2, 0.2, 0.0)).is_some());
         assert_eq!(c.shading_normal(1, Vec3::new(0.0, 0.2, 0.2)), None);
         assert!(Mesh::concat(Vec::new()).is_none());
+    }
+
+    #[test]
+    fn a_second_uv_set_is_kept_interpolated_and_its_area_ratio_measured() {
+        // A 2×2 quad in z = 0: set 0 maps it onto the unit square, set 1
+        // onto a quarter of it, turned.
+        let quad = Mesh::new(
+            vec![
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(2.0, 0.0, 0.0),
+                Vec3::new(2.0, 2.0, 0.0),
+                Vec3::new(0.0, 2.0, 0.0),
+            ],
+            vec![[0, 1, 2], [0, 2, 3]],
+        )
+        .unwrap()
+        .with_vertex_attributes(vec![], vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+        .unwrap();
+        assert!(quad.has_uv_set(0) && !quad.has_uv_set(1));
+        assert_eq!(quad.uv_of_set(0, 1, Vec3::new(1.0, 0.5, 0.0)), None);
+        assert_eq!(quad.uv_per_world_area(0, 1), 0.0);
+        let quad = quad.with_second_uvs(vec![[0.5, 0.0], [0.5, 0.5], [0.0, 0.5], [0.0, 0.0]]).unwrap();
+        assert!(quad.has_uv_set(1));
+        let p = Vec3::new(1.5, 0.5, 0.0);
+        let (u, v) = quad.uv_of_set(0, 1, p).unwrap();
+        assert!((u - 0.375).abs() < 1e-6 && (v - 0.375).abs() < 1e-6, "({u}, {v})");
+        assert_eq!(quad.uv_of_set(0, 0, p), quad.uv(0, p));
+        // Unit uv square over 4 world units; a quarter of it over 4.
+        assert!((quad.uv_per_world_area(0, 0) - 0.25).abs() < 1e-6);
+        assert!((quad.uv_per_world_area(1, 1) - 0.0625).abs() < 1e-6);
+        assert_eq!(quad.with_second_uvs(vec![[0.0; 2]; 3]), None);
+        // Kept when meshes are joined.
+        let joined = Mesh::concat(vec![
+            Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]).unwrap(),
+            Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]])
+                .unwrap()
+                .with_second_uvs(vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+                .unwrap(),
+        ])
+        .unwrap();
+        assert!(joined.has_uv_set(1) && !joined.has_uv_set(0));
+        assert!((joined.uv_per_world_area(1, 1) - 1.0).abs() < 1e-6);
     }
 }

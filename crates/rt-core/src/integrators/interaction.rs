@@ -17,6 +17,7 @@ use crate::geometry::object::Object;
 use crate::geometry::surface::SurfacePoint;
 use crate::materials::bsdf::Bsdf;
 use crate::materials::material::Material;
+use crate::materials::texture_lod::Footprint;
 use crate::math::color::Color;
 use crate::math::ray::Ray;
 use crate::math::real::{Real, Vec3, normalize_robust};
@@ -55,9 +56,18 @@ impl<'s> SurfaceInteraction<'s> {
     /// known already (an integrator's loop has it).
     #[inline]
     pub fn along(scene: &'s Scene, ray: &Ray, d: Vec3, hit: &Hit) -> Self {
+        Self::along_cone(scene, ray, d, hit, 0.0)
+    }
+
+    /// [`SurfaceInteraction::along`] for a ray whose cone is `cone_width`
+    /// wide at the hit ([`crate::materials::texture_lod`]): its textures are
+    /// read at the mip-map level the footprint asks for.
+    #[inline]
+    pub fn along_cone(scene: &'s Scene, ray: &Ray, d: Vec3, hit: &Hit, cone_width: f32) -> Self {
         let shape = &scene.objects()[hit.object];
         let point = shape.primitive.surface_point(hit.primitive, hit.normal, ray.at(hit.t));
-        let material = scene.material_at(hit.object, hit.primitive, point.p);
+        let footprint = Footprint::new(cone_width, d.dot(point.normal));
+        let material = scene.material_at_footprint(hit.object, hit.primitive, point.p, footprint);
         let shading_normal = shape.primitive.shading_normal(hit.primitive, point.p);
         Self { object: hit.object, primitive: hit.primitive, point, wo: -d, shading_normal, material, shape }
     }

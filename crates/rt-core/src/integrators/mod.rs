@@ -20,6 +20,7 @@ use crate::explain::recorder::{NoRecorder, Recorder};
 use crate::geometry::hit::Hit;
 use crate::integrators::path_tracer::PathTracer;
 use crate::integrators::tracer::Tracer;
+use crate::materials::texture_lod::RayCone;
 use crate::math::color::Color;
 use crate::math::ray::Ray;
 use crate::sampling::sampler::Sampler;
@@ -42,6 +43,15 @@ impl<'s> Integrator<'s> {
         match plan.global_illumination {
             Some(gi) => Self::Path(PathTracer::new(scene, gi, plan.subsurface)),
             None => Self::Direct(Tracer::new(scene, plan)),
+        }
+    }
+
+    /// This integrator with camera rays of cone `cone`, for texture level
+    /// of detail ([`crate::materials::texture_lod`]).
+    pub fn with_cone(self, cone: RayCone) -> Self {
+        match self {
+            Self::Direct(tracer) => Self::Direct(tracer.with_cone(cone)),
+            Self::Path(path_tracer) => Self::Path(path_tracer.with_cone(cone)),
         }
     }
 

@@ -40,6 +40,7 @@ use crate::integrators::interaction::SurfaceInteraction;
 use crate::integrators::random_walk::{RandomWalk, WalkEnd};
 use crate::lights::light_sampler::{LightSampler, Source};
 use crate::materials::bsdf::{self, Bsdf};
+use crate::materials::texture_lod::RayCone;
 use crate::math::color::Color;
 use crate::math::ray::{Interval, Ray};
 use crate::math::real::{Real, Vec3, normalize_robust, to_f32};
@@ -59,6 +60,8 @@ pub struct PathTracer<'s> {
     /// Whether translucent objects get random walks (else their materials
     /// act as plain surfaces).
     subsurface: bool,
+    /// A camera ray's cone, for texture level of detail.
+    cone: RayCone,
 }
 
 /// What the path knows about the scattering that led to the current ray.
@@ -75,7 +78,15 @@ impl<'s> PathTracer<'s> {
     /// A path tracer for `scene` with `settings`; `subsurface` says whether
     /// translucent objects get random walks ([`crate::EffectPlan::subsurface`]).
     pub fn new(scene: &'s Scene, settings: GlobalIllumination, subsurface: bool) -> Self {
-        Self { scene, settings, subsurface }
+        Self { scene, settings, subsurface, cone: RayCone::POINT }
+    }
+
+    /// This path tracer with camera rays of cone `cone` (one pixel's,
+    /// [`RayCone::of_pixel`]): textures are read at the level of detail
+    /// its footprint asks for, along the whole path
+    /// ([`crate::materials::texture_lod`]).
+    pub fn with_cone(self, cone: RayCone) -> Self {
+        Self { cone, ..self }
     }
 
     /// The radiance arriving along a camera ray already cast: `hit` is what
@@ -109,6 +120,8 @@ impl<'s> PathTracer<'s> {
         let mut beta = Color::ONE;
         let mut previous = Previous::Specular;
         let mut bounce = 0;
+        // The path's length so far: its ray cone's width grows with it.
+        let mut travelled: Real = 0.0;
         while let Some(d) = normalize_robust(ray.dir) {
             let Some(h) = hit else {
                 // 1. The environment found by this ray.
@@ -122,7 +135,8 @@ impl<'s> PathTracer<'s> {
                 rec.contribution(ContributionKind::Environment, term);
                 break;
             };
-            let si = SurfaceInteraction::along(scene, &ray, d, &h);
+            travelled += h.t * ray.dir.length();
+            let si = SurfaceInteraction::along_cone(scene, &ray, d, &h, self.cone.width_at(travelled));
             let (sp, wo) = (si.point, si.wo);
             // A translucent object's surface is its dielectric boundary; the
             // medium inside does the rest (step 6).
@@ -948,7 +962,10 @@ mod tests {
                     ior: 0.5 + 3.0 * ior,
                     emission: if e > 0.7 { Color::splat(e * 5.0) } else { Color::ZERO },
                     subsurface: None,
-                    texture: textured[i].then_some(0),
+                    base_color_texture: textured[i].then_some(crate::materials::texture_slot::TextureSlot::new(0)),
+                    metallic_roughness_texture: None,
+                    emissive_texture: None,
+                    occlusion_texture: None,
                     // Half the materials physically based, from the same numbers.
                     physical: (ks > 0.5).then_some(crate::materials::principled::Principled {
                         metallic: kd,

@@ -40,9 +40,10 @@ use crate::geometry::hit::Hit;
 use crate::geometry::surface::SurfacePoint;
 use crate::integrators::interaction::SurfaceInteraction;
 use crate::materials::shading::{fresnel_dielectric, reflect, refract};
+use crate::materials::texture_lod::RayCone;
 use crate::math::color::Color;
 use crate::math::ray::{Interval, Ray};
-use crate::math::real::{Real, Vec3, to_f32};
+use crate::math::real::{Real, Vec3, normalize_robust, to_f32};
 use crate::sampling::sampler::{Sampler, cosine_hemisphere, stratified};
 use crate::scene::Scene;
 use crate::scene::effects::{EffectPlan, RayCounts};
@@ -56,12 +57,22 @@ pub const MIN_WEIGHT: f32 = 1.0 / 512.0;
 pub struct Tracer<'s> {
     scene: &'s Scene,
     plan: EffectPlan,
+    /// A camera ray's cone, for texture level of detail.
+    cone: RayCone,
 }
 
 impl<'s> Tracer<'s> {
     /// A tracer for `scene` that simulates what `plan` allows.
     pub fn new(scene: &'s Scene, plan: EffectPlan) -> Self {
-        Self { scene, plan }
+        Self { scene, plan, cone: RayCone::POINT }
+    }
+
+    /// This tracer with camera rays of cone `cone` (one pixel's,
+    /// [`RayCone::of_pixel`]): textures are read at the level of detail
+    /// its footprint asks for, reflected and refracted rays' too
+    /// ([`crate::materials::texture_lod`]).
+    pub fn with_cone(self, cone: RayCone) -> Self {
+        Self { cone, ..self }
     }
 
     /// The plan in force.
@@ -91,12 +102,13 @@ impl<'s> Tracer<'s> {
             return background;
         };
         if !self.plan.shading {
-            let flat = self.scene.hit_color(&hit, ray);
+            let flat = self.scene.hit_color(&hit, ray, self.cone.width_at(hit.t * ray.dir.length()));
             rec.contribution(ContributionKind::Flat, flat);
             rec.returned(flat);
             return flat;
         }
-        let color = self.shade(ray, &hit, Path { depth: 0, weight: 1.0 }, sampler, counts, rec);
+        let color =
+            self.shade(ray, &hit, Path { depth: 0, weight: 1.0, travelled: 0.0 }, sampler, counts, rec);
         rec.returned(color);
         color
     }
@@ -131,11 +143,15 @@ impl<'s> Tracer<'s> {
         counts: &mut RayCounts,
         rec: &mut R,
     ) -> Color {
-        let Some(si) = SurfaceInteraction::new(self.scene, ray, hit) else {
+        let travelled = path.travelled + hit.t * ray.dir.length();
+        let Some(si) = normalize_robust(ray.dir)
+            .map(|d| SurfaceInteraction::along_cone(self.scene, ray, d, hit, self.cone.width_at(travelled)))
+        else {
             let background = self.scene.environment().radiance(ray.dir);
             rec.contribution(ContributionKind::Environment, background);
             return background;
         };
+        let path = Path { travelled, ..path };
         let (sp, m, wo, d) = (&si.point, &*si.material, si.wo, -si.wo);
         let front = si.front();
         let n = si.facing_normal();
@@ -270,12 +286,15 @@ impl<'s> Tracer<'s> {
 struct Path {
     depth: u32,
     weight: f32,
+    /// Distance from the camera to where the ray starts, along the path:
+    /// its ray cone's width grows with it.
+    travelled: Real,
 }
 
 impl Path {
     /// The path one bounce further, through a surface passing `factor`.
     fn then(self, factor: f32) -> Self {
-        Self { depth: self.depth + 1, weight: self.weight * factor }
+        Self { depth: self.depth + 1, weight: self.weight * factor, ..self }
     }
 }
 

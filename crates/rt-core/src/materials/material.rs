@@ -3,6 +3,7 @@
 
 use crate::materials::medium::Subsurface;
 use crate::materials::principled::Principled;
+use crate::materials::texture_slot::TextureSlot;
 use crate::math::color::Color;
 use crate::math::real::{Real, SMOOTH_ALPHA};
 
@@ -56,11 +57,21 @@ pub struct Material {
     /// around a homogeneous scattering medium, and the BSDF lobes above are
     /// not used. Only closed objects may have one.
     pub subsurface: Option<Subsurface>,
-    /// A base-colour texture: an index into the scene's textures
-    /// ([`crate::scene::Scene::texture`]). Where the surface has texture
-    /// coordinates, the texture's colour multiplies `color` (as `map_Kd`
-    /// multiplies `Kd`, and glTF's `baseColorTexture` its factor).
-    pub texture: Option<u32>,
+    /// A base-colour texture (sRGB-decoded): where the surface has the
+    /// slot's texture coordinates, its colour multiplies `color` (as
+    /// `map_Kd` multiplies `Kd`, and glTF's `baseColorTexture` its factor).
+    pub base_color_texture: Option<TextureSlot>,
+    /// glTF's `metallicRoughnessTexture` (linear data): its blue channel
+    /// multiplies the physically based `metallic`, its green one
+    /// `roughness`; unused by the weights model.
+    pub metallic_roughness_texture: Option<TextureSlot>,
+    /// An emissive texture (sRGB-decoded): its colour multiplies `emission`.
+    pub emissive_texture: Option<TextureSlot>,
+    /// glTF's `occlusionTexture` (linear data, red channel), kept but not
+    /// applied: global illumination computes the occlusion it bakes, so
+    /// applying it would count it twice, and the direct-lighting tracer's
+    /// ambient term has ray-traced ambient occlusion of its own.
+    pub occlusion_texture: Option<TextureSlot>,
     /// The physically based parameters ([`Principled`]): when set, the
     /// surface is shaded by the glTF 2.0 BSDF instead of the weights.
     pub physical: Option<Principled>,
@@ -80,7 +91,10 @@ impl Material {
             ior: 1.5,
             emission: Color::ZERO,
             subsurface: None,
-            texture: None,
+            base_color_texture: None,
+            metallic_roughness_texture: None,
+            emissive_texture: None,
+            occlusion_texture: None,
             physical: None,
         }
     }
@@ -140,6 +154,44 @@ impl Material {
                     && (Real::from(p.roughness * p.roughness) < SMOOTH_ALPHA || self.ior == 1.0)
             }
         }
+    }
+
+    /// The texture slots that change what the surface looks like (base
+    /// colour, metallic-roughness, emissive), those present.
+    pub fn applied_textures(&self) -> impl Iterator<Item = &TextureSlot> {
+        [&self.base_color_texture, &self.metallic_roughness_texture, &self.emissive_texture]
+            .into_iter()
+            .flatten()
+    }
+
+    /// Every texture slot the material has, the occlusion one included.
+    pub fn texture_slots(&self) -> impl Iterator<Item = &TextureSlot> {
+        self.applied_textures().chain(&self.occlusion_texture)
+    }
+
+    /// Moves every texture slot's index up by `by`: a model's materials
+    /// number its own textures from 0, a scene's follow the textures
+    /// already there.
+    pub fn offset_textures(&mut self, by: u32) {
+        for slot in [
+            &mut self.base_color_texture,
+            &mut self.metallic_roughness_texture,
+            &mut self.emissive_texture,
+            &mut self.occlusion_texture,
+        ]
+        .into_iter()
+        .flatten()
+        {
+            slot.texture += by;
+        }
+    }
+
+    /// Whether any texture changes the surface (an untextured material is
+    /// used as it is, [`crate::scene::Scene::material_at`]).
+    pub fn is_textured(&self) -> bool {
+        self.base_color_texture.is_some()
+            || self.metallic_roughness_texture.is_some()
+            || self.emissive_texture.is_some()
     }
 
     /// Whether the surface gives off light.

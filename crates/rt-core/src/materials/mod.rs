@@ -1,7 +1,7 @@
 //! How surfaces and insides scatter light: a scene file's [`material`],
 //! the BSDF it makes ([`bsdf`], with the optics of [`shading`] and the
 //! physically based model of [`principled`]), the
-//! medium of a translucent inside ([`medium`]) and image [`texture`]s.
+//! medium of a translucent inside ([`medium`]) and image [`texture`]s and how a material uses one ([`texture_slot`]) at the level of detail a ray's footprint asks for ([`texture_lod`]).
 
 pub mod bsdf;
 pub mod material;
@@ -9,3 +9,5 @@ pub mod medium;
 pub mod principled;
 pub mod shading;
 pub mod texture;
+pub mod texture_lod;
+pub mod texture_slot;

@@ -1,11 +1,15 @@
-//! Image textures: a base colour that varies over a surface.
+//! Image textures: a parameter that varies over a surface.
 //!
-//! A texture is an image file (PNG or JPEG) read with the `image` crate. Its
-//! 8-bit values are sRGB-encoded, as base-colour textures are by the
-//! conventions of OBJ/MTL `map_Kd` and glTF's `baseColorTexture`: they are
-//! decoded to linear RGB once, at load, with the IEC 61966-2-1 curve
-//! ([`srgb_decode`]), so that filtering and shading happen on linear values.
-//! Alpha is ignored.
+//! A texture is an image file (PNG or JPEG) read with the `image` crate, or
+//! an image inside a glTF file. It is decoded once, at load, by the
+//! [`Encoding`] its use needs: colours (base colour, emissive; OBJ/MTL
+//! `map_Kd`, glTF's `baseColorTexture`) are sRGB-encoded and decoded to
+//! linear RGB with the IEC 61966-2-1 curve ([`srgb_decode`]); data
+//! (metallic-roughness, occlusion, normals) are read as stored, `b/255`.
+//! Filtering and shading then happen on linear values. One image used both
+//! ways is decoded twice; one decoding is shared (`Arc`) by every material
+//! and sampler that uses it ([`crate::materials::texture_slot`]). Alpha is
+//! ignored.
 //!
 //! **Coordinates.** `(u, v)` with `u` to the right and `v` *down* the image:
 //! `(0, 0)` is the upper-left corner of the upper-left texel, `(1, 1)` the
@@ -18,9 +22,21 @@
 //! `Bilerp`). **Wrapping** is by default glTF's `REPEAT`: texel indices are
 //! taken modulo the size, so `u = 1.25` is `u = 0.25` and the filter wraps
 //! across the border. glTF's other modes are there too ([`Wrap`]), per axis.
+//! glTF's `NEAREST` filter reads the texel the point falls in.
+//!
+//! **Mip-maps.** A texture seen from afar covers many texels per pixel, and
+//! one bilinear lookup per ray would alias (moiré). Each texture keeps a
+//! mip-map pyramid (Williams, "Pyramidal Parametrics", 1983), built once in
+//! linear space: each level halves the one above by a box filter that is
+//! exact for odd sizes too (an odd side n halves to ⌊n/2⌋ texels, each the
+//! mean of a span of n/⌊n/2⌋ source texels). [`Texture::lookup`] reads
+//! the level the ray's footprint asks for
+//! ([`crate::materials::texture_lod`]), blending the two around it
+//! (trilinear). The pyramid costs a third more memory than the image.
 
 use std::path::{Path, PathBuf};
 
+use crate::materials::texture_slot::{Encoding, Filter, Sampler};
 use crate::math::color::Color;
 use crate::math::real::{Real, to_f64};
 
@@ -80,12 +96,112 @@ impl Wrap {
     }
 }
 
-/// An image of linear RGB texels, row by row from the top, and how it wraps.
+/// One level of a mip-map pyramid: `width × height` linear texels, row by
+/// row from the top.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Texture {
+struct Level {
     width: u32,
     height: u32,
     texels: Vec<Color>,
+}
+
+impl Level {
+    /// The texel at integer coordinates `(i, j)`, wrapped.
+    #[inline]
+    fn texel(&self, wrap: [Wrap; 2], i: i64, j: i64) -> Color {
+        let (w, h) = (i64::from(self.width), i64::from(self.height));
+        self.texels[(wrap[1].index(j, h) * w + wrap[0].index(i, w)) as usize]
+    }
+
+    /// The texel `(u, v)` falls in (glTF's `NEAREST`).
+    fn nearest(&self, wrap: [Wrap; 2], u: f64, v: f64) -> Color {
+        let (w, h) = (f64::from(self.width), f64::from(self.height));
+        let (x, y) = ((u * w).floor(), (v * h).floor());
+        if !(x.is_finite() && y.is_finite()) {
+            return self.texels[0];
+        }
+        // Reduced by whole mirrored periods first, so the index stays exact.
+        let reduce = |x: f64, n: f64, wrap: Wrap| match wrap {
+            Wrap::ClampToEdge => x.clamp(-1.0, n),
+            _ => x.rem_euclid(2.0 * n),
+        };
+        self.texel(wrap, reduce(x, w, wrap[0]) as i64, reduce(y, h, wrap[1]) as i64)
+    }
+
+    /// The bilinear filter at `(u, v)` (see the module documentation).
+    fn bilinear(&self, wrap: [Wrap; 2], u: f64, v: f64) -> Color {
+        let (w, h) = (f64::from(self.width), f64::from(self.height));
+        let (x, y) = (u * w - 0.5, v * h - 0.5);
+        if !(x.is_finite() && y.is_finite()) {
+            return self.texels[0];
+        }
+        // Far coordinates are reduced first (by a whole mirrored period),
+        // so the integer part stays exact.
+        let reduce = |x: f64, n: f64, wrap: Wrap| match wrap {
+            Wrap::ClampToEdge => x.clamp(-1.0, n),
+            _ => x.rem_euclid(2.0 * n),
+        };
+        let (x, y) = (reduce(x, w, wrap[0]), reduce(y, h, wrap[1]));
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
+        let (i, j) = (x0 as i64, y0 as i64);
+        let top = self.texel(wrap, i, j) * (1.0 - fx) + self.texel(wrap, i + 1, j) * fx;
+        let bottom = self.texel(wrap, i, j + 1) * (1.0 - fx) + self.texel(wrap, i + 1, j + 1) * fx;
+        top * (1.0 - fy) + bottom * fy
+    }
+
+    /// The next level down: each side halved (rounded down, at least 1) by
+    /// a box filter — `2×2` texels averaged for even sides; for an odd side
+    /// n, output texel `i` averages the source span `[i·n/m, (i+1)·n/m)`
+    /// (m = ⌊n/2⌋), the texels at its ends weighted by how much of them it
+    /// covers, so no texel is dropped and the mean is kept exactly.
+    fn halved(&self) -> Level {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let (w2, h2) = ((w / 2).max(1), (h / 2).max(1));
+        let rows: Vec<Color> =
+            (0..h).flat_map(|j| box_resample(&self.texels[j * w..(j + 1) * w], w2)).collect();
+        let mut texels = vec![Color::ZERO; w2 * h2];
+        for i in 0..w2 {
+            let column: Vec<Color> = (0..h).map(|j| rows[j * w2 + i]).collect();
+            for (j, c) in box_resample(&column, h2).into_iter().enumerate() {
+                texels[j * w2 + i] = c;
+            }
+        }
+        Level { width: w2 as u32, height: h2 as u32, texels }
+    }
+}
+
+/// `values` box-filtered down to `m` values: output `i` is the mean over
+/// the span `[i·s, (i+1)·s)`, `s = n/m`, each source value weighted by its
+/// overlap with the span.
+fn box_resample(values: &[Color], m: usize) -> Vec<Color> {
+    let n = values.len();
+    if n == m {
+        return values.to_vec();
+    }
+    let s = n as f64 / m as f64;
+    (0..m)
+        .map(|i| {
+            let (a, b) = (i as f64 * s, (i + 1) as f64 * s);
+            let mut sum = Color::ZERO;
+            let (first, end) = (a.floor() as usize, (b.ceil() as usize).min(n));
+            for (k, &value) in values.iter().enumerate().take(end).skip(first) {
+                let overlap = (b.min(k as f64 + 1.0) - a.max(k as f64)).max(0.0);
+                sum += value * (overlap / s) as f32;
+            }
+            sum
+        })
+        .collect()
+}
+
+/// An image of linear RGB texels with its mip-map pyramid (built when it
+/// is made, in linear space), and how it wraps when read without a
+/// sampler ([`Texture::sample`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    /// Level 0 is the image; each next level is the previous one halved
+    /// ([`Level::halved`]), down to 1×1.
+    levels: Vec<Level>,
     wrap: [Wrap; 2],
 }
 
@@ -93,25 +209,74 @@ impl Texture {
     /// A texture of `width × height` linear colours given row by row from
     /// the top. `None` if the sizes disagree or either side is 0.
     pub fn new(width: u32, height: u32, texels: Vec<Color>) -> Option<Self> {
-        (width > 0 && height > 0 && texels.len() as u64 == u64::from(width) * u64::from(height))
-            .then_some(Self { width, height, texels, wrap: [Wrap::Repeat; 2] })
+        (width > 0 && height > 0 && texels.len() as u64 == u64::from(width) * u64::from(height)).then(|| {
+            let mut levels = vec![Level { width, height, texels }];
+            while let Some(last) = levels.last().filter(|l| l.width > 1 || l.height > 1) {
+                let next = last.halved();
+                levels.push(next);
+            }
+            Self { levels, wrap: [Wrap::Repeat; 2] }
+        })
     }
 
     /// A texture from 8- or 16-bit sRGB-encoded values in [0, 1], `channels`
     /// (1 to 4) per texel, row by row from the top: grey (1 or 2 channels)
     /// or RGB (3 or 4); alpha is dropped. `None` if the sizes disagree.
     pub fn from_srgb(width: u32, height: u32, channels: usize, values: &[f32]) -> Option<Self> {
+        Self::from_values(width, height, channels, values, Encoding::Srgb)
+    }
+
+    /// A texture from values in [0, 1] as [`Texture::from_srgb`] reads
+    /// them, decoded by `encoding`: sRGB colour to linear, or linear data
+    /// as it is.
+    pub fn from_values(
+        width: u32,
+        height: u32,
+        channels: usize,
+        values: &[f32],
+        encoding: Encoding,
+    ) -> Option<Self> {
         if !(1..=4).contains(&channels) || values.len() != channels * width as usize * height as usize {
             return None;
         }
+        let decode = |v: f32| {
+            let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+            match encoding {
+                Encoding::Srgb => srgb_decode(v),
+                Encoding::Linear => v,
+            }
+        };
         let texels = values
             .chunks_exact(channels)
             .map(|t| {
                 let rgb = if channels < 3 { [t[0]; 3] } else { [t[0], t[1], t[2]] };
-                Color::from_array(rgb.map(|v| srgb_decode(v.clamp(0.0, 1.0))))
+                Color::from_array(rgb.map(decode))
             })
             .collect();
         Self::new(width, height, texels)
+    }
+
+    /// One metallic-roughness texture in glTF's layout (green: roughness,
+    /// blue: metallic, red: 1) from separate grey ones (their red channel),
+    /// as MTL's `map_Pr` and `map_Pm` give them: as large as the larger of
+    /// the two, the other read bilinearly at its texel centres; a missing
+    /// one reads 1 (its factor unchanged). `None` when both are missing.
+    pub fn metallic_roughness(roughness: Option<&Texture>, metallic: Option<&Texture>) -> Option<Self> {
+        let (w, h) = match (roughness, metallic) {
+            (None, None) => return None,
+            (Some(t), None) | (None, Some(t)) => t.size(),
+            (Some(a), Some(b)) => (a.size().0.max(b.size().0), a.size().1.max(b.size().1)),
+        };
+        let at = |t: Option<&Texture>, u: Real, v: Real| t.map_or(1.0, |t| t.sample(u, v).x);
+        let texels = (0..h)
+            .flat_map(|j| (0..w).map(move |i| (i, j)))
+            .map(|(i, j)| {
+                let (u, v) = ((f64::from(i) + 0.5) / f64::from(w), (f64::from(j) + 0.5) / f64::from(h));
+                let (u, v) = (u as Real, v as Real);
+                Color::new(1.0, at(roughness, u, v), at(metallic, u, v))
+            })
+            .collect();
+        Self::new(w, h, texels)
     }
 
     /// The texture with wrap modes `[u, v]`.
@@ -121,6 +286,11 @@ impl Texture {
 
     /// Reads an sRGB-encoded image file and decodes it to linear colour.
     pub fn load(path: &Path) -> Result<Self, TextureError> {
+        Self::load_as(path, Encoding::Srgb)
+    }
+
+    /// Reads an image file and decodes it by `encoding`.
+    pub fn load_as(path: &Path, encoding: Encoding) -> Result<Self, TextureError> {
         let read = |reason: String| TextureError::Read { path: path.to_owned(), reason };
         let mut reader = image::ImageReader::open(path)
             .map_err(|e| read(e.to_string()))?
@@ -136,56 +306,81 @@ impl Texture {
             return Err(TextureError::Size { path: path.to_owned(), width, height });
         }
         // One table lookup per channel value.
-        let table: Vec<f32> = (0..=255u8).map(|b| srgb_decode(f32::from(b) / 255.0)).collect();
+        let table: Vec<f32> = (0..=255u8)
+            .map(|b| match encoding {
+                Encoding::Srgb => srgb_decode(f32::from(b) / 255.0),
+                Encoding::Linear => f32::from(b) / 255.0,
+            })
+            .collect();
         let texels = image
             .pixels()
             .map(|p| Color::new(table[p[0] as usize], table[p[1] as usize], table[p[2] as usize]));
-        Ok(Self { width, height, texels: texels.collect(), wrap: [Wrap::Repeat; 2] })
+        Self::new(width, height, texels.collect()).ok_or_else(|| TextureError::Size {
+            path: path.to_owned(),
+            width,
+            height,
+        })
     }
 
     /// Width and height in texels.
     pub fn size(&self) -> (u32, u32) {
-        (self.width, self.height)
+        (self.levels[0].width, self.levels[0].height)
     }
 
-    /// Bytes of texel storage.
+    /// How many mip-map levels it has, the image included: `⌊log₂ max(W, H)⌋ + 1`.
+    pub fn level_count(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// Width and height of mip-map level `level` (0 is the image).
+    pub fn level_size(&self, level: usize) -> (u32, u32) {
+        let l = &self.levels[level.min(self.levels.len() - 1)];
+        (l.width, l.height)
+    }
+
+    /// Bytes of texel storage, every level.
     pub fn memory_bytes(&self) -> usize {
-        self.texels.len() * size_of::<Color>()
+        self.levels.iter().map(|l| l.texels.len() * size_of::<Color>()).sum()
     }
 
-    /// The bilinearly filtered colour at `(u, v)` (see the module
-    /// documentation), wrapped by the texture's [`Wrap`] modes. Non-finite
-    /// coordinates give the texel at (0, 0).
+    /// The bilinearly filtered colour of the full-size image at `(u, v)`
+    /// (see the module documentation), wrapped by the texture's [`Wrap`]
+    /// modes. Non-finite coordinates give the texel at (0, 0).
     pub fn sample(&self, u: Real, v: Real) -> Color {
-        let (w, h) = (self.width as i64, self.height as i64);
-        let x = to_f64(u) * w as f64 - 0.5;
-        let y = to_f64(v) * h as f64 - 0.5;
-        if !(x.is_finite() && y.is_finite()) {
-            return self.texels[0];
+        self.levels[0].bilinear(self.wrap, to_f64(u), to_f64(v))
+    }
+
+    /// The colour at `(u, v)` through `sampler`, for a footprint whose
+    /// level of detail is `lod` (mip-map level, fractional:
+    /// [`crate::materials::texture_lod`]). At `lod ≤ 0` the image is
+    /// magnified: `sampler.mag` on level 0. Above, `sampler.min` within a
+    /// level, and between levels `sampler.mip`: none reads level 0, nearest
+    /// the level `lod` rounds to, linear blends levels `⌊lod⌋` and `⌊lod⌋ + 1`
+    /// by the fraction (trilinear filtering; continuous in `lod`). A NaN
+    /// `lod` reads level 0.
+    pub fn lookup(&self, u: Real, v: Real, lod: f32, sampler: &Sampler) -> Color {
+        let (u, v) = (to_f64(u), to_f64(v));
+        let read = |level: usize, filter: Filter| {
+            let l = &self.levels[level.min(self.levels.len() - 1)];
+            match filter {
+                Filter::Nearest => l.nearest(sampler.wrap, u, v),
+                Filter::Linear => l.bilinear(sampler.wrap, u, v),
+            }
+        };
+        if lod.is_nan() || lod <= 0.0 {
+            return read(0, sampler.mag);
         }
-        // Reduce far coordinates first (by a whole mirrored period), so the
-        // integer part stays exact.
-        let (x, y) = (x.rem_euclid(2.0 * w as f64), y.rem_euclid(2.0 * h as f64));
-        let (x, y) = (
-            if self.wrap[0] == Wrap::ClampToEdge {
-                (to_f64(u) * w as f64 - 0.5).clamp(-1.0, w as f64)
-            } else {
-                x
-            },
-            if self.wrap[1] == Wrap::ClampToEdge {
-                (to_f64(v) * h as f64 - 0.5).clamp(-1.0, h as f64)
-            } else {
-                y
-            },
-        );
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
-        let [wrap_u, wrap_v] = self.wrap;
-        let texel = |i: i64, j: i64| self.texels[(wrap_v.index(j, h) * w + wrap_u.index(i, w)) as usize];
-        let (i, j) = (x0 as i64, y0 as i64);
-        let top = texel(i, j) * (1.0 - fx) + texel(i + 1, j) * fx;
-        let bottom = texel(i, j + 1) * (1.0 - fx) + texel(i + 1, j + 1) * fx;
-        top * (1.0 - fy) + bottom * fy
+        let top = (self.levels.len() - 1) as f32;
+        let lod = lod.min(top);
+        match sampler.mip {
+            None => read(0, sampler.min),
+            Some(Filter::Nearest) => read(lod.round() as usize, sampler.min),
+            Some(Filter::Linear) => {
+                let (l0, f) = (lod.floor(), lod.fract());
+                let a = read(l0 as usize, sampler.min);
+                if f == 0.0 { a } else { a * (1.0 - f) + read(l0 as usize + 1, sampler.min) * f }
+            }
+        }
     }
 }
 
@@ -300,5 +495,90 @@ mod tests {
         std::fs::write(&junk, b"\x89PNG\r\n\x1a\nnot really").unwrap();
         let e = Texture::load(&junk).unwrap_err().to_string();
         assert!(e.contains("junk.png"), "{e}");
+    }
+
+    #[test]
+    fn mip_levels_halve_each_side_down_to_one_texel_and_odd_sizes_keep_the_mean() {
+        let (w, h) = (5u32, 3u32);
+        let texels: Vec<Color> = (0..w * h).map(|i| Color::splat((i * 7 % 11) as f32)).collect();
+        let mean = |t: &Texture, l: usize| {
+            let (w, h) = t.level_size(l);
+            t.levels[l].texels.iter().map(|c| c.x as f64).sum::<f64>() / f64::from(w * h)
+        };
+        let t = Texture::new(w, h, texels).unwrap();
+        assert_eq!(t.level_count(), 3);
+        assert_eq!([t.level_size(0), t.level_size(1), t.level_size(2)], [(5, 3), (2, 1), (1, 1)]);
+        for l in 1..3 {
+            assert!(
+                (mean(&t, l) - mean(&t, 0)).abs() < 1e-5,
+                "level {l}: {} vs {}",
+                mean(&t, l),
+                mean(&t, 0)
+            );
+        }
+        // Odd: output 0 of 3 → 1 covers all three.
+        let row = Texture::new(3, 1, vec![Color::splat(0.0), Color::splat(3.0), Color::splat(6.0)]).unwrap();
+        assert!((row.levels[1].texels[0].x - 3.0).abs() < 1e-6);
+        // Even: the 2×2 box, exactly.
+        let t = checker();
+        assert_eq!(t.level_count(), 2);
+        assert_eq!(t.levels[1].texels[0], (Color::ZERO + Color::ONE + Color::X + Color::Y) / 4.0);
+        assert_eq!(t.memory_bytes(), 5 * size_of::<Color>());
+    }
+
+    #[test]
+    fn trilinear_lookups_are_continuous_in_the_level_of_detail() {
+        let texels: Vec<Color> = (0..64).map(|i| Color::splat(((i * 13) % 7) as f32)).collect();
+        let t = Texture::new(8, 8, texels).unwrap();
+        let s = Sampler::DEFAULT;
+        let (u, v) = (0.37, 0.61);
+        for k in 0..=3 {
+            let k = k as f32;
+            let at = t.lookup(u, v, k, &s);
+            // At a whole level: that level's bilinear filter.
+            let exact = t.levels[k as usize].bilinear(s.wrap, to_f64(u), to_f64(v));
+            assert!((at - exact).abs().max_element() < 1e-6, "level {k}");
+            for e in [1e-3, -1e-3] {
+                let near = t.lookup(u, v, k + e, &s);
+                assert!((near - at).abs().max_element() < 0.02, "lod {k} ± {e}: {near} vs {at}");
+            }
+        }
+        // Magnified (lod ≤ 0) and past the last level: the ends.
+        assert_eq!(t.lookup(u, v, -5.0, &s), t.sample(u, v));
+        // (The 1×1 level's bilinear weights sum to 1 within rounding.)
+        assert!((t.lookup(u, v, 50.0, &s) - t.levels[3].texels[0]).abs().max_element() < 1e-5);
+        assert_eq!(t.lookup(u, v, f32::NAN, &s), t.sample(u, v));
+        // Without mip-maps every lod reads the image.
+        let flat = Sampler { mip: None, ..s };
+        assert_eq!(t.lookup(u, v, 2.5, &flat), t.sample(u, v));
+        let nearest_mip = Sampler { mip: Some(Filter::Nearest), ..s };
+        assert_eq!(t.lookup(u, v, 1.4, &nearest_mip), t.lookup(u, v, 1.0, &s));
+    }
+
+    #[test]
+    fn nearest_filtering_reads_the_texel_the_point_falls_in() {
+        let t = checker();
+        let s = Sampler { mag: Filter::Nearest, min: Filter::Nearest, mip: None, wrap: [Wrap::Repeat; 2] };
+        assert_eq!(t.lookup(0.49, 0.1, 0.0, &s), Color::ZERO);
+        assert_eq!(t.lookup(0.51, 0.1, 0.0, &s), Color::ONE);
+        assert_eq!(t.lookup(1.51, -0.9, 0.0, &s), Color::ONE);
+        let clamp = Sampler { wrap: [Wrap::ClampToEdge; 2], ..s };
+        assert_eq!(t.lookup(7.0, 0.9, 0.0, &clamp), Color::Y);
+        assert_eq!(t.lookup(-7.0, 0.9, 0.0, &clamp), Color::X);
+    }
+
+    #[test]
+    fn colour_is_decoded_from_srgb_and_data_is_read_as_stored() {
+        let values = [128.0 / 255.0, 0.0, 1.0];
+        let srgb = Texture::from_values(1, 1, 3, &values, Encoding::Srgb).unwrap();
+        let linear = Texture::from_values(1, 1, 3, &values, Encoding::Linear).unwrap();
+        assert!((srgb.sample(0.5, 0.5).x - 0.2158605).abs() < 1e-6);
+        assert_eq!(linear.sample(0.5, 0.5), Color::new(128.0 / 255.0, 0.0, 1.0));
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("mr.png");
+        image::RgbImage::from_pixel(1, 1, image::Rgb([0, 64, 255])).save(&path).unwrap();
+        let data = Texture::load_as(&path, Encoding::Linear).unwrap();
+        assert_eq!(data.sample(0.5, 0.5), Color::new(0.0, 64.0 / 255.0, 1.0));
+        assert!(Texture::load(&path).unwrap().sample(0.5, 0.5).y < 0.06);
     }
 }

@@ -118,6 +118,13 @@ pub const PEREZ_MIN_COS: f64 = 1e-3;
 /// sampled GGX would be numerically degenerate.
 pub const SMOOTH_ALPHA: Real = 1e-3;
 
+/// The least `|cos θ|` a ray cone's footprint is divided by
+/// ([`crate::materials::texture_lod::Footprint`]): a ray grazing a surface
+/// has a footprint `w/|cos θ|` that grows without bound; held here it is at
+/// most 1000 cone widths, ten mip-map levels above the head-on one — the
+/// texture's mean, or close, which is what a grazing view of it averages to.
+pub const FOOTPRINT_MIN_COS: Real = 1e-3;
+
 /// `v / |v|`, or `None` for a zero or non-finite `v`, for any finite `v`:
 /// `v` is first divided by its largest absolute component, so `|v|²` can
 /// neither overflow (components near 10³⁸ in f32) nor underflow (near 10⁻²⁰).

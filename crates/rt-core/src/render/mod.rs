@@ -25,6 +25,7 @@ use crate::camera::Camera;
 use crate::camera::view_plane::{ViewPlane, ViewPlaneError};
 use crate::geometry::hit::Hit;
 use crate::integrators::Integrator;
+use crate::materials::texture_lod::RayCone;
 use crate::math::color::{Color, ColorSpace};
 use crate::math::ray::Ray;
 use crate::math::real::Vec3;
@@ -93,11 +94,12 @@ impl<'s> Renderer<'s> {
     pub fn new(scene: &'s Scene, camera: Camera, settings: &RenderSettings) -> Result<Self, RenderError> {
         let plan = scene.effect_plan(&settings.effects).restricted(settings.toggles);
         let spp = settings.samples.get();
+        let view = ViewPlane::new(camera, settings.image.width(), settings.image.height())?;
         Ok(Self {
             scene,
             plan,
-            integrator: Integrator::new(scene, plan),
-            view: ViewPlane::new(camera, settings.image.width(), settings.image.height())?,
+            integrator: Integrator::new(scene, plan).with_cone(RayCone::of_pixel(&view)),
+            view,
             spp,
             sampler: Sampler::new(spp, settings.seed).with_kind(settings.sampler),
             color_space: settings.color_space,

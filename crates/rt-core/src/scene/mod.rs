@@ -27,9 +27,11 @@ use crate::lights::light_sampler::{LightSampler, Source};
 use crate::lights::light_source::LightSource;
 use crate::materials::material::Material;
 use crate::materials::texture::Texture;
+use crate::materials::texture_lod::Footprint;
+use crate::materials::texture_slot::TextureSlot;
 use crate::math::color::Color;
 use crate::math::ray::{Interval, Ray, rescale_t};
-use crate::math::real::{Real, Vec3, cast_min_t, scale_pow2};
+use crate::math::real::{Real, Vec3, cast_min_t, normalize_robust, scale_pow2};
 use crate::scene::effects::{EffectPlan, Effects};
 
 /// A world ready to render, validated and read-only: every part is read
@@ -206,7 +208,7 @@ impl SceneBuilder {
         self
     }
 
-    /// Adds a texture; the first is texture 0 ([`Material::texture`]).
+    /// Adds a texture; the first is texture 0 ([`TextureSlot::texture`]).
     pub fn texture(mut self, texture: Arc<Texture>) -> Self {
         self.textures.push(texture);
         self
@@ -231,11 +233,15 @@ impl SceneBuilder {
             if material_names[..i].contains(name) {
                 return Err(SceneBuildError::DuplicateMaterial(name.clone()));
             }
-            if let Some(texture) = materials[i].texture
-                && texture as usize >= self.textures.len()
+            if let Some(slot) =
+                materials[i].texture_slots().find(|s| s.texture as usize >= self.textures.len())
             {
                 let count = self.textures.len();
-                return Err(SceneBuildError::UnknownTexture { material: name.clone(), texture, count });
+                return Err(SceneBuildError::UnknownTexture {
+                    material: name.clone(),
+                    texture: slot.texture,
+                    count,
+                });
             }
         }
         let objects = self
@@ -448,31 +454,76 @@ impl Scene {
         }
     }
 
-    /// The colour `hit` (found along `ray`) shows without lights: its
+    /// The colour `hit` (found along `ray`, whose cone is `cone_width` wide
+    /// there: [`crate::materials::texture_lod`]) shows without lights: its
     /// material's colour, textured where the surface has texture coordinates.
-    pub fn hit_color(&self, hit: &Hit, ray: &Ray) -> Color {
+    pub fn hit_color(&self, hit: &Hit, ray: &Ray, cone_width: f32) -> Color {
         let m = self.object_material(hit.object);
-        if m.texture.is_none() {
+        if m.base_color_texture.is_none() {
             m.color
         } else {
-            self.material_at(hit.object, hit.primitive, ray.at(hit.t)).color
+            let cos = normalize_robust(ray.dir).map_or(1.0, |d| d.dot(hit.normal));
+            let footprint = Footprint::new(cone_width, cos);
+            self.material_at_footprint(hit.object, hit.primitive, ray.at(hit.t), footprint).color
         }
     }
 
-    /// The material of `object` at the point `p` of its `primitive`: the
-    /// object's material, with its texture's colour multiplying `color`
-    /// where the surface has texture coordinates ([`crate::materials::texture`]).
-    /// Borrowed when there is nothing to change, so an untextured scene
-    /// pays nothing for textures.
+    /// The material of `object` at the point `p` of its `primitive`, its
+    /// textures read at their full size ([`Scene::material_at_footprint`]
+    /// with a point footprint).
     pub fn material_at(&self, object: usize, primitive: usize, p: Vec3) -> Cow<'_, Material> {
+        self.material_at_footprint(object, primitive, p, Footprint::POINT)
+    }
+
+    /// The material of `object` at the point `p` of its `primitive`, seen
+    /// by a ray whose footprint there is `footprint`: the object's material
+    /// with each texture slot read where the surface has the slot's
+    /// texture coordinates ([`crate::materials::texture_slot`]), at the
+    /// mip-map level the footprint asks for ([`crate::materials::texture_lod`]):
+    /// the base colour multiplies `color`, the metallic-roughness texture's
+    /// blue and green channels the physically based `metallic` and
+    /// `roughness`, the emissive texture `emission`. Borrowed when there is
+    /// nothing to change, so an untextured scene pays nothing for textures.
+    pub fn material_at_footprint(
+        &self,
+        object: usize,
+        primitive: usize,
+        p: Vec3,
+        footprint: Footprint,
+    ) -> Cow<'_, Material> {
         let o = &self.objects[object];
         let m = &self.materials[o.material];
-        match (m.texture, m.texture.and_then(|_| o.primitive.uv(primitive, p))) {
-            (Some(t), Some((u, v))) => {
-                Cow::Owned(Material { color: m.color * self.textures[t as usize].sample(u, v), ..*m })
-            }
-            _ => Cow::Borrowed(m),
+        if !m.is_textured() {
+            return Cow::Borrowed(m);
         }
+        let Primitive::Mesh(mesh) = &o.primitive else { return Cow::Borrowed(m) };
+        let read = |slot: &Option<TextureSlot>| {
+            let slot = slot.as_ref()?;
+            let uv = mesh.uv_of_set(primitive, slot.tex_coord, p)?;
+            let texture = &self.textures[slot.texture as usize];
+            let (w, h) = texture.size();
+            let area = mesh.uv_per_world_area(primitive, slot.tex_coord) * slot.transform.area_scale();
+            let lod = footprint.level_of_detail(w as f32 * h as f32, area);
+            let (u, v) = slot.transformed(uv);
+            Some(texture.lookup(u, v, lod, &slot.sampler))
+        };
+        let (base, metal_rough, emissive) =
+            (read(&m.base_color_texture), read(&m.metallic_roughness_texture), read(&m.emissive_texture));
+        if base.is_none() && metal_rough.is_none() && emissive.is_none() {
+            return Cow::Borrowed(m);
+        }
+        let mut out = *m;
+        if let Some(c) = base {
+            out.color *= c;
+        }
+        if let (Some(c), Some(physical)) = (metal_rough, &mut out.physical) {
+            physical.metallic *= c.z;
+            physical.roughness *= c.y;
+        }
+        if let Some(c) = emissive {
+            out.emission *= c;
+        }
+        Cow::Owned(out)
     }
 
     /// How many textures the scene holds, and their bytes.
@@ -480,7 +531,7 @@ impl Scene {
         (self.textures.len(), self.textures.iter().map(|t| t.memory_bytes()).sum())
     }
 
-    /// Texture `index` ([`Material::texture`]).
+    /// Texture `index` ([`TextureSlot::texture`]).
     pub fn texture(&self, index: usize) -> &Texture {
         &self.textures[index]
     }
@@ -571,6 +622,47 @@ mod tests {
     use crate::math::real::Vec3;
     use crate::testing::test_support::{primitives_of, random_parts, scene_of, v};
     use proptest::prelude::*;
+
+    #[test]
+    fn each_texture_slot_multiplies_its_own_parameter_and_an_untextured_material_is_borrowed() {
+        use crate::geometry::mesh::Mesh;
+        use crate::materials::principled::Principled;
+        use crate::materials::texture_slot::TextureSlot;
+        let quad = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]])
+            .unwrap()
+            .with_vertex_attributes(vec![], vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+            .unwrap();
+        let flat = |c: Color| Arc::new(Texture::new(1, 1, vec![c]).unwrap());
+        let p = Principled { metallic: 0.8, roughness: 0.6, ..Principled::DIELECTRIC };
+        let textured = Material {
+            emission: Color::splat(2.0),
+            base_color_texture: Some(TextureSlot::new(0)),
+            metallic_roughness_texture: Some(TextureSlot::new(1)),
+            emissive_texture: Some(TextureSlot::new(2)),
+            occlusion_texture: Some(TextureSlot::new(3)),
+            ..Material::principled(Color::splat(0.5), p)
+        };
+        let scene = SceneBuilder::new()
+            .texture(flat(Color::new(1.0, 0.5, 0.25)))
+            .texture(flat(Color::new(0.1, 0.5, 0.25)))
+            .texture(flat(Color::new(0.5, 1.0, 0.0)))
+            .texture(flat(Color::ZERO))
+            .material("t", textured)
+            .material("plain", Material::principled(Color::splat(0.5), p))
+            .object(Primitive::Mesh(quad.clone()), "t")
+            .object(Primitive::Mesh(quad), "plain")
+            .build()
+            .unwrap();
+        let at = Vec3::new(0.25, 0.25, 0.0);
+        let m = scene.material_at_footprint(0, 0, at, Footprint::new(0.01, 1.0));
+        assert_eq!(m.color, Color::new(0.5, 0.25, 0.125));
+        let q = m.physical.unwrap();
+        // Blue → metallic, green → roughness; red (occlusion's channel) unused.
+        assert!((q.metallic - 0.2).abs() < 1e-6 && (q.roughness - 0.3).abs() < 1e-6, "{q:?}");
+        assert_eq!(m.emission, Color::new(1.0, 2.0, 0.0));
+        // The occlusion texture (all black) changes nothing.
+        assert!(matches!(scene.material_at(1, 0, at), Cow::Borrowed(_)));
+    }
 
     proptest! {
         /// Random scenes and rays (including axis-parallel ones with ±0

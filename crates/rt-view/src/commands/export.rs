@@ -252,7 +252,7 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
             transparency: m.transparency,
             ior: m.ior,
             emission: c3(m.emission),
-            textured: m.texture.is_some(),
+            textured: m.base_color_texture.is_some(),
             subsurface: m.subsurface.map(|s| SubsurfaceJson {
                 albedo: c3(s.albedo),
                 mean_free_path: c3(s.mean_free_path),

@@ -44,7 +44,7 @@ pub fn flat_render(scene: &Scene, camera: Camera, size: [u32; 2], cancel: &Atomi
             if let Some(hit) = scene.cast(&ray) {
                 let facing = hit.normal.dot(ray.dir.normalize_or_zero()).abs() as f32;
                 let shade = AMBIENT + (1.0 - AMBIENT) * facing;
-                let c = scene.hit_color(&hit, &ray).to_array();
+                let c = scene.hit_color(&hit, &ray, 0.0).to_array();
                 let byte = |v: f32| (v.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0 + 0.5) as u8;
                 *pixel = Color32::from_rgb(byte(c[0] * shade), byte(c[1] * shade), byte(c[2] * shade));
             }

@@ -6,6 +6,8 @@ use super::values::{ColorDesc, Finite};
 use crate::materials::material::Material;
 use crate::materials::medium::Subsurface;
 use crate::materials::principled::Principled;
+use crate::materials::texture::Wrap;
+use crate::materials::texture_slot::{Encoding, Filter, Sampler, TextureSlot, UvTransform};
 use crate::math::color::Color;
 use crate::math::real::{Real, to_f32};
 
@@ -65,6 +67,134 @@ pub(super) struct MaterialFields {
     emission: ColorDesc,
     #[serde(default, deserialize_with = "super::values::present")]
     subsurface: Option<SubsurfaceDesc>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    base_color_texture: Option<TextureDesc>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    metallic_roughness_texture: Option<TextureDesc>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    emissive_texture: Option<TextureDesc>,
+}
+
+/// A texture a material uses: an image file's path (relative to the scene
+/// file), alone — `base_color_texture: "wood.png"` — or with options:
+/// `(file: "wood.png", tex_coord: 1, offset: (0, 0), rotation: 0,
+/// scale: (4, 4), filter: Nearest, mipmaps: false, wrap: ClampToEdge)`,
+/// each optional: texture-coordinate set 0 or 1 (default 0),
+/// `KHR_texture_transform`'s offset, rotation (degrees) and scale, the
+/// filter (`Linear` by default) and whether mip-maps are used against
+/// aliasing (default yes, trilinear), and the wrap mode of both axes
+/// (`Repeat`, `ClampToEdge`, `MirroredRepeat`; default `Repeat`).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(untagged)]
+pub(super) enum TextureDesc {
+    /// Just the file.
+    File(String),
+    /// The file with options.
+    Options(TextureFields),
+}
+
+/// [`TextureDesc`]'s options.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Texture")]
+pub(super) struct TextureFields {
+    file: String,
+    #[serde(default)]
+    tex_coord: u32,
+    #[serde(default)]
+    offset: Option<(f32, f32)>,
+    #[serde(default)]
+    rotation: Option<f32>,
+    #[serde(default)]
+    scale: Option<(f32, f32)>,
+    #[serde(default)]
+    filter: Option<FilterName>,
+    #[serde(default)]
+    mipmaps: Option<bool>,
+    #[serde(default)]
+    wrap: Option<WrapName>,
+}
+
+/// A texture filter's name in a scene file.
+#[derive(Clone, Copy, Debug, Deserialize)]
+pub(super) enum FilterName {
+    Nearest,
+    Linear,
+}
+
+/// A wrap mode's name in a scene file.
+#[derive(Clone, Copy, Debug, Deserialize)]
+pub(super) enum WrapName {
+    Repeat,
+    ClampToEdge,
+    MirroredRepeat,
+}
+
+impl TextureDesc {
+    /// The image file (relative to the scene file) and the slot reading it
+    /// (its `texture` index left 0 for the scene to fill in); what is wrong
+    /// with the options, naming `field`.
+    fn slot(&self, field: &str) -> Result<(String, TextureSlot), String> {
+        let f = match self {
+            Self::File(file) => return Ok((file.clone(), TextureSlot::new(0))),
+            Self::Options(f) => f,
+        };
+        if f.tex_coord > 1 {
+            return Err(format!("material {field}.tex_coord must be 0 or 1, got {}", f.tex_coord));
+        }
+        let transform = UvTransform::new(
+            f.offset.map_or([0.0; 2], |(x, y)| [x, y]),
+            f.rotation.unwrap_or(0.0).to_radians(),
+            f.scale.map_or([1.0; 2], |(x, y)| [x, y]),
+        )
+        .ok_or_else(|| format!("material {field}: offset, rotation and scale must be finite numbers"))?;
+        let filter = match f.filter {
+            Some(FilterName::Nearest) => Filter::Nearest,
+            _ => Filter::Linear,
+        };
+        let wrap = match f.wrap {
+            None | Some(WrapName::Repeat) => Wrap::Repeat,
+            Some(WrapName::ClampToEdge) => Wrap::ClampToEdge,
+            Some(WrapName::MirroredRepeat) => Wrap::MirroredRepeat,
+        };
+        let mip = f.mipmaps.unwrap_or(true).then_some(Filter::Linear);
+        let sampler = Sampler { mag: filter, min: filter, mip, wrap: [wrap; 2] };
+        Ok((
+            f.file.clone(),
+            TextureSlot { tex_coord: f.tex_coord, transform, sampler, ..TextureSlot::new(0) },
+        ))
+    }
+}
+
+/// A material's textures as the scene file gives them: which slot, the
+/// image file (relative to the scene file), its decoding and the slot.
+pub(super) struct TextureUses(pub(super) Vec<(TextureField, String, Encoding, TextureSlot)>);
+
+/// Which of a material's texture slots.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum TextureField {
+    BaseColor,
+    MetallicRoughness,
+    Emissive,
+}
+
+impl TextureField {
+    /// The field's name in a scene file.
+    pub(super) fn name(self) -> &'static str {
+        match self {
+            Self::BaseColor => "base_color_texture",
+            Self::MetallicRoughness => "metallic_roughness_texture",
+            Self::Emissive => "emissive_texture",
+        }
+    }
+
+    /// Puts `slot` into `material`'s slot of this field.
+    pub(super) fn set(self, material: &mut Material, slot: TextureSlot) {
+        match self {
+            Self::BaseColor => material.base_color_texture = Some(slot),
+            Self::MetallicRoughness => material.metallic_roughness_texture = Some(slot),
+            Self::Emissive => material.emissive_texture = Some(slot),
+        }
+    }
 }
 
 /// `subsurface: (albedo: (r, g, b), mean_free_path: (r, g, b), anisotropy: g)`;
@@ -110,11 +240,27 @@ impl TryFrom<SubsurfaceFields> for SubsurfaceDesc {
 
 #[derive(Deserialize)]
 #[serde(try_from = "MaterialFields")]
-pub(super) struct MaterialDesc(pub(super) Material);
+pub(super) struct MaterialDesc(pub(super) Material, pub(super) TextureUses);
 
 impl TryFrom<MaterialFields> for MaterialDesc {
     type Error = String;
     fn try_from(f: MaterialFields) -> Result<Self, String> {
+        let mut uses = Vec::new();
+        for (field, desc, encoding) in [
+            (TextureField::BaseColor, &f.base_color_texture, Encoding::Srgb),
+            (TextureField::MetallicRoughness, &f.metallic_roughness_texture, Encoding::Linear),
+            (TextureField::Emissive, &f.emissive_texture, Encoding::Srgb),
+        ] {
+            if let Some(desc) = desc {
+                let (file, slot) = desc.slot(field.name())?;
+                uses.push((field, file, encoding, slot));
+            }
+        }
+        if f.metallic_roughness_texture.is_some() && f.base_color.is_none() {
+            return Err("material metallic_roughness_texture belongs to the physically based model: \
+                        write base_color instead of color"
+                .into());
+        }
         let number = |v: Option<Finite>, default: f32, name: &str, ok: fn(Real) -> bool, rule: &str| match v {
             None => Ok(default),
             Some(Finite(v)) if ok(v) => Ok(to_f32(v)),
@@ -233,7 +379,10 @@ impl TryFrom<MaterialFields> for MaterialDesc {
                     ior,
                     emission,
                     subsurface,
-                    texture: None,
+                    base_color_texture: None,
+                    metallic_roughness_texture: None,
+                    emissive_texture: None,
+                    occlusion_texture: None,
                     physical: None,
                 };
                 if m.reflectivity + m.transparency > 1.0 {
@@ -245,7 +394,7 @@ impl TryFrom<MaterialFields> for MaterialDesc {
                 m
             }
         };
-        Ok(Self(m))
+        Ok(Self(m, TextureUses(uses)))
     }
 }
 
@@ -323,5 +472,69 @@ mod tests {
             assert!(error.contains(expected), "{text}: {error}");
             assert!(error.starts_with("m.ron:2:"), "where it stands: {error}");
         }
+    }
+
+    #[test]
+    fn textures_are_read_by_path_with_their_options_and_shared_between_materials() {
+        use crate::materials::texture::Wrap;
+        use crate::materials::texture_slot::{Filter, Sampler};
+        let dir = tempfile::tempdir().unwrap();
+        image::RgbImage::from_pixel(2, 2, image::Rgb([128, 64, 255])).save(dir.path().join("t.png")).unwrap();
+        let text = r#"Scene(camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1),
+            image: (width: 8, height: 8),
+            materials: {
+                "a": (base_color: (1, 1, 1), base_color_texture: "t.png",
+                      metallic_roughness_texture: (file: "t.png", tex_coord: 1, scale: (2, 2), rotation: 90,
+                                                   filter: Nearest, mipmaps: false, wrap: ClampToEdge),
+                      emissive_texture: "t.png", emission: (1, 1, 1)),
+                "b": (color: (1, 1, 1), base_color_texture: (file: "t.png")),
+            },
+            objects: [Sphere(center: (0, 0, 0), radius: 1, material: "a"), Sphere(center: (3, 0, 0), radius: 1, material: "b")])"#;
+        let loaded = parse_scene(text, "m.ron", dir.path()).unwrap();
+        let s = &loaded.scene;
+        // t.png as colour (sRGB) and as data (linear): two decodings for four uses.
+        assert_eq!(s.texture_stats().0, 2);
+        let (a, b) = (s.material(0), s.material(1));
+        let (base, mr, e) = (
+            a.base_color_texture.unwrap(),
+            a.metallic_roughness_texture.unwrap(),
+            a.emissive_texture.unwrap(),
+        );
+        assert_eq!((base.texture, e.texture, b.base_color_texture.unwrap().texture), (0, 0, 0));
+        assert_eq!(mr.texture, 1);
+        assert_eq!(base.sampler, Sampler::DEFAULT);
+        assert_eq!(
+            mr.sampler,
+            Sampler { mag: Filter::Nearest, min: Filter::Nearest, mip: None, wrap: [Wrap::ClampToEdge; 2] }
+        );
+        let (u, v) = mr.transformed((1.0, 0.0));
+        assert!(u.abs() < 1e-6 && (v + 2.0).abs() < 1e-6, "({u}, {v})");
+        assert_eq!(mr.tex_coord, 1);
+        assert_eq!(s.texture(1).sample(0.5, 0.5), Color::new(128.0 / 255.0, 64.0 / 255.0, 1.0));
+        assert!(s.texture(0).sample(0.5, 0.5).x < 0.25);
+        assert!(s.source_files().iter().any(|f| f.ends_with("t.png")));
+    }
+
+    #[test]
+    fn a_texture_that_cannot_be_used_is_an_error_naming_the_material_and_field() {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = |material: &str| {
+            let text = format!(
+                "Scene(camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1),
+                image: (width: 8, height: 8), materials: {{ \"m\": {material} }},
+                objects: [Sphere(center: (0, 0, 0), radius: 1, material: \"m\")])"
+            );
+            parse_scene(&text, "m.ron", dir.path()).map(|_| ()).unwrap_err().to_string()
+        };
+        let e = scene(r#"(base_color: (1, 1, 1), emissive_texture: "gone.png")"#);
+        assert!(
+            e.starts_with("m.ron: material \"m\": emissive_texture: cannot read texture ")
+                && e.contains("gone.png"),
+            "{e}"
+        );
+        let e = scene(r#"(base_color: (1, 1, 1), base_color_texture: (file: "t.png", tex_coord: 2))"#);
+        assert!(e.contains("base_color_texture.tex_coord must be 0 or 1, got 2"), "{e}");
+        let e = scene(r#"(color: (1, 1, 1), metallic_roughness_texture: "t.png")"#);
+        assert!(e.contains("metallic_roughness_texture belongs to the physically based model"), "{e}");
     }
 }

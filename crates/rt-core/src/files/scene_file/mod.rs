@@ -18,8 +18,9 @@ mod model;
 mod object;
 mod values;
 
-use std::collections::BTreeMap;
-use std::path::Path;
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use serde::Deserialize;
 use thiserror::Error;
@@ -27,6 +28,8 @@ use thiserror::Error;
 use crate::camera::Camera;
 use crate::files::model::ModelError;
 use crate::geometry::method::Methods;
+use crate::materials::texture::Texture;
+use crate::materials::texture_slot::{Encoding, TextureSlot};
 use crate::math::color::ColorSpace;
 use crate::render::settings::{AdaptiveSampling, RenderSettings};
 use crate::render::view_transform::{Display, ViewTransform};
@@ -73,6 +76,14 @@ pub enum SceneError {
         file: String,
         /// What is wrong (in the message, so not also a `source()`).
         reason: SceneBuildError,
+    },
+    /// A material's texture cannot be read.
+    #[error("{file}: {reason}")]
+    Texture {
+        /// The scene file.
+        file: String,
+        /// The material, its field, the image and why.
+        reason: String,
     },
     /// The glTF file the camera is taken from cannot be used.
     #[error("{file}: camera: {reason}")]
@@ -172,8 +183,27 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<LoadedScen
     for light in desc.lights {
         scene = scene.light(light.0);
     }
-    for (name, material) in desc.materials {
-        scene = scene.material(name, material.0);
+    // Each image decoded once per encoding, shared by the materials.
+    let mut decoded: HashMap<(PathBuf, Encoding), u32> = HashMap::new();
+    for (name, MaterialDesc(mut material, uses)) in desc.materials {
+        for (field, image, encoding, slot) in uses.0 {
+            let path = base_dir.join(&image);
+            let texture = match decoded.get(&(path.clone(), encoding)) {
+                Some(&t) => t,
+                None => {
+                    let texture = Texture::load_as(&path, encoding).map_err(|e| SceneError::Texture {
+                        file: file.to_owned(),
+                        reason: format!("material \"{name}\": {}: {e}", field.name()),
+                    })?;
+                    let index = scene.texture_count() as u32;
+                    scene = scene.texture(Arc::new(texture)).source_file(&path);
+                    decoded.insert((path, encoding), index);
+                    index
+                }
+            };
+            field.set(&mut material, TextureSlot { texture, ..slot });
+        }
+        scene = scene.material(name, material);
     }
     // A mesh with its file's materials adds an object per material: the
     // scene's object k came from the file's `entry_of[k]`.

@@ -81,7 +81,7 @@ pub(super) fn add_model(
     }
     let names: Vec<String> = model.materials.iter().map(|(name, _)| format!("{written}:{name}")).collect();
     for ((_, mut m), name) in model.materials.into_iter().zip(&names) {
-        m.texture = m.texture.map(|t| t + first_texture);
+        m.offset_textures(first_texture);
         scene = scene.material(name.clone(), m);
     }
     let default = format!("{written}:default");
