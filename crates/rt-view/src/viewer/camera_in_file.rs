@@ -476,13 +476,26 @@ mod tests {
         files
     }
 
+    /// The scenes whose camera block gives the camera's numbers (not a
+    /// glTF file's camera, which saving replaces by numbers on purpose).
+    fn scenes_with_own_camera() -> Vec<PathBuf> {
+        let own = |p: &PathBuf| {
+            let text = std::fs::read_to_string(p).unwrap();
+            let block = CameraBlock::find(&text).unwrap();
+            !block.fields.iter().any(|f| GLTF_FIELDS.contains(&f.name.as_str()))
+        };
+        let files: Vec<PathBuf> = scenes().into_iter().filter(own).collect();
+        assert!(files.len() > 10, "{files:?}");
+        files
+    }
+
     fn file_camera(path: &Path) -> CameraSettings {
         CameraSettings::from_camera(&rt_core::load_scene(path).unwrap().camera)
     }
 
     #[test]
     fn every_scene_saved_with_its_own_camera_is_unchanged_to_the_byte() {
-        for path in scenes() {
+        for path in scenes_with_own_camera() {
             let text = std::fs::read_to_string(&path).unwrap();
             let camera = file_camera(&path);
             assert_eq!(read_camera(&text).unwrap(), camera, "{}", path.display());
