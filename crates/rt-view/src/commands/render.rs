@@ -146,7 +146,17 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         None => (None, Some(PendingImage::create(&args.output)?)),
     };
     let passes = args.passes();
-    let with_features = !passes.is_empty() || args.denoise;
+    // Denoising needs the library: without it the image is rendered (and
+    // written) exactly as without `--denoise`, after a warning.
+    let denoise = args.denoise
+        && match crate::denoise::find_and_load() {
+            Ok(_) => true,
+            Err(e) => {
+                eprintln!("warning: not denoised: {e}");
+                false
+            }
+        };
+    let with_features = !passes.is_empty() || denoise;
     if with_features && part.is_some() {
         anyhow::bail!(
             "{}: feature passes and denoising (--passes, --aovs, --denoise) are not made for parts: merge the parts, then denoise",
@@ -229,9 +239,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let mut frame = frame.ok_or(Interrupted)?;
 
     let mut noisy = None;
-    if args.denoise
-        && let Some(features) = &features
-    {
+    if denoise && let Some(features) = &features {
         match render_outputs::denoise_frame(&mut frame, features) {
             Denoised::Done { took, noisy: n } => {
                 eprintln!("denoised with OIDN in {:.3} s", took.as_secs_f64());
