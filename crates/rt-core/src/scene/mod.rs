@@ -6,6 +6,8 @@
 //! A scene is made once, by [`crate::files::scene_file`] from a RON file or by a
 //! [`SceneBuilder`] in code, and is read-only afterwards: its BVH and the
 //! light sampler are built when it is made, from parts that cannot change.
+//! A live edit makes a new scene instead ([`Scene::with_material`]), sharing
+//! the geometry with the old one.
 
 pub mod effects;
 

@@ -197,7 +197,7 @@ impl MaterialPanel {
 /// the physically based parameters or the classic weights, the ior, the
 /// emission, the subsurface medium and the textures used.
 pub(super) fn describe(m: &Material) -> Vec<(&'static str, String)> {
-    let rgb = |c: rt_core::math::color::Color| format!("({:.3}, {:.3}, {:.3})", c.x, c.y, c.z);
+    let rgb = |c: rt_core::math::color::Color| format!("({:.2}, {:.2}, {:.2})", c.x, c.y, c.z);
     let mut rows = vec![];
     match &m.physical {
         Some(p) => {
@@ -206,19 +206,19 @@ pub(super) fn describe(m: &Material) -> Vec<(&'static str, String)> {
             rows.push(("metallic", format!("{:.3}", p.metallic)));
             rows.push(("roughness", format!("{:.3}", p.roughness)));
             rows.push(("ior", format!("{:.3}", m.ior)));
-            rows.push(("specular", format!("{:.3} × {}", p.specular, rgb(p.specular_color))));
+            rows.push(("specular", format!("{:.2} × {}", p.specular, rgb(p.specular_color))));
             rows.push(("transmission", format!("{:.3}", p.transmission)));
             if p.transmission > 0.0 {
                 let distance = p.attenuation_distance;
                 rows.push(("attenuation", format!("{} after {distance}", rgb(p.attenuation_color))));
             }
-            rows.push(("clearcoat", format!("{:.3}, roughness {:.3}", p.clearcoat, p.clearcoat_roughness)));
+            rows.push(("clearcoat", format!("{:.2}, roughness {:.2}", p.clearcoat, p.clearcoat_roughness)));
         }
         None => {
             rows.push(("model", "classic weights".to_owned()));
             rows.push(("colour", rgb(m.color)));
             rows.push(("diffuse", format!("{:.3}", m.diffuse)));
-            rows.push(("specular", format!("{:.3} × {}", m.specular, rgb(m.specular_color))));
+            rows.push(("specular", format!("{:.2} × {}", m.specular, rgb(m.specular_color))));
             rows.push(("shininess", format!("{:.1} (roughness {:.3})", m.shininess, m.roughness())));
             rows.push(("reflectivity", format!("{:.3}", m.reflectivity)));
             rows.push(("transparency", format!("{:.3}", m.transparency)));
