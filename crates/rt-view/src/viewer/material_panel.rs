@@ -151,12 +151,10 @@ impl MaterialPanel {
             }
             None => {
                 let (mut metallic, mut roughness) = (0.0, m.roughness());
-                ui.add_enabled_ui(false, |ui| {
-                    ui.add(egui::Slider::new(&mut metallic, 0.0..=1.0).text("metallic"));
-                    ui.add(egui::Slider::new(&mut roughness, 0.0..=1.0).text("roughness"));
-                })
-                .response
-                .on_disabled_hover_text(CLASSIC_HOVER);
+                for (value, text) in [(&mut metallic, "metallic"), (&mut roughness, "roughness")] {
+                    ui.add_enabled(false, egui::Slider::new(value, 0.0..=1.0).text(text))
+                        .on_disabled_hover_text(CLASSIC_HOVER);
+                }
             }
         }
         slider(ui, &mut m.ior, 1.0..=3.0, "ior");
@@ -269,5 +267,26 @@ mod tests {
         assert_eq!(get(&classic, "model").unwrap(), "classic weights");
         assert!(get(&classic, "shininess").is_some() && get(&classic, "metallic").is_none());
         assert_eq!(get(&classic, "base colour map"), None);
+    }
+
+    /// The panel drawn for `object` of the scene file `name`, one frame.
+    fn drawn_for(name: &str, object: usize) -> (MaterialPanel, Option<Edit>) {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes").join(name);
+        let scene = Arc::new(rt_core::load_scene(&path).unwrap());
+        let (ctx, mut panel) = (egui::Context::default(), MaterialPanel::default());
+        let mut edit = None;
+        let mut output =
+            ctx.run_ui(egui::RawInput::default(), |ui| edit = panel.ui(ui, &scene, Some(object)));
+        output.textures_delta.clear();
+        ctx.tex_manager().write().take_delta().clear();
+        (panel, edit)
+    }
+
+    #[test]
+    fn only_a_physically_based_material_gets_a_roughness_slider_and_drawing_edits_nothing() {
+        let (physical, edit) = drawn_for("metal_rough.ron", 0);
+        assert!(physical.drawn.roughness.is_some() && edit.is_none());
+        let (classic, edit) = drawn_for("sphere.ron", 0);
+        assert!(classic.drawn.roughness.is_none() && classic.drawn.revert.is_some() && edit.is_none());
     }
 }
