@@ -72,4 +72,4 @@ pub use math::real::{Real, Vec3};
 pub use render::settings::{ImageSize, RenderSettings, SamplesPerPixel, SettingsError};
 pub use render::{Frame, RenderError, Renderer};
 pub use scene::effects::{EffectPlan, Effects, RayCounts};
-pub use scene::{Scene, SceneBuildError, SceneBuilder};
+pub use scene::{MaterialEditError, Scene, SceneBuildError, SceneBuilder};

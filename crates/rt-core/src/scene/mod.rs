@@ -6,6 +6,8 @@
 //! A scene is made once, by [`crate::files::scene_file`] from a RON file or by a
 //! [`SceneBuilder`] in code, and is read-only afterwards: its BVH and the
 //! light sampler are built when it is made, from parts that cannot change.
+//! A live edit makes a new scene instead ([`Scene::with_material`]), sharing
+//! the geometry with the old one.
 
 pub mod effects;
 
@@ -45,10 +47,12 @@ pub struct Scene {
     materials: Vec<Material>,
     material_names: Vec<String>,
     textures: Vec<Arc<Texture>>,
-    objects: Vec<Object>,
-    bvh: Bvh,
+    /// Behind `Arc`s, with the BVH and the emitters, so that a copy with
+    /// one material replaced ([`Scene::with_material`]) shares the geometry.
+    objects: Arc<Vec<Object>>,
+    bvh: Arc<Bvh>,
     /// The emissive objects, as lights for global illumination.
-    emitters: Vec<Emitter>,
+    emitters: Arc<Vec<Emitter>>,
     /// Index into `emitters` of each object's emitter.
     emitter_of: Vec<Option<u32>>,
     light_sampler: LightSampler,
@@ -105,6 +109,39 @@ pub enum SceneBuildError {
         kind: &'static str,
         /// Why.
         reason: EmitterError,
+    },
+}
+
+/// Why [`Scene::with_material`] cannot replace a material.
+#[derive(Clone, Debug, Error, PartialEq)]
+pub enum MaterialEditError {
+    /// There is no material of that index.
+    #[error("material {index} does not exist ({count} defined)")]
+    NoSuchMaterial {
+        /// The index asked for.
+        index: usize,
+        /// How many materials the scene has.
+        count: usize,
+    },
+    /// The new material names a texture the scene does not hold.
+    #[error("material {index}: texture {texture} does not exist ({count} in the scene)")]
+    UnknownTexture {
+        /// The material's index.
+        index: usize,
+        /// The texture index it names.
+        texture: u32,
+        /// How many textures the scene holds.
+        count: usize,
+    },
+    /// The emission or the subsurface medium differs: the emitters, the
+    /// light sampler and the check that a medium has an inside were built
+    /// from them, so the scene must be built again ([`SceneBuilder`]).
+    #[error("material {index}: {what} cannot change without building the scene again")]
+    NeedsRebuild {
+        /// The material's index.
+        index: usize,
+        /// `"emission"` or `"subsurface"`.
+        what: &'static str,
     },
 }
 
@@ -304,9 +341,9 @@ impl SceneBuilder {
             materials,
             material_names,
             textures: self.textures,
-            objects,
-            bvh,
-            emitters,
+            objects: Arc::new(objects),
+            bvh: Arc::new(bvh),
+            emitters: Arc::new(emitters),
             emitter_of,
             light_sampler,
             source_files: self.source_files,
@@ -562,6 +599,32 @@ impl Scene {
         &self.material_names
     }
 
+    /// The same scene with material `index` replaced by `material`, for a
+    /// live edit (the viewer's material panel): the objects, the BVH and
+    /// the emitters are shared with `self` (`Arc`s, nothing rebuilt), so
+    /// the copy costs the material, light and texture lists. `self` is
+    /// left as it was. Refused where what was built from the material
+    /// would change: its emission (the emitters and the light sampler)
+    /// and its subsurface medium (the check that its objects are closed);
+    /// its texture slots must name textures the scene holds.
+    pub fn with_material(&self, index: usize, material: Material) -> Result<Scene, MaterialEditError> {
+        let count = self.materials.len();
+        let old = self.materials.get(index).ok_or(MaterialEditError::NoSuchMaterial { index, count })?;
+        if let Some(slot) = material.texture_slots().find(|s| s.texture as usize >= self.textures.len()) {
+            let (texture, count) = (slot.texture, self.textures.len());
+            return Err(MaterialEditError::UnknownTexture { index, texture, count });
+        }
+        if material.emission != old.emission {
+            return Err(MaterialEditError::NeedsRebuild { index, what: "emission" });
+        }
+        if material.subsurface != old.subsurface {
+            return Err(MaterialEditError::NeedsRebuild { index, what: "subsurface" });
+        }
+        let mut edited = self.clone();
+        edited.materials[index] = material;
+        Ok(edited)
+    }
+
     /// The files besides the scene file that the scene was read from (OBJ
     /// meshes), as given to [`SceneBuilder::source_file`].
     pub fn source_files(&self) -> &[PathBuf] {
@@ -622,6 +685,43 @@ mod tests {
     use crate::math::real::Vec3;
     use crate::testing::test_support::{primitives_of, random_parts, scene_of, v};
     use proptest::prelude::*;
+
+    #[test]
+    fn with_material_renders_the_edit_shares_the_geometry_and_leaves_the_original_untouched() {
+        use crate::testing::test_support::{camera_at, renderer_of};
+        let sphere = Primitive::Sphere(Sphere::new(Vec3::ZERO, 1.0).unwrap());
+        let scene = SceneBuilder::new()
+            .material("lamp", Material { emission: Color::ONE, ..Material::flat(Color::ZERO) })
+            .material("red", Material::flat(Color::new(0.9, 0.1, 0.1)))
+            .object(sphere, "red")
+            .build()
+            .unwrap();
+        let green = Material::flat(Color::new(0.1, 0.9, 0.1));
+        let edited = scene.with_material(1, green).unwrap();
+        assert_eq!(edited.material(1), &green);
+        assert_eq!(scene.material(1).color, Color::new(0.9, 0.1, 0.1), "the original changed");
+        assert!(Arc::ptr_eq(&scene.objects, &edited.objects) && Arc::ptr_eq(&scene.bvh, &edited.bvh));
+        // Flat colours (no lights): the centre pixel is the material's colour.
+        let camera = camera_at(v([0.0, 0.0, -5.0]), Vec3::ZERO, 30.0);
+        let centre = |s: &Scene| {
+            let frame = renderer_of(s, camera, Effects::default(), (9, 9, 1)).render(|_| {});
+            frame.pixels[4 * 9 + 4]
+        };
+        assert_eq!(centre(&scene), Color::new(0.9, 0.1, 0.1));
+        assert_eq!(centre(&edited), Color::new(0.1, 0.9, 0.1));
+        // What was built from a material cannot change this way.
+        let glowing = Material { emission: Color::ONE, ..green };
+        assert_eq!(
+            scene.with_material(1, glowing),
+            Err(MaterialEditError::NeedsRebuild { index: 1, what: "emission" })
+        );
+        assert_eq!(
+            scene.with_material(2, green),
+            Err(MaterialEditError::NoSuchMaterial { index: 2, count: 2 })
+        );
+        let textured = Material { base_color_texture: Some(TextureSlot::new(0)), ..green };
+        assert!(matches!(scene.with_material(1, textured), Err(MaterialEditError::UnknownTexture { .. })));
+    }
 
     #[test]
     fn each_texture_slot_multiplies_its_own_parameter_and_an_untextured_material_is_borrowed() {

@@ -21,6 +21,7 @@ use super::display_panel::DisplayPanel;
 use super::image_settings::ImageSettings;
 use super::image_view::ImageView;
 use super::interaction::Interaction;
+use super::material_panel::MaterialPanel;
 use super::region::Region;
 use super::remembered::{LastScene, Remembered, absolute};
 use super::render_job::{JobSpec, RenderJob};
@@ -123,6 +124,8 @@ pub struct Viewer {
     scene_view: SceneView,
     /// Exposure, channel views, histogram, reference and comparison.
     display: DisplayPanel,
+    /// The pinned object's material, and its live edits.
+    materials: MaterialPanel,
     /// The path Save PNG and Save EXR write to (with their extension).
     save_path: String,
     notice: Option<Notice>,
@@ -169,6 +172,7 @@ impl Viewer {
             view: ImageView::default(),
             scene_view: SceneView::default(),
             display,
+            materials: MaterialPanel::default(),
             save_path: "render.png".to_owned(),
             notice: None,
             show_panel: remembered.show_panel,
@@ -252,6 +256,9 @@ impl Viewer {
         self.notice = None;
         if let Some(note) = scale_note {
             self.notify(note);
+        }
+        if self.materials.scene_loaded() {
+            self.notify("material edits dropped: the scene was loaded from its file again".into());
         }
         self.view.unpin();
         self.scene_view.scene_changed();
@@ -455,8 +462,14 @@ impl Viewer {
         let mut input = Interaction::default();
         self.source.ui(ui);
         ui.separator();
-        let selected = self.pinned_object().map(|o| describe_object(&self.source.scene().scene, o));
+        let pinned = self.pinned_object();
+        let selected = pinned.map(|o| describe_object(&self.source.scene().scene, o));
         input = input | self.camera.ui(ui, self.source.path(), selected.as_deref());
+        ui.separator();
+        if let Some(edit) = self.materials.ui(ui, &self.source.scene().clone(), pinned) {
+            self.source.show_edited(edit.scene);
+            input = input | edit.interaction;
+        }
         ui.separator();
         input = input | self.image.ui(ui, &self.source.scene().clone());
         self.region_ui(ui);
@@ -1695,6 +1708,75 @@ mod tests {
         assert_ne!(moved.position, observer.position, "the observer did not orbit");
         assert_eq!(moved.center_of_interest, observer.center_of_interest);
         assert_eq!(*v.camera.settings(), camera, "the drag moved the render camera");
+        drop_textures(&ctx, v);
+    }
+
+    /// A press at `from`, a drag to `to` and a release there, a frame each.
+    fn drag(ctx: &egui::Context, v: &mut Viewer, size: egui::Vec2, from: egui::Pos2, to: egui::Pos2) {
+        let button = |pos, pressed| egui::Event::PointerButton {
+            pos,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        };
+        frame(ctx, v, size, vec![egui::Event::PointerMoved(from)]);
+        frame(ctx, v, size, vec![button(from, true)]);
+        frame(ctx, v, size, vec![egui::Event::PointerMoved(to)]);
+        frame(ctx, v, size, vec![button(to, false)]);
+    }
+
+    #[test]
+    fn a_material_edit_renders_the_pinned_objects_new_material_without_writing_the_file_and_revert_restores()
+    {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("spheres.ron");
+        let text = std::fs::read_to_string(scenes().join("metal_rough.ron"))
+            .unwrap()
+            .replace("image: (width: 320, height: 320)", "image: (width: 64, height: 64)")
+            .replace("samples_per_pixel: 64", "samples_per_pixel: 2");
+        std::fs::write(&path, &text).unwrap();
+        let ctx = egui::Context::default();
+        let mut v = viewer(&ctx, Some(path.clone()));
+        // Tall enough that the whole side panel is on screen.
+        let size = egui::vec2(1000.0, 2400.0);
+        frame(&ctx, &mut v, size, vec![]);
+        let loaded = v.source.scene().clone();
+        // The centre sphere: "m0.5 r0.5".
+        v.view.pin([32, 32]);
+        let object = v.pinned_object().expect("the centre pixel sees a sphere");
+        let index = loaded.scene.objects()[object].material;
+        assert_eq!(loaded.scene.material_names()[index], "m0.5 r0.5");
+        let roughness = |s: &rt_core::LoadedScene| s.scene.material(index).physical.unwrap().roughness;
+        frame(&ctx, &mut v, size, vec![]);
+        let slider = v.materials.drawn.roughness.expect("the roughness slider is drawn");
+        let generation = v.scheduler.job().map(|(j, _)| j.generation());
+        // Drag the slider from its left end (roughness 0) a quarter of its way.
+        let from = egui::pos2(slider.left() + 1.0, slider.center().y);
+        drag(&ctx, &mut v, size, from, from + egui::vec2(25.0, 0.0));
+        let edited = v.source.scene().clone();
+        assert!(!std::sync::Arc::ptr_eq(&edited, &loaded), "the edit made no new scene");
+        assert!(roughness(&edited) < 0.45, "roughness {}", roughness(&edited));
+        assert_eq!(roughness(&loaded), 0.5, "the loaded scene changed");
+        assert!(v.materials.is_edited(index));
+        // A new job renders the edited scene.
+        let (job, _) = v.scheduler.job().expect("a job runs");
+        assert_ne!(Some(job.generation()), generation, "no new job started");
+        assert!(std::sync::Arc::ptr_eq(&job.spec().scene, &edited), "the job renders another scene");
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), text, "the scene file was written");
+        // Revert brings the loaded scene back, and renders it.
+        frame(&ctx, &mut v, size, vec![]);
+        let revert = v.materials.drawn.revert.expect("Revert is drawn");
+        drag(&ctx, &mut v, size, revert.center(), revert.center());
+        assert!(std::sync::Arc::ptr_eq(v.source.scene(), &loaded), "Revert did not restore the loaded scene");
+        assert!(!v.materials.is_edited(index));
+        assert!(std::sync::Arc::ptr_eq(&v.scheduler.job().unwrap().0.spec().scene, &loaded));
+        // An edit is dropped, with a notice, when the file loads again.
+        drag(&ctx, &mut v, size, from, from + egui::vec2(25.0, 0.0));
+        assert!(v.materials.is_edited(index));
+        reload(&mut v, &ctx);
+        assert_eq!(roughness(v.source.scene()), 0.5);
+        assert!(!v.materials.is_edited(index));
+        assert!(v.notice.as_ref().is_some_and(|n| n.text.contains("material edits dropped")));
         drop_textures(&ctx, v);
     }
 }

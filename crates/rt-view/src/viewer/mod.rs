@@ -56,6 +56,7 @@ pub mod histogram;
 mod image_settings;
 mod image_view;
 mod interaction;
+mod material_panel;
 mod observer;
 mod observer_render;
 mod path_overlay;

@@ -238,6 +238,13 @@ impl SceneSource {
         SceneChange { previous, opened }
     }
 
+    /// Shows `scene`, an edit of the scene shown (the material panel's):
+    /// the same file and geometry, so nothing is watched anew and no
+    /// [`SceneChange`] follows; the file is not written.
+    pub fn show_edited(&mut self, scene: Arc<LoadedScene>) {
+        self.scene = scene;
+    }
+
     /// Watches the scene file and its mesh files, if it has a file.
     fn watch(&mut self, ctx: &egui::Context) {
         self.watcher = None;
