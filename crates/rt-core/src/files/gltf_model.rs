@@ -78,6 +78,7 @@ use crate::files::meshopt_views::{self, CompressedView};
 use crate::files::model::{Model, ModelError};
 use crate::geometry::mesh::{MAX_MESH_TRIANGLES, Mesh};
 use crate::lights::light::{Light, LightKind};
+use crate::materials::alpha::{AlphaMode, DEFAULT_ALPHA_CUTOFF};
 use crate::materials::material::Material;
 use crate::materials::principled::Principled;
 use crate::materials::texture::{Texture, Wrap};
@@ -324,11 +325,14 @@ fn read(
 
     let mut materials = Vec::new();
     let mut textures = Vec::new();
-    let mut texture_of: HashMap<usize, Option<u32>> = HashMap::new();
+    // Decoded once per texture and colour space (sRGB colour, linear normals).
+    let mut texture_of: HashMap<(usize, bool), Option<u32>> = HashMap::new();
     let mut parts = Vec::new();
     for g in groups {
+        let has_uvs = g.has_uvs;
         let mesh = Mesh::new(g.positions, g.triangles)
             .and_then(|m| m.with_vertex_attributes(g.normals, g.uvs))
+            .and_then(|m| m.with_tangents(g.tangents))
             .ok_or_else(|| err("a mesh has no triangles".into()))?;
         let Some(index) = g.material.filter(|_| with_materials) else {
             parts.push((mesh, None));
@@ -344,26 +348,40 @@ fn read(
             .filter(|n| document.materials().filter(|o| o.name() == Some(n)).count() == 1)
             .map_or_else(|| format!("material {index}"), str::to_owned);
         let (mut material, mut notes) = map_material(&m);
+        let mut texture = |t: ::gltf::Texture, linear: bool, warnings: &mut Vec<String>, shown: &str| {
+            *texture_of.entry((t.index(), linear)).or_insert_with(|| {
+                match read_texture(&t, document.as_json(), base, &buffer_data, linear) {
+                    Ok(texture) => {
+                        textures.push(texture);
+                        Some(textures.len() as u32 - 1)
+                    }
+                    Err(reason) => {
+                        warnings
+                            .push(format!("texture {}: {reason}: its materials {shown} instead", t.index()));
+                        None
+                    }
+                }
+            })
+        };
         if let Some(info) = m.pbr_metallic_roughness().base_color_texture() {
             if info.tex_coord() != 0 {
                 notes.push(format!("its base colour texture uses TEXCOORD_{}", info.tex_coord()));
             } else {
-                let t = info.texture();
-                material.texture = *texture_of.entry(t.index()).or_insert_with(|| {
-                    match read_texture(&t, document.as_json(), base, &buffer_data) {
-                        Ok(texture) => {
-                            textures.push(texture);
-                            Some(textures.len() as u32 - 1)
-                        }
-                        Err(reason) => {
-                            warnings.push(format!(
-                                "texture {}: {reason}: its materials show their base colour factor instead",
-                                t.index()
-                            ));
-                            None
-                        }
-                    }
-                });
+                material.texture =
+                    texture(info.texture(), false, &mut warnings, "show their base colour factor");
+            }
+        }
+        if let Some(info) = m.normal_texture() {
+            if info.tex_coord() != 0 {
+                notes.push(format!("its normal texture uses TEXCOORD_{}", info.tex_coord()));
+            } else if !has_uvs {
+                warnings.push(format!(
+                    "{}: material \"{name}\": normalTexture is not used: the mesh has no TEXCOORD_0",
+                    path.display()
+                ));
+            } else {
+                material.normal_scale = map_normal_scale(info.scale(), &mut notes);
+                material.normal_texture = texture(info.texture(), true, &mut warnings, "keep their normals");
             }
         }
         if !notes.is_empty() {
@@ -426,9 +444,10 @@ fn unused_features(document: &::gltf::Document) -> Vec<String> {
         .flat_map(|p| p.attributes.keys())
         .filter_map(|k| match k {
             ::gltf::json::validation::Checked::Valid(semantic) => match semantic {
-                ::gltf::Semantic::Positions | ::gltf::Semantic::Normals | ::gltf::Semantic::TexCoords(0) => {
-                    None
-                }
+                ::gltf::Semantic::Positions
+                | ::gltf::Semantic::Normals
+                | ::gltf::Semantic::Tangents
+                | ::gltf::Semantic::TexCoords(0) => None,
                 other => Some(other.to_string()),
             },
             ::gltf::json::validation::Checked::Invalid => None,
@@ -637,10 +656,13 @@ struct Group {
     positions: Vec<Vec3>,
     normals: Vec<Vec3>,
     uvs: Vec<[f32; 2]>,
+    /// `TANGENT`s, mirrored with the points (see [`read_primitive`]).
+    tangents: Vec<[f32; 4]>,
     triangles: Vec<[u32; 3]>,
-    /// Whether any primitive so far had normals / texture coordinates.
+    /// Whether any primitive so far had normals / texture coordinates / tangents.
     has_normals: bool,
     has_uvs: bool,
+    has_tangents: bool,
 }
 
 /// `uri` with its `%XX` escapes decoded, if that is UTF-8 text.
@@ -713,6 +735,13 @@ fn read_primitive(
     if let Some(a) = &texcoord {
         check_accessor(a, "TEXCOORD_0", Dimensions::Vec2, &[F32, I8, U8, I16, U16], buffers)?;
     }
+    let tangent = primitive.get(&::gltf::Semantic::Tangents);
+    if let Some(a) = &tangent {
+        check_accessor(a, "TANGENT", Dimensions::Vec4, &[F32, I8, I16], buffers)?;
+        if a.data_type() != F32 && !a.normalized() {
+            return Err("TANGENT of integers must be normalized".into());
+        }
+    }
     if let Some(a) = primitive.indices() {
         check_accessor(
             &a,
@@ -726,6 +755,7 @@ fn read_primitive(
     let count = position.count();
     if normal.as_ref().is_some_and(|a| a.count() != count)
         || texcoord.as_ref().is_some_and(|a| a.count() != count)
+        || tangent.as_ref().is_some_and(|a| a.count() != count)
     {
         return Err("its attributes have different counts".into());
     }
@@ -771,9 +801,29 @@ fn read_primitive(
         None if group.has_uvs => group.uvs.resize(base + count, [0.0; 2]),
         None => {}
     }
+    // A tangent is a direction along the surface: it goes through the
+    // transform itself. A mirror turns the frame's handedness round, so
+    // `w` changes sign with the determinant (glTF's bitangent
+    // `w·(N × T)`, mirrored, is `−w·(N' × T')`).
+    match &tangent {
+        Some(a) => {
+            if !group.has_tangents {
+                group.tangents.resize(base, [0.0; 4]);
+                group.has_tangents = true;
+            }
+            let sign = if flip { -1.0 } else { 1.0 };
+            group.tangents.extend(read_vectors::<4>(a, buffers).into_iter().map(|[x, y, z, w]| {
+                let t = linear * DVec3::new(x, y, z);
+                [t.x as f32, t.y as f32, t.z as f32, (sign * w) as f32]
+            }));
+        }
+        None if group.has_tangents => group.tangents.resize(base + count, [0.0; 4]),
+        None => {}
+    }
     if group.positions.len() != base + count
         || (group.has_normals && group.normals.len() != base + count)
         || (group.has_uvs && group.uvs.len() != base + count)
+        || (group.has_tangents && group.tangents.len() != base + count)
     {
         return Err("an attribute holds fewer values than its count".into());
     }
@@ -893,7 +943,7 @@ fn map_material(m: &::gltf::Material) -> (Material, Vec<String>) {
         }
     };
     let pbr = m.pbr_metallic_roughness();
-    let [r, g, b, _] = pbr.base_color_factor();
+    let [r, g, b, a] = pbr.base_color_factor();
     let base = Color::new(
         factor("baseColorFactor", r, 1.0, 0.0..=1.0),
         factor("baseColorFactor", g, 1.0, 0.0..=1.0),
@@ -939,14 +989,24 @@ fn map_material(m: &::gltf::Material) -> (Material, Vec<String>) {
     let e = |v: f32| factor("emissiveFactor", v, 0.0, 0.0..=1.0);
     let strength = factor("emissiveStrength", m.emissive_strength().unwrap_or(1.0), 1.0, 0.0..=f32::MAX);
     let ior = factor("ior", m.ior().unwrap_or(1.5), 1.5, 1.0..=100.0);
-    let material =
-        Material { ior, emission: Color::new(e(r), e(g), e(b)) * strength, ..Material::principled(base, p) };
+    use ::gltf::material::AlphaMode as Mode;
+    let alpha_mode = match m.alpha_mode() {
+        Mode::Opaque => AlphaMode::Opaque,
+        Mode::Mask => AlphaMode::Mask {
+            cutoff: factor("alphaCutoff", m.alpha_cutoff().unwrap_or(DEFAULT_ALPHA_CUTOFF), 0.5, 0.0..=1.0),
+        },
+        Mode::Blend => AlphaMode::Blend,
+    };
+    let material = Material {
+        ior,
+        emission: Color::new(e(r), e(g), e(b)) * strength,
+        alpha: factor("baseColorFactor", a, 1.0, 0.0..=1.0),
+        alpha_mode,
+        ..Material::principled(base, p)
+    };
     let mut notes = notes.into_inner();
     if pbr.metallic_roughness_texture().is_some() {
         notes.push("metallicRoughnessTexture".to_owned());
-    }
-    if m.normal_texture().is_some() {
-        notes.push("normalTexture".to_owned());
     }
     if m.occlusion_texture().is_some() {
         notes.push("occlusionTexture".to_owned());
@@ -968,18 +1028,27 @@ fn map_material(m: &::gltf::Material) -> (Material, Vec<String>) {
             notes.push("specularColorTexture".to_owned());
         }
     }
-    if m.alpha_mode() != ::gltf::material::AlphaMode::Opaque {
-        notes.push(format!("alphaMode {:?} (the surface is opaque)", m.alpha_mode()));
-    }
     (material, notes)
 }
 
-/// The texture's image, decoded, with its sampler's wrap modes.
+/// A normal texture's `scale`, or 1 (named in `notes`) where it is not a number.
+fn map_normal_scale(scale: f32, notes: &mut Vec<String>) -> f32 {
+    if scale.is_finite() {
+        scale
+    } else {
+        notes.push(format!("normalTexture.scale {scale} (not a number: 1 instead)"));
+        1.0
+    }
+}
+
+/// The texture's image, decoded (from sRGB, or as it is when `linear`: a
+/// normal map), with its sampler's wrap modes.
 fn read_texture(
     t: &::gltf::Texture,
     document: &::gltf::json::Root,
     base: &Path,
     buffers: &[::gltf::buffer::Data],
+    linear: bool,
 ) -> Result<Texture, String> {
     let image = t.source();
     // `Image::source` unwraps a missing `mimeType` beside a `bufferView`,
@@ -1037,7 +1106,8 @@ fn read_texture(
         WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
     };
     let sampler = t.sampler();
-    Texture::from_srgb(decoded.width, decoded.height, channels, &values)
+    let make = if linear { Texture::from_linear } else { Texture::from_srgb };
+    make(decoded.width, decoded.height, channels, &values)
         .map(|tex| tex.with_wrap([wrap(sampler.wrap_s()), wrap(sampler.wrap_t())]))
         .ok_or_else(|| "its decoded size does not match its pixels".into())
 }
@@ -1172,7 +1242,7 @@ mod tests {
                 "KHR_texture_transform"
             ]);
             doc["materials"] = json!([{
-                "pbrMetallicRoughness": { "baseColorFactor": [1.0, 0.5, 0.25, 1.0], "metallicFactor": 0.5, "roughnessFactor": 0.3 },
+                "pbrMetallicRoughness": { "baseColorFactor": [1.0, 0.5, 0.25, 0.75], "metallicFactor": 0.5, "roughnessFactor": 0.3 },
                 "emissiveFactor": [1.0, 0.5, 0.0],
                 "alphaMode": "BLEND",
                 "extensions": {
@@ -1203,9 +1273,21 @@ mod tests {
             specular_color: Color::new(1.0, 0.9, 0.8),
         };
         assert_eq!(m.physical, Some(expected));
-        assert_eq!(model.warnings.len(), 2, "{:?}", model.warnings);
+        assert_eq!((m.alpha, m.alpha_mode), (0.75, AlphaMode::Blend));
+        assert_eq!(model.warnings.len(), 1, "{:?}", model.warnings);
         assert!(model.warnings[0].contains("KHR_texture_transform"));
-        assert!(model.warnings[1].contains("alphaMode Blend"));
+        // MASK with its cutoff, or glTF's default 0.5.
+        for (cutoff, expected) in [(json!(0.25), 0.25), (Value::Null, 0.5)] {
+            let bytes = triangle_glb(|doc, _| {
+                doc["materials"] = json!([{ "alphaMode": "MASK" }]);
+                if !cutoff.is_null() {
+                    doc["materials"][0]["alphaCutoff"] = cutoff;
+                }
+            });
+            let model = load_bytes(&bytes).unwrap();
+            assert_eq!(model.materials[0].1.alpha_mode, AlphaMode::Mask { cutoff: expected });
+            assert!(model.warnings.is_empty(), "{:?}", model.warnings);
+        }
         // Without extensions: glTF's defaults (metallic and roughness 1).
         let bytes = triangle_glb(|doc, _| doc["materials"] = json!([{}]));
         let m = load_bytes(&bytes).unwrap().materials[0].1;
@@ -1345,6 +1427,95 @@ mod tests {
     }
 
     /// A 2×2 PNG (orange and blue checks), as Blender embeds its textures.
+    /// [`triangle_glb`] with a 1×1 normal map of texel `rgb` (linear)
+    /// and, if given, `TANGENT`s.
+    fn normal_mapped_glb(rgb: [u8; 3], tangent: Option<[f32; 4]>) -> Vec<u8> {
+        triangle_glb(|doc, bin| {
+            let mut png = Vec::new();
+            image::RgbImage::from_pixel(1, 1, image::Rgb(rgb))
+                .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+                .unwrap();
+            let offset = bin.len();
+            bin.extend_from_slice(&png);
+            let views = doc["bufferViews"].as_array_mut().unwrap();
+            views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": png.len() }));
+            if let Some(t) = tangent {
+                while bin.len() % 4 != 0 {
+                    bin.push(0);
+                }
+                let offset = bin.len();
+                (0..3).for_each(|_| bin.extend(t.iter().flat_map(|f| f.to_le_bytes())));
+                views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": 48 }));
+                doc["accessors"].as_array_mut().unwrap().push(json!(
+                    { "bufferView": 5, "componentType": 5126, "count": 3, "type": "VEC4" }
+                ));
+                doc["meshes"][0]["primitives"][0]["attributes"]["TANGENT"] = json!(4);
+            }
+            doc["buffers"][0]["byteLength"] = json!(bin.len());
+            doc["images"] = json!([{ "bufferView": 4, "mimeType": "image/png" }]);
+            doc["textures"] = json!([{ "source": 0 }]);
+            doc["materials"][0]["normalTexture"] = json!({ "index": 0, "scale": 1.0 });
+        })
+    }
+
+    /// The shading normal a ray along +z sees at (0.25, 0.25) on `model`'s
+    /// triangle (glTF's, mirrored: it faces −z here).
+    fn mapped_normal_of(model: Model) -> Vec3 {
+        let mut builder = crate::SceneBuilder::new();
+        for t in model.textures {
+            builder = builder.texture(std::sync::Arc::new(t));
+        }
+        let (mesh, _) = model.parts.into_iter().next().unwrap();
+        let (name, material) = model.materials[0].clone();
+        let scene = builder
+            .material(name.clone(), material)
+            .object(crate::Primitive::Mesh(mesh), name)
+            .build()
+            .unwrap();
+        let ray = crate::math::ray::Ray::new(Vec3::new(0.25, 0.25, -1.0), Vec3::Z);
+        let hit = scene.cast(&ray).unwrap();
+        let si = crate::integrators::interaction::SurfaceInteraction::new(&scene, &ray, &hit).unwrap();
+        si.shading_normal.unwrap()
+    }
+
+    #[test]
+    fn a_normal_map_tilts_the_normal_towards_u_and_up_the_image_through_the_mirror() {
+        // The triangle's u runs along glTF's +x and v along +y, so up the
+        // image (decreasing v) is −y; mirrored in z, x and y stay. A texel
+        // of red 1 tilts the normal 45° towards +u, one of green 1 45° up
+        // the image: with MikkTSpace's tangents, and with the file's that
+        // say the same (w = −1: glTF's bitangent w·(N × T) = −(z × x) is −y).
+        let n = Vec3::new(0.0, 0.0, -1.0);
+        let tilted = |d: Vec3| (n + d).normalize();
+        for tangent in [None, Some([1.0, 0.0, 0.0, -1.0])] {
+            let model = load_bytes(&normal_mapped_glb([255, 128, 255], tangent)).unwrap();
+            assert!(model.warnings.is_empty(), "{:?}", model.warnings);
+            let m = model.materials[0].1;
+            assert_eq!((m.normal_texture, m.normal_scale), (Some(0), 1.0));
+            let got = mapped_normal_of(model);
+            assert!((got - tilted(Vec3::X)).length() < 0.01, "tangent {tangent:?}: {got}");
+            let got = mapped_normal_of(load_bytes(&normal_mapped_glb([128, 255, 255], tangent)).unwrap());
+            assert!((got - tilted(-Vec3::Y)).length() < 0.01, "tangent {tangent:?}: {got}");
+        }
+        // The file's handedness is what counts: w = +1 makes its bitangent
+        // z × x = +y, and green tilts that way, through the mirror.
+        let model = load_bytes(&normal_mapped_glb([128, 255, 255], Some([1.0, 0.0, 0.0, 1.0]))).unwrap();
+        let got = mapped_normal_of(model);
+        assert!((got - tilted(Vec3::Y)).length() < 0.01, "{got}");
+    }
+
+    #[test]
+    fn a_normal_map_on_a_mesh_without_texture_coordinates_is_a_warning_naming_file_material_and_field() {
+        let mut bytes = normal_mapped_glb([128, 128, 255], None);
+        let mut doc = json_of(&bytes);
+        doc["meshes"][0]["primitives"][0]["attributes"].as_object_mut().unwrap().remove("TEXCOORD_0");
+        bytes = encode_glb(&doc.to_string(), &bin_of(&bytes));
+        let model = load_bytes(&bytes).unwrap();
+        assert_eq!(model.materials[0].1.normal_texture, None);
+        let w = model.warnings.join("\n");
+        assert!(w.contains("m.glb: material \"paint\": normalTexture is not used"), "{w}");
+    }
+
     fn png() -> Vec<u8> {
         let mut png = Vec::new();
         image::RgbImage::from_fn(2, 2, |x, y| {

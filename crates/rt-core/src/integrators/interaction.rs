@@ -8,15 +8,22 @@
 //! the ray, the shading normal, the material there (textured), and from
 //! these the BSDF, the emitted radiance and the spawning of the next ray.
 //! Texture coordinates and the tangent frame `∂p/∂u`, `∂p/∂v` are computed
-//! when asked for, so a hit that needs neither pays nothing for them.
+//! when asked for, so a hit that needs neither pays nothing for them. A
+//! material with a normal map bends the shading normal here
+//! ([`crate::materials::normal_map`]), once per hit; every integrator then
+//! shades with it and keeps the geometric normal for the sides of the
+//! surface and for spawning rays.
 
 use std::borrow::Cow;
 
 use crate::geometry::hit::Hit;
 use crate::geometry::object::Object;
+use crate::geometry::primitive::Primitive;
 use crate::geometry::surface::SurfacePoint;
 use crate::materials::bsdf::Bsdf;
 use crate::materials::material::Material;
+use crate::materials::normal_map;
+use crate::materials::texture::Texture;
 use crate::math::color::Color;
 use crate::math::ray::Ray;
 use crate::math::real::{Real, Vec3, normalize_robust};
@@ -34,8 +41,9 @@ pub struct SurfaceInteraction<'s> {
     pub point: SurfacePoint,
     /// Unit direction from the point back along the ray (ω_o).
     pub wo: Vec3,
-    /// The unit shading normal (a mesh's interpolated vertex normals), or
-    /// `None` where it is the geometric normal.
+    /// The unit shading normal (a mesh's interpolated vertex normals, bent
+    /// by the material's normal map), or `None` where it is the geometric
+    /// normal.
     pub shading_normal: Option<Vec3>,
     /// The object's material at the point, its texture applied.
     pub material: Cow<'s, Material>,
@@ -58,7 +66,13 @@ impl<'s> SurfaceInteraction<'s> {
         let shape = &scene.objects()[hit.object];
         let point = shape.primitive.surface_point(hit.primitive, hit.normal, ray.at(hit.t));
         let material = scene.material_at(hit.object, hit.primitive, point.p);
-        let shading_normal = shape.primitive.shading_normal(hit.primitive, point.p);
+        let mut shading_normal = shape.primitive.shading_normal(hit.primitive, point.p);
+        if let Some(texture) = material.normal_texture {
+            let map = scene.texture(texture as usize);
+            shading_normal =
+                normal_mapped(shape, hit.primitive, &point, shading_normal, map, material.normal_scale)
+                    .or(shading_normal);
+        }
         Self { object: hit.object, primitive: hit.primitive, point, wo: -d, shading_normal, material, shape }
     }
 
@@ -117,6 +131,34 @@ impl<'s> SurfaceInteraction<'s> {
     pub fn tangents(&self) -> (Vec3, Vec3) {
         self.shape.primitive.tangents(self.primitive, self.point.normal)
     }
+}
+
+/// The shading normal at `point` on `primitive` of `shape` bent by the
+/// normal map `map` of scale `scale` ([`crate::materials::normal_map`]):
+/// about the shading normal `shading` (or the geometric one), in the frame
+/// of the mesh's tangents, or where it has none of `∂p/∂u` and the
+/// direction up the image, `−∂p/∂v`. `None` where the surface has no
+/// texture coordinates.
+fn normal_mapped(
+    shape: &Object,
+    primitive: usize,
+    point: &SurfacePoint,
+    shading: Option<Vec3>,
+    map: &Texture,
+    scale: f32,
+) -> Option<Vec3> {
+    let (u, v) = shape.primitive.uv(primitive, point.p)?;
+    let n = shading.unwrap_or(point.normal);
+    let (t, w) = match &shape.primitive {
+        Primitive::Mesh(mesh) => mesh.tangent(primitive, point.p),
+        _ => None,
+    }
+    .unwrap_or_else(|| {
+        let (dpdu, dpdv) = shape.primitive.tangents(primitive, point.normal);
+        (dpdu, if n.cross(dpdu).dot(dpdv) > 0.0 { -1.0 } else { 1.0 })
+    });
+    let n_ts = normal_map::tangent_space_normal(map.sample(u, v), scale)?;
+    Some(normal_map::mapped_normal(n, t, w, n_ts))
 }
 
 #[cfg(test)]

@@ -1,6 +1,7 @@
 //! Materials: how a surface answers light. Its colours are linear RGB
 //! ([`crate::math::color`]).
 
+use crate::materials::alpha::AlphaMode;
 use crate::materials::medium::Subsurface;
 use crate::materials::principled::Principled;
 use crate::math::color::Color;
@@ -64,6 +65,20 @@ pub struct Material {
     /// The physically based parameters ([`Principled`]): when set, the
     /// surface is shaded by the glTF 2.0 BSDF instead of the weights.
     pub physical: Option<Principled>,
+    /// A normal map (glTF's `normalTexture`): an index into the scene's
+    /// textures, holding linear tangent-space normals
+    /// ([`crate::materials::normal_map`]). Where the surface has texture
+    /// coordinates it replaces the shading normal.
+    pub normal_texture: Option<u32>,
+    /// The normal map's `scale`: how far its normals tilt, multiplying
+    /// their x and y (glTF's `normalTexture.scale`, 1 by default).
+    pub normal_scale: f32,
+    /// The base colour's alpha factor in [0, 1] (glTF's
+    /// `baseColorFactor[3]`), multiplied by the texture's alpha where it has
+    /// one; used as `alpha_mode` says.
+    pub alpha: f32,
+    /// How alpha decides where the surface is ([`crate::materials::alpha`]).
+    pub alpha_mode: AlphaMode,
 }
 
 impl Material {
@@ -82,6 +97,10 @@ impl Material {
             subsurface: None,
             texture: None,
             physical: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+            alpha: 1.0,
+            alpha_mode: AlphaMode::Opaque,
         }
     }
 

@@ -5,7 +5,10 @@
 //! conventions of OBJ/MTL `map_Kd` and glTF's `baseColorTexture`: they are
 //! decoded to linear RGB once, at load, with the IEC 61966-2-1 curve
 //! ([`srgb_decode`]), so that filtering and shading happen on linear values.
-//! Alpha is ignored.
+//! Alpha, where the image has it, is kept apart as it is (alpha is linear
+//! coverage, never sRGB-encoded) and filtered the same way
+//! ([`Texture::sample_alpha`]). Normal maps hold linear values and are made
+//! with [`Texture::from_linear`].
 //!
 //! **Coordinates.** `(u, v)` with `u` to the right and `v` *down* the image:
 //! `(0, 0)` is the upper-left corner of the upper-left texel, `(1, 1)` the
@@ -86,6 +89,9 @@ pub struct Texture {
     width: u32,
     height: u32,
     texels: Vec<Color>,
+    /// The alpha channel, one value per texel, or empty when the image has
+    /// none (alpha 1 everywhere).
+    alpha: Vec<f32>,
     wrap: [Wrap; 2],
 }
 
@@ -94,13 +100,37 @@ impl Texture {
     /// the top. `None` if the sizes disagree or either side is 0.
     pub fn new(width: u32, height: u32, texels: Vec<Color>) -> Option<Self> {
         (width > 0 && height > 0 && texels.len() as u64 == u64::from(width) * u64::from(height))
-            .then_some(Self { width, height, texels, wrap: [Wrap::Repeat; 2] })
+            .then_some(Self { width, height, texels, alpha: Vec::new(), wrap: [Wrap::Repeat; 2] })
+    }
+
+    /// The texture with an alpha channel (one value in [0, 1] per texel, row
+    /// by row from the top); `None` if the count differs from the texels'.
+    pub fn with_alpha(self, alpha: Vec<f32>) -> Option<Self> {
+        (alpha.len() == self.texels.len()).then(|| Self { alpha, ..self })
+    }
+
+    /// A texture from linear values in [0, 1] (a normal map's), `channels`
+    /// (1 to 4) per texel, row by row from the top, grey for 1 or 2
+    /// channels; a fourth channel is dropped. `None` if the sizes disagree.
+    pub fn from_linear(width: u32, height: u32, channels: usize, values: &[f32]) -> Option<Self> {
+        Self::from_values(width, height, channels, values, |v| v).map(|t| Self { alpha: Vec::new(), ..t })
     }
 
     /// A texture from 8- or 16-bit sRGB-encoded values in [0, 1], `channels`
     /// (1 to 4) per texel, row by row from the top: grey (1 or 2 channels)
-    /// or RGB (3 or 4); alpha is dropped. `None` if the sizes disagree.
+    /// or RGB (3 or 4), the second or fourth channel being alpha (kept
+    /// linear). `None` if the sizes disagree.
     pub fn from_srgb(width: u32, height: u32, channels: usize, values: &[f32]) -> Option<Self> {
+        Self::from_values(width, height, channels, values, srgb_decode)
+    }
+
+    fn from_values(
+        width: u32,
+        height: u32,
+        channels: usize,
+        values: &[f32],
+        decode: fn(f32) -> f32,
+    ) -> Option<Self> {
         if !(1..=4).contains(&channels) || values.len() != channels * width as usize * height as usize {
             return None;
         }
@@ -108,10 +138,14 @@ impl Texture {
             .chunks_exact(channels)
             .map(|t| {
                 let rgb = if channels < 3 { [t[0]; 3] } else { [t[0], t[1], t[2]] };
-                Color::from_array(rgb.map(|v| srgb_decode(v.clamp(0.0, 1.0))))
+                Color::from_array(rgb.map(|v| decode(v.clamp(0.0, 1.0))))
             })
             .collect();
-        Self::new(width, height, texels)
+        let texture = Self::new(width, height, texels)?;
+        if channels % 2 == 1 {
+            return Some(texture);
+        }
+        texture.with_alpha(values.chunks_exact(channels).map(|t| t[channels - 1].clamp(0.0, 1.0)).collect())
     }
 
     /// The texture with wrap modes `[u, v]`.
@@ -130,7 +164,9 @@ impl Texture {
         limits.max_image_width = Some(MAX_TEXTURE_SIDE);
         limits.max_image_height = Some(MAX_TEXTURE_SIDE);
         reader.limits(limits);
-        let image = reader.decode().map_err(|e| read(e.to_string()))?.into_rgb8();
+        let decoded = reader.decode().map_err(|e| read(e.to_string()))?;
+        let has_alpha = decoded.color().has_alpha();
+        let image = decoded.into_rgba8();
         let (width, height) = image.dimensions();
         if width == 0 || height == 0 {
             return Err(TextureError::Size { path: path.to_owned(), width, height });
@@ -140,7 +176,9 @@ impl Texture {
         let texels = image
             .pixels()
             .map(|p| Color::new(table[p[0] as usize], table[p[1] as usize], table[p[2] as usize]));
-        Ok(Self { width, height, texels: texels.collect(), wrap: [Wrap::Repeat; 2] })
+        let alpha =
+            if has_alpha { image.pixels().map(|p| f32::from(p[3]) / 255.0).collect() } else { Vec::new() };
+        Ok(Self { width, height, texels: texels.collect(), alpha, wrap: [Wrap::Repeat; 2] })
     }
 
     /// Width and height in texels.
@@ -150,18 +188,37 @@ impl Texture {
 
     /// Bytes of texel storage.
     pub fn memory_bytes(&self) -> usize {
-        self.texels.len() * size_of::<Color>()
+        self.texels.len() * size_of::<Color>() + self.alpha.len() * size_of::<f32>()
+    }
+
+    /// Whether the image has an alpha channel.
+    pub fn has_alpha(&self) -> bool {
+        !self.alpha.is_empty()
     }
 
     /// The bilinearly filtered colour at `(u, v)` (see the module
     /// documentation), wrapped by the texture's [`Wrap`] modes. Non-finite
     /// coordinates give the texel at (0, 0).
     pub fn sample(&self, u: Real, v: Real) -> Color {
+        self.filter(u, v, &self.texels)
+    }
+
+    /// The alpha at `(u, v)`, filtered and wrapped as [`Texture::sample`]
+    /// filters colour; 1 for an image without alpha.
+    pub fn sample_alpha(&self, u: Real, v: Real) -> f32 {
+        if self.alpha.is_empty() { 1.0 } else { self.filter(u, v, &self.alpha) }
+    }
+
+    /// The bilinear filter over `values` (one per texel).
+    fn filter<T>(&self, u: Real, v: Real, values: &[T]) -> T
+    where
+        T: Copy + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
+    {
         let (w, h) = (self.width as i64, self.height as i64);
         let x = to_f64(u) * w as f64 - 0.5;
         let y = to_f64(v) * h as f64 - 0.5;
         if !(x.is_finite() && y.is_finite()) {
-            return self.texels[0];
+            return values[0];
         }
         // Reduce far coordinates first (by a whole mirrored period), so the
         // integer part stays exact.
@@ -181,7 +238,7 @@ impl Texture {
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
         let [wrap_u, wrap_v] = self.wrap;
-        let texel = |i: i64, j: i64| self.texels[(wrap_v.index(j, h) * w + wrap_u.index(i, w)) as usize];
+        let texel = |i: i64, j: i64| values[(wrap_v.index(j, h) * w + wrap_u.index(i, w)) as usize];
         let (i, j) = (x0 as i64, y0 as i64);
         let top = texel(i, j) * (1.0 - fx) + texel(i + 1, j) * fx;
         let bottom = texel(i, j + 1) * (1.0 - fx) + texel(i + 1, j + 1) * fx;

@@ -233,8 +233,7 @@ impl TryFrom<MaterialFields> for MaterialDesc {
                     ior,
                     emission,
                     subsurface,
-                    texture: None,
-                    physical: None,
+                    ..flat
                 };
                 if m.reflectivity + m.transparency > 1.0 {
                     return Err(format!(
