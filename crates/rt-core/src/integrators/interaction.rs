@@ -256,7 +256,10 @@ mod tests {
         use crate::materials::principled::Principled;
         let materials = [
             Material::flat(Color::ONE),
-            Material::principled(Color::ONE, Principled { metallic: 1.0, roughness: 0.3, ..Principled::DIELECTRIC }),
+            Material::principled(
+                Color::ONE,
+                Principled { metallic: 1.0, roughness: 0.3, ..Principled::DIELECTRIC },
+            ),
             Material::principled(Color::ONE, Principled { roughness: 0.2, ..Principled::DIELECTRIC }),
         ];
         for (k, material) in materials.into_iter().enumerate() {

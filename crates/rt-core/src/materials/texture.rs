@@ -155,6 +155,15 @@ impl Texture {
 
     /// Reads an sRGB-encoded image file and decodes it to linear colour.
     pub fn load(path: &Path) -> Result<Self, TextureError> {
+        Self::load_decoded(path, srgb_decode)
+    }
+
+    /// Reads an image file of linear values (a normal map), as they are.
+    pub fn load_linear(path: &Path) -> Result<Self, TextureError> {
+        Self::load_decoded(path, |v| v)
+    }
+
+    fn load_decoded(path: &Path, decode: fn(f32) -> f32) -> Result<Self, TextureError> {
         let read = |reason: String| TextureError::Read { path: path.to_owned(), reason };
         let mut reader = image::ImageReader::open(path)
             .map_err(|e| read(e.to_string()))?
@@ -172,7 +181,7 @@ impl Texture {
             return Err(TextureError::Size { path: path.to_owned(), width, height });
         }
         // One table lookup per channel value.
-        let table: Vec<f32> = (0..=255u8).map(|b| srgb_decode(f32::from(b) / 255.0)).collect();
+        let table: Vec<f32> = (0..=255u8).map(|b| decode(f32::from(b) / 255.0)).collect();
         let texels = image
             .pixels()
             .map(|p| Color::new(table[p[0] as usize], table[p[1] as usize], table[p[2] as usize]));

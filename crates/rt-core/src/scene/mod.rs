@@ -282,6 +282,18 @@ impl SceneBuilder {
                 });
             }
         }
+        let mut warnings = self.warnings;
+        for (index, o) in objects.iter().enumerate() {
+            let uvs = matches!(&o.primitive, Primitive::Mesh(mesh) if mesh.has_uvs());
+            if materials[o.material].normal_texture.is_some() && !uvs {
+                warnings.push(format!(
+                    "material \"{}\": normal_texture is not used on objects[{index}] ({}): it has no texture \
+                     coordinates",
+                    material_names[o.material],
+                    o.primitive.kind()
+                ));
+            }
+        }
         let mut emitters = Vec::new();
         let mut emitter_of = vec![None; objects.len()];
         for (index, o) in objects.iter().enumerate() {
@@ -311,7 +323,7 @@ impl SceneBuilder {
             emitter_of,
             light_sampler,
             source_files: self.source_files,
-            warnings: self.warnings,
+            warnings,
             cuts,
         })
     }

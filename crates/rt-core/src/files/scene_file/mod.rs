@@ -165,8 +165,23 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<LoadedScen
     for light in desc.lights {
         scene = scene.light(light.0);
     }
-    for (name, material) in desc.materials {
-        scene = scene.material(name, material.0);
+    for (name, MaterialDesc(mut material, normal_texture)) in desc.materials {
+        if let Some(written) = normal_texture {
+            let path = base_dir.join(&written);
+            scene = scene.source_file(&path);
+            match crate::materials::texture::Texture::load_linear(&path) {
+                Ok(texture) => {
+                    material.normal_texture = Some(scene.texture_count() as u32);
+                    scene = scene.texture(std::sync::Arc::new(texture));
+                }
+                Err(e) => {
+                    scene = scene.warning(format!(
+                        "{file}: material \"{name}\": normal_texture {written} is not used: {e}"
+                    ));
+                }
+            }
+        }
+        scene = scene.material(name, material);
     }
     // A mesh with its file's materials adds an object per material: the
     // scene's object k came from the file's `entry_of[k]`.
