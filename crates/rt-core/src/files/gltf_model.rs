@@ -4,7 +4,8 @@
 //! **What is read.** Every mesh primitive of the file's default scene (or
 //! its first scene), placed by its node's transform composed with its
 //! parents' (glTF 2.0 §3.5.3): positions, normals (as shading normals),
-//! `TEXCOORD_0`, indices. Triangle lists, strips and fans are read; points
+//! tangents (for normal maps; generated with MikkTSpace where absent,
+//! [`Mesh::with_generated_tangents`]), `TEXCOORD_0`, indices. Triangle lists, strips and fans are read; points
 //! and lines are an error. Attributes may be quantized
 //! (`KHR_mesh_quantization`: 8- and 16-bit integers, normalized or not,
 //! `read_vectors`) and compressed (`EXT_meshopt_compression`,
@@ -26,7 +27,10 @@
 //! imaged. A mirror turns a triangle's winding round, so the corners are
 //! stored in reverse wherever the transform (mirror included) has a
 //! negative determinant, and `(b−a)×(c−a)` keeps pointing out of the model.
-//! Normals go through the inverse transpose of the transform. The scene's
+//! Normals go through the inverse transpose of the transform, tangents
+//! through the transform itself with their handedness `w` negated where
+//! its determinant is negative (glTF's bitangent `w·(N × T)`, mirrored, is
+//! `−w·(N' × T')`). The scene's
 //! `scale` and `translate` apply last. Texture coordinates keep glTF's
 //! convention, `v` down the image, which is [`crate::materials::texture`]'s.
 //!
@@ -38,6 +42,8 @@
 //! |---|---|
 //! | `baseColorFactor` (RGB) | `color` (the base colour) |
 //! | `baseColorTexture` | `texture` (sRGB, bilinear, the sampler's wrap modes), multiplying `color` |
+//! | `baseColorFactor[3]` × the texture's alpha, `alphaMode`, `alphaCutoff` | `alpha`, `alpha_mode` ([`crate::materials::alpha`]) |
+//! | `normalTexture`, its `scale` | `normal_texture` (linear), `normal_scale` ([`crate::materials::normal_map`]) |
 //! | `metallicFactor`, `roughnessFactor` | `metallic`, `roughness` (α = roughness²) |
 //! | `emissiveFactor` × `KHR_materials_emissive_strength` | `emission` |
 //! | `KHR_materials_transmission` | `transmission` |
@@ -49,9 +55,10 @@
 //! A factor that is not a number or out of its range is replaced by its
 //! default or clamped, and named in the warnings. Not used, and named in
 //! the model's warnings: the metallic-roughness,
-//! normal, occlusion and emissive textures (and the extensions' textures), a base-colour texture on
-//! another coordinate set than 0, alpha (`alphaMode` is treated as
-//! `OPAQUE`), and every other extension the file uses. An extension the file
+//! occlusion and emissive textures (and the extensions' textures), a
+//! base-colour or normal texture on another coordinate set than 0, a normal
+//! texture on a mesh without texture coordinates, and every other extension
+//! the file uses. An extension the file
 //! *requires* and rt-view does not know is an error. Samplers' filters are
 //! not used: textures are always filtered bilinearly.
 //!

@@ -29,13 +29,13 @@
 //! and where secondary rays start.
 
 use crate::math::color::Color;
-use crate::math::real::{Vec3, normalize_robust};
+use crate::math::real::{Vec3, narrow, normalize_robust};
 
 /// The tangent-space normal that texel `c` holds, its x and y scaled by
 /// `scale`: `normalize((2c − 1)·(s, s, 1))`; `None` if that is zero.
 pub fn tangent_space_normal(c: Color, scale: f32) -> Option<Vec3> {
     let v = (c * 2.0 - Color::ONE) * Color::new(scale, scale, 1.0);
-    normalize_robust(Vec3::new(v.x.into(), v.y.into(), v.z.into()))
+    normalize_robust(narrow(v.as_dvec3()))
 }
 
 /// The orthonormal tangent and bitangent `(T', B)` about the unit normal

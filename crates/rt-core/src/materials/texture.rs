@@ -106,7 +106,7 @@ impl Texture {
     /// The texture with an alpha channel (one value in [0, 1] per texel, row
     /// by row from the top); `None` if the count differs from the texels'.
     pub fn with_alpha(self, alpha: Vec<f32>) -> Option<Self> {
-        (alpha.len() == self.texels.len()).then(|| Self { alpha, ..self })
+        if alpha.len() == self.texels.len() { Some(Self { alpha, ..self }) } else { None }
     }
 
     /// A texture from linear values in [0, 1] (a normal map's), `channels`

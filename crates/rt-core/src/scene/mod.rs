@@ -692,7 +692,12 @@ mod tests {
     fn square(z: Real) -> Primitive {
         let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
         let positions = corners.iter().map(|&(x, y)| Vec3::new(x, y, z)).collect();
-        let uvs = corners.iter().map(|&(x, y)| [(x as f32 + 1.0) / 2.0, (1.0 - y as f32) / 2.0]).collect();
+        let uvs = corners
+            .iter()
+            .map(|&(x, y)| {
+                [(crate::math::real::to_f32(x) + 1.0) / 2.0, (1.0 - crate::math::real::to_f32(y)) / 2.0]
+            })
+            .collect();
         let mesh = crate::geometry::mesh::Mesh::new(positions, vec![[0, 2, 1], [0, 3, 2]]).unwrap();
         Primitive::Mesh(mesh.with_vertex_attributes(Vec::new(), uvs).unwrap())
     }
@@ -702,7 +707,7 @@ mod tests {
     /// an opaque square just behind it at z = 10⁻³.
     fn cut_square(mode: AlphaMode, n: u32, alpha: f32) -> Scene {
         let texels = vec![Color::ONE; (n * n) as usize];
-        let checker = (0..n * n).map(|k| if (k % n + k / n) % 2 == 0 { 0.0 } else { alpha }).collect();
+        let checker = (0..n * n).map(|k| if (k % n + k / n).is_multiple_of(2) { 0.0 } else { alpha }).collect();
         let texture = Texture::new(n, n, texels).unwrap().with_alpha(checker).unwrap();
         let cut = Material { texture: Some(0), alpha_mode: mode, ..Material::flat(Color::ONE) };
         SceneBuilder::new()
