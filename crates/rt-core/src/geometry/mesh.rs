@@ -836,7 +836,8 @@ mod tests {
     /// texture coordinates `uv(x, y)` at its corners.
     fn quad(uv: impl Fn(f32, f32) -> [f32; 2]) -> Mesh {
         let corners = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
-        let positions = corners.iter().map(|&(x, y)| narrow(glam::DVec3::new(x.into(), y.into(), 0.0))).collect();
+        let positions =
+            corners.iter().map(|&(x, y)| narrow(glam::DVec3::new(x.into(), y.into(), 0.0))).collect();
         let uvs = corners.iter().map(|&(x, y)| uv(x, y)).collect();
         Mesh::new(positions, vec![[0, 1, 2], [0, 2, 3]])
             .unwrap()

@@ -328,6 +328,37 @@ mod tests {
     }
 
     #[test]
+    fn alpha_is_kept_linear_and_filtered_where_the_image_has_it() {
+        // 2×1 RGBA: alpha 0 and 1, colours sRGB-decoded, alpha not.
+        let t = Texture::from_srgb(2, 1, 4, &[0.5, 0.5, 0.5, 0.0, 1.0, 1.0, 1.0, 1.0]).unwrap();
+        assert!(t.has_alpha());
+        assert_eq!(
+            (t.sample_alpha(0.25, 0.5), t.sample_alpha(0.75, 0.5), t.sample_alpha(0.5, 0.5)),
+            (0.0, 1.0, 0.5)
+        );
+        assert!((t.sample(0.25, 0.5).x - srgb_decode(0.5)).abs() < 1e-6);
+        // Grey with alpha (2 channels); none without.
+        let g = Texture::from_srgb(1, 1, 2, &[1.0, 0.25]).unwrap();
+        assert_eq!(g.sample_alpha(0.3, 0.3), 0.25);
+        let rgb = Texture::from_srgb(1, 1, 3, &[1.0, 0.5, 0.0]).unwrap();
+        assert!(!rgb.has_alpha() && rgb.sample_alpha(0.5, 0.5) == 1.0);
+        // A normal map is linear and has no alpha.
+        let n = Texture::from_linear(1, 1, 4, &[0.5, 0.25, 1.0, 0.0]).unwrap();
+        assert_eq!((n.sample(0.5, 0.5), n.has_alpha()), (Color::new(0.5, 0.25, 1.0), false));
+        // An RGBA file keeps its alpha; an RGB one has none.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.png");
+        image::RgbaImage::from_pixel(1, 1, image::Rgba([255, 255, 255, 51])).save(&path).unwrap();
+        let t = Texture::load(&path).unwrap();
+        assert!((t.sample_alpha(0.5, 0.5) - 0.2).abs() < 1e-6);
+        assert_eq!(t.memory_bytes(), size_of::<Color>() + size_of::<f32>());
+        image::RgbImage::from_pixel(1, 1, image::Rgb([255, 128, 0])).save(&path).unwrap();
+        assert!(!Texture::load(&path).unwrap().has_alpha());
+        let linear = Texture::load_linear(&path).unwrap().sample(0.5, 0.5);
+        assert!((linear - Color::new(1.0, 128.0 / 255.0, 0.0)).abs().max_element() < 1e-6, "{linear}");
+    }
+
+    #[test]
     fn srgb_decoding_inverts_the_encoding() {
         for i in 0..=255 {
             let v = i as f32 / 255.0;

@@ -707,7 +707,8 @@ mod tests {
     /// an opaque square just behind it at z = 10⁻³.
     fn cut_square(mode: AlphaMode, n: u32, alpha: f32) -> Scene {
         let texels = vec![Color::ONE; (n * n) as usize];
-        let checker = (0..n * n).map(|k| if (k % n + k / n).is_multiple_of(2) { 0.0 } else { alpha }).collect();
+        let checker =
+            (0..n * n).map(|k| if (k % n + k / n).is_multiple_of(2) { 0.0 } else { alpha }).collect();
         let texture = Texture::new(n, n, texels).unwrap().with_alpha(checker).unwrap();
         let cut = Material { texture: Some(0), alpha_mode: mode, ..Material::flat(Color::ONE) };
         SceneBuilder::new()
