@@ -1512,6 +1512,26 @@ mod tests {
     }
 
     #[test]
+    fn bad_tangents_are_errors_naming_the_attribute_or_are_replaced_never_a_panic() {
+        let edit = |f: fn(&mut Value)| {
+            let bytes = normal_mapped_glb([128, 128, 255], Some([1.0, 0.0, 0.0, 1.0]));
+            let mut doc = json_of(&bytes);
+            f(&mut doc);
+            load_bytes(&encode_glb(&doc.to_string(), &bin_of(&bytes)))
+        };
+        let e = edit(|d| d["accessors"][4]["type"] = json!("VEC3")).unwrap_err().to_string();
+        assert!(e.contains("TANGENT: accessor 4 is Vec3"), "{e}");
+        let e = edit(|d| d["accessors"][4]["count"] = json!(2)).unwrap_err().to_string();
+        assert!(e.contains("attributes have different counts"), "{e}");
+        let e = edit(|d| d["accessors"][4]["count"] = json!(4)).unwrap_err().to_string();
+        assert!(e.contains("runs past the end"), "{e}");
+        // Not-a-number tangents are no tangents: MikkTSpace's stand in.
+        let bytes = normal_mapped_glb([128, 255, 255], Some([f32::NAN, 0.0, 0.0, 1.0]));
+        let n = mapped_normal_of(load_bytes(&bytes).unwrap());
+        assert!((n - Vec3::new(0.0, -1.0, -1.0).normalize()).length() < 0.01, "{n}");
+    }
+
+    #[test]
     fn a_normal_map_on_a_mesh_without_texture_coordinates_is_a_warning_naming_file_material_and_field() {
         let mut bytes = normal_mapped_glb([128, 128, 255], None);
         let mut doc = json_of(&bytes);
@@ -1557,7 +1577,9 @@ mod tests {
                 "metallicRoughnessTexture": { "index": 0 },
                 "metallicFactor": 1.0
             },
-            "normalTexture": { "index": 0 },
+            "normalTexture": { "index": 0, "scale": 0.8 },
+            "alphaMode": "MASK",
+            "alphaCutoff": 0.4,
             "extensions": { "KHR_materials_ior": { "ior": 1.45 }, "KHR_materials_specular": { "specularFactor": 0.5 } }
         }]);
         doc["cameras"] = json!([{ "name": "Camera", "type": "perspective", "perspective": { "yfov": 0.6911, "znear": 0.1, "zfar": 100.0, "aspectRatio": 1.7778 } }]);
@@ -1611,9 +1633,13 @@ mod tests {
                 model.warnings
             );
         }
-        // The well-formed file decodes its texture.
+        // The well-formed file decodes its texture, once as colour and once
+        // as the (linear) normal map, and reads its alpha mode.
         let model = load_bytes(&triangle_glb(blender_like)).unwrap();
-        assert_eq!(model.materials[0].1.texture, Some(0));
+        let m = model.materials[0].1;
+        assert_eq!((m.texture, m.normal_texture, m.normal_scale), (Some(0), Some(1), 0.8));
+        assert_eq!(m.alpha_mode, AlphaMode::Mask { cutoff: 0.4 });
+        assert_eq!(model.textures.len(), 2);
     }
 
     #[test]
