@@ -578,6 +578,41 @@ mod tests {
     }
 
     #[test]
+    fn alpha_is_mip_mapped_and_looked_up_with_the_colours_levels_filter_and_weights() {
+        // A 5×3 image (odd sides) whose alpha equals its red channel: every
+        // lookup's alpha must be the lookup's red, at every level of detail
+        // and for every sampler.
+        let red = |k: usize| ((k * 7919) % 13) as f32 / 12.0;
+        let texels = (0..15).map(|k| Color::new(red(k), 0.5, 0.25)).collect();
+        let t = Texture::new(5, 3, texels).unwrap().with_alpha((0..15).map(red).collect()).unwrap();
+        assert_eq!(t.level_count(), 3);
+        let samplers = [
+            Sampler::DEFAULT,
+            Sampler {
+                mag: Filter::Nearest,
+                min: Filter::Nearest,
+                mip: Some(Filter::Nearest),
+                ..Sampler::DEFAULT
+            },
+            Sampler { mip: None, wrap: [Wrap::MirroredRepeat, Wrap::ClampToEdge], ..Sampler::DEFAULT },
+        ];
+        for s in &samplers {
+            for lod in [-1.0, 0.0, 0.4, 1.0, 1.7, 2.0, 9.0] {
+                for (u, v) in [(0.1, 0.2), (0.55, 0.5), (0.93, 0.81), (-0.3, 1.4)] {
+                    let (c, a) = (t.lookup(u, v, lod, s), t.lookup_alpha(u, v, lod, s));
+                    assert!((c.x - a).abs() < 1e-6, "lod {lod} at ({u}, {v}): {} vs {a}", c.x);
+                }
+            }
+        }
+        // The top level's alpha is the image's mean, as its colour is.
+        let mean = (0..15).map(red).sum::<f32>() / 15.0;
+        assert!((t.lookup_alpha(0.5, 0.5, 9.0, &Sampler::DEFAULT) - mean).abs() < 1e-6);
+        // Without alpha: 1 everywhere.
+        let opaque = Texture::new(1, 1, vec![Color::ONE]).unwrap();
+        assert_eq!(opaque.lookup_alpha(0.5, 0.5, 3.0, &Sampler::DEFAULT), 1.0);
+    }
+
+    #[test]
     fn alpha_is_kept_linear_and_filtered_where_the_image_has_it() {
         // 2×1 RGBA: alpha 0 and 1, colours sRGB-decoded, alpha not.
         let t = Texture::from_srgb(2, 1, 4, &[0.5, 0.5, 0.5, 0.0, 1.0, 1.0, 1.0, 1.0]).unwrap();

@@ -897,6 +897,54 @@ mod tests {
         assert!(cases.iter().all(|&(x, y, _)| opaque.cast(&ray(x, y)).unwrap().object == 0));
     }
 
+    #[test]
+    fn alpha_is_read_through_the_base_colour_slot_its_transform_and_its_factor() {
+        // 2×2 checker: alpha 0 at the top-left texel centre (u, v) = (¼, ¼),
+        // 1 at (¾, ¼). The point (−0.5, 0.5) is (u, v) = (¼, ¼).
+        let s = cut_square(AlphaMode::Mask { cutoff: 0.5 }, 2, 1.0);
+        let p = Vec3::new(-0.5, 0.5, 0.0);
+        assert_eq!(s.alpha_at(0, 0, p) + s.alpha_at(0, 1, p), 0.0);
+        // Offset by half the image in u: the same point reads the opaque texel.
+        let mut m = s.materials[0];
+        let slot = m.base_color_texture.unwrap();
+        let transform =
+            crate::materials::texture_slot::UvTransform::new([0.5, 0.0], 0.0, [1.0, 1.0]).unwrap();
+        m.base_color_texture = Some(TextureSlot { transform, ..slot });
+        m.alpha = 0.5;
+        let shifted = SceneBuilder::new()
+            .texture(Arc::new(s.textures[0].as_ref().clone()))
+            .material("cut", m)
+            .object(square(0.0), "cut")
+            .build()
+            .unwrap();
+        let (a, b) = (shifted.alpha_at(0, 0, p), shifted.alpha_at(0, 1, p));
+        assert_eq!(a.max(b), 0.5, "texel alpha 1 times the factor 0.5");
+        // Seen from afar (a wide footprint), alpha is the mip-mapped mean, as
+        // the base colour is.
+        let far = crate::materials::texture_lod::Footprint::new(1e3, 1.0);
+        assert!((s.alpha_at_footprint(0, 0, p, far) - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn the_normal_map_is_read_through_its_slot_at_the_footprints_level_of_detail() {
+        // 2×2 normal map: left column tilted to +x, right column to −x.
+        let (a, b) = (Color::new(0.9, 0.5, 0.6), Color::new(0.1, 0.5, 0.6));
+        let map = Texture::new(2, 2, vec![a, b, a, b]).unwrap();
+        let slot = TextureSlot { scale: 0.5, ..TextureSlot::new(0) };
+        let s = SceneBuilder::new()
+            .texture(Arc::new(map))
+            .material("n", Material { normal_texture: Some(slot), ..Material::flat(Color::ONE) })
+            .object(square(0.0), "n")
+            .build()
+            .unwrap();
+        let p = Vec3::new(-0.5, 0.5, 0.0);
+        let at = |footprint| (0..2).find_map(|t| s.normal_texel_at(0, t, p, footprint)).unwrap();
+        assert_eq!(at(Footprint::POINT), (a, 0.5));
+        // From afar, the mip-mapped mean: the tilts cancel.
+        let (far, scale) = at(Footprint::new(1e3, 1.0));
+        assert!((far - (a + b) * 0.5).abs().max_element() < 1e-6 && scale == 0.5, "{far}");
+    }
+
     /// The share of `n`×`n` rays along +z, spread over the square, that
     /// pass the cut square and stop at z = 5·10⁻⁴ (shadow rays).
     fn share_through(s: &Scene, n: u32) -> f64 {
