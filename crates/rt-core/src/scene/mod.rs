@@ -290,8 +290,9 @@ impl SceneBuilder {
         }
         let mut warnings = self.warnings;
         for (index, o) in objects.iter().enumerate() {
-            let uvs = matches!(&o.primitive, Primitive::Mesh(mesh) if mesh.has_uvs());
-            if materials[o.material].normal_texture.is_some() && !uvs {
+            let Some(slot) = materials[o.material].normal_texture else { continue };
+            let uvs = matches!(&o.primitive, Primitive::Mesh(mesh) if mesh.has_uv_set(slot.tex_coord));
+            if !uvs {
                 warnings.push(format!(
                     "material \"{}\": normal_texture is not used on objects[{index}] ({}): it has no texture \
                      coordinates",
