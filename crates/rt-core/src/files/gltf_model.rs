@@ -96,8 +96,8 @@ use crate::lights::light::{Light, LightKind};
 use crate::materials::alpha::{AlphaMode, DEFAULT_ALPHA_CUTOFF};
 use crate::materials::material::Material;
 use crate::materials::principled::Principled;
-use crate::materials::texture::{MAX_TEXTURE_SIDE, Texture, Wrap};
-use crate::materials::texture_slot::{Encoding, Sampler, TextureSlot, UvTransform};
+use crate::materials::texture::{MAX_TEXTURE_SIDE, Texture};
+use crate::materials::texture_slot::{Encoding, Sampler, TextureSlot, UvTransform, Wrap};
 use crate::math::color::Color;
 use crate::math::real::{Real, Vec3, narrow, to_f64};
 

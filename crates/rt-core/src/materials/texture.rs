@@ -38,7 +38,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::materials::texture_slot::{Encoding, Filter, Sampler};
+use crate::materials::texture_slot::{Encoding, Filter, Sampler, Wrap};
 use crate::math::color::Color;
 use crate::math::real::{Real, to_f64};
 
@@ -68,34 +68,6 @@ pub enum TextureError {
         /// Height in texels.
         height: u32,
     },
-}
-
-/// How texel indices outside the image are brought back into it: glTF's
-/// sampler wrap modes (glTF 2.0 §3.8.4.3), for one axis.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Wrap {
-    /// Index `i` is `i mod n`: the image tiles the plane.
-    #[default]
-    Repeat,
-    /// Index `i` is clamped to `[0, n − 1]`: the border texels extend.
-    ClampToEdge,
-    /// The image tiles the plane mirrored every other time: index `i` is
-    /// `i mod 2n` folded back into `[0, n − 1]`.
-    MirroredRepeat,
-}
-
-impl Wrap {
-    /// Texel index `i` on an axis of `n` texels.
-    fn index(self, i: i64, n: i64) -> i64 {
-        match self {
-            Self::Repeat => i.rem_euclid(n),
-            Self::ClampToEdge => i.clamp(0, n - 1),
-            Self::MirroredRepeat => {
-                let j = i.rem_euclid(2 * n);
-                if j < n { j } else { 2 * n - 1 - j }
-            }
-        }
-    }
 }
 
 /// One level of a mip-map pyramid: `width × height` linear texels, row by

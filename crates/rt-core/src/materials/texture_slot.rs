@@ -25,7 +25,6 @@
 //! (`Matrix3::setUvTransform`). The extension's own `texCoord` replaces the
 //! slot's set when given.
 
-use crate::materials::texture::Wrap;
 use crate::math::real::Real;
 
 /// How the texels of one image are decoded to the numbers a slot uses.
@@ -190,6 +189,34 @@ impl TextureSlot {
     /// `uv` in its set ([`TextureSlot::tex_coord`]): transformed.
     pub fn transformed(&self, uv: (Real, Real)) -> (Real, Real) {
         if self.transform.is_identity() { uv } else { self.transform.apply(uv) }
+    }
+}
+
+/// How texel indices outside the image are brought back into it: glTF's
+/// sampler wrap modes (glTF 2.0 §3.8.4.3), for one axis.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Wrap {
+    /// Index `i` is `i mod n`: the image tiles the plane.
+    #[default]
+    Repeat,
+    /// Index `i` is clamped to `[0, n − 1]`: the border texels extend.
+    ClampToEdge,
+    /// The image tiles the plane mirrored every other time: index `i` is
+    /// `i mod 2n` folded back into `[0, n − 1]`.
+    MirroredRepeat,
+}
+
+impl Wrap {
+    /// Texel index `i` on an axis of `n` texels.
+    pub(crate) fn index(self, i: i64, n: i64) -> i64 {
+        match self {
+            Self::Repeat => i.rem_euclid(n),
+            Self::ClampToEdge => i.clamp(0, n - 1),
+            Self::MirroredRepeat => {
+                let j = i.rem_euclid(2 * n);
+                if j < n { j } else { 2 * n - 1 - j }
+            }
+        }
     }
 }
 

@@ -7,7 +7,7 @@ use crate::materials::alpha::{AlphaMode, DEFAULT_ALPHA_CUTOFF};
 use crate::materials::material::Material;
 use crate::materials::medium::Subsurface;
 use crate::materials::principled::Principled;
-use crate::materials::texture::Wrap;
+use crate::materials::texture_slot::Wrap;
 use crate::materials::texture_slot::{Encoding, Filter, Sampler, TextureSlot, UvTransform};
 use crate::math::color::Color;
 use crate::math::real::{Real, to_f32};
@@ -625,7 +625,7 @@ mod tests {
 
     #[test]
     fn textures_are_read_by_path_with_their_options_and_shared_between_materials() {
-        use crate::materials::texture::Wrap;
+        use crate::materials::texture_slot::Wrap;
         use crate::materials::texture_slot::{Filter, Sampler};
         let dir = tempfile::tempdir().unwrap();
         image::RgbImage::from_pixel(2, 2, image::Rgb([128, 64, 255])).save(dir.path().join("t.png")).unwrap();
