@@ -26,6 +26,6 @@ fuzz_target!(|data: &[u8]| {
     for (_, m) in &model.materials {
         assert!(m.color.max_element() <= 1.0 && m.specular_color.max_element() <= 1.0);
         assert!(m.reflectivity + m.transparency <= 1.0 + 1e-6);
-        assert!(m.texture.is_none_or(|t| (t as usize) < model.textures.len()));
+        assert!(m.texture_slots().all(|s| (s.texture as usize) < model.textures.len()));
     }
 });

@@ -4,7 +4,8 @@
 //! **What is read.** Every mesh primitive of the file's default scene (or
 //! its first scene), placed by its node's transform composed with its
 //! parents' (glTF 2.0 §3.5.3): positions, normals (as shading normals),
-//! `TEXCOORD_0`, indices. Triangle lists, strips and fans are read; points
+//! tangents (for normal maps; generated with MikkTSpace where absent,
+//! [`Mesh::with_generated_tangents`]), `TEXCOORD_0`, indices. Triangle lists, strips and fans are read; points
 //! and lines are an error. Attributes may be quantized
 //! (`KHR_mesh_quantization`: 8- and 16-bit integers, normalized or not,
 //! `read_vectors`) and compressed (`EXT_meshopt_compression`,
@@ -26,7 +27,10 @@
 //! imaged. A mirror turns a triangle's winding round, so the corners are
 //! stored in reverse wherever the transform (mirror included) has a
 //! negative determinant, and `(b−a)×(c−a)` keeps pointing out of the model.
-//! Normals go through the inverse transpose of the transform. The scene's
+//! Normals go through the inverse transpose of the transform, tangents
+//! through the transform itself with their handedness `w` negated where
+//! its determinant is negative (glTF's bitangent `w·(N × T)`, mirrored, is
+//! `−w·(N' × T')`). The scene's
 //! `scale` and `translate` apply last. Texture coordinates keep glTF's
 //! convention, `v` down the image, which is [`crate::materials::texture`]'s.
 //!
@@ -38,6 +42,8 @@
 //! |---|---|
 //! | `baseColorFactor` (RGB) | `color` (the base colour) |
 //! | `baseColorTexture` | `texture` (sRGB, bilinear, the sampler's wrap modes), multiplying `color` |
+//! | `baseColorFactor[3]` × the texture's alpha, `alphaMode`, `alphaCutoff` | `alpha`, `alpha_mode` ([`crate::materials::alpha`]) |
+//! | `normalTexture`, its `scale` | `normal_texture` (linear), `normal_scale` ([`crate::materials::normal_map`]) |
 //! | `metallicFactor`, `roughnessFactor` | `metallic`, `roughness` (α = roughness²) |
 //! | `emissiveFactor` × `KHR_materials_emissive_strength` | `emission` |
 //! | `KHR_materials_transmission` | `transmission` |
@@ -49,9 +55,10 @@
 //! A factor that is not a number or out of its range is replaced by its
 //! default or clamped, and named in the warnings. Not used, and named in
 //! the model's warnings: the metallic-roughness,
-//! normal, occlusion and emissive textures (and the extensions' textures), a base-colour texture on
-//! another coordinate set than 0, alpha (`alphaMode` is treated as
-//! `OPAQUE`), and every other extension the file uses. An extension the file
+//! occlusion and emissive textures (and the extensions' textures), a
+//! base-colour or normal texture on another coordinate set than 0, a normal
+//! texture on a mesh without texture coordinates, and every other extension
+//! the file uses. An extension the file
 //! *requires* and rt-view does not know is an error. Samplers' filters are
 //! not used: textures are always filtered bilinearly.
 //!
@@ -86,10 +93,11 @@ use crate::files::meshopt_views::{self, CompressedView};
 use crate::files::model::{Model, ModelError};
 use crate::geometry::mesh::{MAX_MESH_TRIANGLES, Mesh};
 use crate::lights::light::{Light, LightKind};
+use crate::materials::alpha::{AlphaMode, DEFAULT_ALPHA_CUTOFF};
 use crate::materials::material::Material;
 use crate::materials::principled::Principled;
-use crate::materials::texture::{MAX_TEXTURE_SIDE, Texture, Wrap};
-use crate::materials::texture_slot::{Encoding, Sampler, TextureSlot, UvTransform};
+use crate::materials::texture::{MAX_TEXTURE_SIDE, Texture};
+use crate::materials::texture_slot::{Encoding, Sampler, TextureSlot, UvTransform, Wrap};
 use crate::math::color::Color;
 use crate::math::real::{Real, Vec3, narrow, to_f64};
 
@@ -340,6 +348,7 @@ fn read(
         let mesh = Mesh::new(g.positions, g.triangles)
             .and_then(|m| m.with_vertex_attributes(g.normals, g.uvs))
             .and_then(|m| m.with_second_uvs(g.uvs1))
+            .and_then(|m| m.with_tangents(g.tangents))
             .ok_or_else(|| err("a mesh has no triangles".into()))?;
         let Some(index) = g.material.filter(|_| with_materials) else {
             parts.push((mesh, None));
@@ -388,6 +397,11 @@ fn read(
                 scale: if strength.is_finite() { strength.clamp(0.0, 1.0) } else { 1.0 },
                 ..slot
             })
+        });
+        material.normal_texture = m.normal_texture().and_then(|i| {
+            let ext = i.extension_value(transform);
+            let slot = images.slot("normalTexture", &i.texture(), i.tex_coord(), ext, Encoding::Linear)?;
+            Some(TextureSlot { scale: map_normal_scale(i.scale(), images.notes), ..slot })
         });
         if material.occlusion_texture.is_some() {
             notes.push(
@@ -455,9 +469,10 @@ fn unused_features(document: &::gltf::Document) -> Vec<String> {
         .flat_map(|p| p.attributes.keys())
         .filter_map(|k| match k {
             ::gltf::json::validation::Checked::Valid(semantic) => match semantic {
-                ::gltf::Semantic::Positions | ::gltf::Semantic::Normals | ::gltf::Semantic::TexCoords(0) => {
-                    None
-                }
+                ::gltf::Semantic::Positions
+                | ::gltf::Semantic::Normals
+                | ::gltf::Semantic::Tangents
+                | ::gltf::Semantic::TexCoords(0) => None,
                 other => Some(other.to_string()),
             },
             ::gltf::json::validation::Checked::Invalid => None,
@@ -668,12 +683,15 @@ struct Group {
     uvs: Vec<[f32; 2]>,
     /// `TEXCOORD_1`, kept beside `uvs` the same way.
     uvs1: Vec<[f32; 2]>,
+    /// `TANGENT`s, mirrored with the points (see [`read_primitive`]).
+    tangents: Vec<[f32; 4]>,
     triangles: Vec<[u32; 3]>,
     /// Whether any primitive so far had normals / texture coordinates
-    /// (sets 0 and 1).
+    /// (sets 0 and 1) / tangents.
     has_normals: bool,
     has_uvs: bool,
     has_uvs1: bool,
+    has_tangents: bool,
 }
 
 /// `uri` with its `%XX` escapes decoded, if that is UTF-8 text.
@@ -750,6 +768,13 @@ fn read_primitive(
     if let Some(a) = &texcoord1 {
         check_accessor(a, "TEXCOORD_1", Dimensions::Vec2, &[F32, I8, U8, I16, U16], buffers)?;
     }
+    let tangent = primitive.get(&::gltf::Semantic::Tangents);
+    if let Some(a) = &tangent {
+        check_accessor(a, "TANGENT", Dimensions::Vec4, &[F32, I8, I16], buffers)?;
+        if a.data_type() != F32 && !a.normalized() {
+            return Err("TANGENT of integers must be normalized".into());
+        }
+    }
     if let Some(a) = primitive.indices() {
         check_accessor(
             &a,
@@ -764,6 +789,7 @@ fn read_primitive(
     if normal.as_ref().is_some_and(|a| a.count() != count)
         || texcoord.as_ref().is_some_and(|a| a.count() != count)
         || texcoord1.as_ref().is_some_and(|a| a.count() != count)
+        || tangent.as_ref().is_some_and(|a| a.count() != count)
     {
         return Err("its attributes have different counts".into());
     }
@@ -800,10 +826,30 @@ fn read_primitive(
     }
     read_uv_set(texcoord.as_ref(), buffers, &mut group.uvs, &mut group.has_uvs, base, count);
     read_uv_set(texcoord1.as_ref(), buffers, &mut group.uvs1, &mut group.has_uvs1, base, count);
+    // A tangent is a direction along the surface: it goes through the
+    // transform itself. A mirror turns the frame's handedness round, so
+    // `w` changes sign with the determinant (glTF's bitangent
+    // `w·(N × T)`, mirrored, is `−w·(N' × T')`).
+    match &tangent {
+        Some(a) => {
+            if !group.has_tangents {
+                group.tangents.resize(base, [0.0; 4]);
+                group.has_tangents = true;
+            }
+            let sign = if flip { -1.0 } else { 1.0 };
+            group.tangents.extend(read_vectors::<4>(a, buffers).into_iter().map(|[x, y, z, w]| {
+                let t = linear * DVec3::new(x, y, z);
+                [t.x as f32, t.y as f32, t.z as f32, (sign * w) as f32]
+            }));
+        }
+        None if group.has_tangents => group.tangents.resize(base + count, [0.0; 4]),
+        None => {}
+    }
     if group.positions.len() != base + count
         || (group.has_normals && group.normals.len() != base + count)
         || (group.has_uvs && group.uvs.len() != base + count)
         || (group.has_uvs1 && group.uvs1.len() != base + count)
+        || (group.has_tangents && group.tangents.len() != base + count)
     {
         return Err("an attribute holds fewer values than its count".into());
     }
@@ -947,7 +993,7 @@ fn map_material(m: &::gltf::Material) -> (Material, Vec<String>) {
         }
     };
     let pbr = m.pbr_metallic_roughness();
-    let [r, g, b, _] = pbr.base_color_factor();
+    let [r, g, b, a] = pbr.base_color_factor();
     let base = Color::new(
         factor("baseColorFactor", r, 1.0, 0.0..=1.0),
         factor("baseColorFactor", g, 1.0, 0.0..=1.0),
@@ -993,12 +1039,22 @@ fn map_material(m: &::gltf::Material) -> (Material, Vec<String>) {
     let e = |v: f32| factor("emissiveFactor", v, 0.0, 0.0..=1.0);
     let strength = factor("emissiveStrength", m.emissive_strength().unwrap_or(1.0), 1.0, 0.0..=f32::MAX);
     let ior = factor("ior", m.ior().unwrap_or(1.5), 1.5, 1.0..=100.0);
-    let material =
-        Material { ior, emission: Color::new(e(r), e(g), e(b)) * strength, ..Material::principled(base, p) };
+    use ::gltf::material::AlphaMode as Mode;
+    let alpha_mode = match m.alpha_mode() {
+        Mode::Opaque => AlphaMode::Opaque,
+        Mode::Mask => AlphaMode::Mask {
+            cutoff: factor("alphaCutoff", m.alpha_cutoff().unwrap_or(DEFAULT_ALPHA_CUTOFF), 0.5, 0.0..=1.0),
+        },
+        Mode::Blend => AlphaMode::Blend,
+    };
+    let material = Material {
+        ior,
+        emission: Color::new(e(r), e(g), e(b)) * strength,
+        alpha: factor("baseColorFactor", a, 1.0, 0.0..=1.0),
+        alpha_mode,
+        ..Material::principled(base, p)
+    };
     let mut notes = notes.into_inner();
-    if m.normal_texture().is_some() {
-        notes.push("normalTexture".to_owned());
-    }
     if m.transmission().is_some_and(|t| t.transmission_texture().is_some()) {
         notes.push("transmissionTexture".to_owned());
     }
@@ -1012,9 +1068,6 @@ fn map_material(m: &::gltf::Material) -> (Material, Vec<String>) {
         if s.specular_color_texture().is_some() {
             notes.push("specularColorTexture".to_owned());
         }
-    }
-    if m.alpha_mode() != ::gltf::material::AlphaMode::Opaque {
-        notes.push(format!("alphaMode {:?} (the surface is opaque)", m.alpha_mode()));
     }
     (material, notes)
 }
@@ -1123,6 +1176,16 @@ fn texture_transform(value: &::gltf::json::Value) -> Result<(UvTransform, Option
     let transform = UvTransform::new(pair("offset", [0.0; 2])?, rotation, pair("scale", [1.0; 2])?)
         .ok_or("is not finite")?;
     Ok((transform, tex_coord))
+}
+
+/// A normal texture's `scale`, or 1 (named in `notes`) where it is not a number.
+fn map_normal_scale(scale: f32, notes: &mut Vec<String>) -> f32 {
+    if scale.is_finite() {
+        scale
+    } else {
+        notes.push(format!("normalTexture.scale {scale} (not a number: 1 instead)"));
+        1.0
+    }
 }
 
 /// The texture's image, decoded by `encoding`.
@@ -1328,7 +1391,7 @@ mod tests {
                 "KHR_texture_transform"
             ]);
             doc["materials"] = json!([{
-                "pbrMetallicRoughness": { "baseColorFactor": [1.0, 0.5, 0.25, 1.0], "metallicFactor": 0.5, "roughnessFactor": 0.3 },
+                "pbrMetallicRoughness": { "baseColorFactor": [1.0, 0.5, 0.25, 0.75], "metallicFactor": 0.5, "roughnessFactor": 0.3 },
                 "emissiveFactor": [1.0, 0.5, 0.0],
                 "alphaMode": "BLEND",
                 "extensions": {
@@ -1359,9 +1422,21 @@ mod tests {
             specular_color: Color::new(1.0, 0.9, 0.8),
         };
         assert_eq!(m.physical, Some(expected));
-        assert_eq!(model.warnings.len(), 2, "{:?}", model.warnings);
+        assert_eq!((m.alpha, m.alpha_mode), (0.75, AlphaMode::Blend));
+        assert_eq!(model.warnings.len(), 1, "{:?}", model.warnings);
         assert!(model.warnings[0].contains("KHR_texture_transform"));
-        assert!(model.warnings[1].contains("alphaMode Blend"));
+        // MASK with its cutoff, or glTF's default 0.5.
+        for (cutoff, expected) in [(json!(0.25), 0.25), (Value::Null, 0.5)] {
+            let bytes = triangle_glb(|doc, _| {
+                doc["materials"] = json!([{ "alphaMode": "MASK" }]);
+                if !cutoff.is_null() {
+                    doc["materials"][0]["alphaCutoff"] = cutoff;
+                }
+            });
+            let model = load_bytes(&bytes).unwrap();
+            assert_eq!(model.materials[0].1.alpha_mode, AlphaMode::Mask { cutoff: expected });
+            assert!(model.warnings.is_empty(), "{:?}", model.warnings);
+        }
         // Without extensions: glTF's defaults (metallic and roughness 1).
         let bytes = triangle_glb(|doc, _| doc["materials"] = json!([{}]));
         let m = load_bytes(&bytes).unwrap().materials[0].1;
@@ -1504,6 +1579,119 @@ mod tests {
     }
 
     /// A 2×2 PNG (orange and blue checks), as Blender embeds its textures.
+    /// [`triangle_glb`] with a 1×1 normal map of texel `rgb` (linear)
+    /// and, if given, `TANGENT`s.
+    fn normal_mapped_glb(rgb: [u8; 3], tangent: Option<[f32; 4]>) -> Vec<u8> {
+        triangle_glb(|doc, bin| {
+            let mut png = Vec::new();
+            image::RgbImage::from_pixel(1, 1, image::Rgb(rgb))
+                .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+                .unwrap();
+            let offset = bin.len();
+            bin.extend_from_slice(&png);
+            let views = doc["bufferViews"].as_array_mut().unwrap();
+            views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": png.len() }));
+            if let Some(t) = tangent {
+                while bin.len() % 4 != 0 {
+                    bin.push(0);
+                }
+                let offset = bin.len();
+                (0..3).for_each(|_| bin.extend(t.iter().flat_map(|f| f.to_le_bytes())));
+                views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": 48 }));
+                doc["accessors"].as_array_mut().unwrap().push(json!(
+                    { "bufferView": 5, "componentType": 5126, "count": 3, "type": "VEC4" }
+                ));
+                doc["meshes"][0]["primitives"][0]["attributes"]["TANGENT"] = json!(4);
+            }
+            doc["buffers"][0]["byteLength"] = json!(bin.len());
+            doc["images"] = json!([{ "bufferView": 4, "mimeType": "image/png" }]);
+            doc["textures"] = json!([{ "source": 0 }]);
+            doc["materials"][0]["normalTexture"] = json!({ "index": 0, "scale": 1.0 });
+        })
+    }
+
+    /// The shading normal a ray along +z sees at (0.25, 0.25) on `model`'s
+    /// triangle (glTF's, mirrored: it faces −z here).
+    fn mapped_normal_of(model: Model) -> Vec3 {
+        let mut builder = crate::SceneBuilder::new();
+        for t in model.textures {
+            builder = builder.texture(std::sync::Arc::new(t));
+        }
+        let (mesh, _) = model.parts.into_iter().next().unwrap();
+        let (name, material) = model.materials[0].clone();
+        let scene = builder
+            .material(name.clone(), material)
+            .object(crate::Primitive::Mesh(mesh), name)
+            .build()
+            .unwrap();
+        let ray = crate::math::ray::Ray::new(Vec3::new(0.25, 0.25, -1.0), Vec3::Z);
+        let hit = scene.cast(&ray).unwrap();
+        let si = crate::integrators::interaction::SurfaceInteraction::new(&scene, &ray, &hit).unwrap();
+        si.shading_normal.unwrap()
+    }
+
+    #[test]
+    fn a_normal_map_tilts_the_normal_towards_u_and_up_the_image_through_the_mirror() {
+        // The triangle's u runs along glTF's +x and v along +y, so up the
+        // image (decreasing v) is −y; mirrored in z, x and y stay. A texel
+        // of red 1 tilts the normal 45° towards +u, one of green 1 45° up
+        // the image: with MikkTSpace's tangents, and with the file's that
+        // say the same (w = −1: glTF's bitangent w·(N × T) = −(z × x) is −y).
+        let n = Vec3::new(0.0, 0.0, -1.0);
+        let tilted = |d: Vec3| (n + d).normalize();
+        for tangent in [None, Some([1.0, 0.0, 0.0, -1.0])] {
+            let model = load_bytes(&normal_mapped_glb([255, 128, 255], tangent)).unwrap();
+            assert!(model.warnings.is_empty(), "{:?}", model.warnings);
+            let m = model.materials[0].1;
+            assert_eq!(m.normal_texture.map(|s| (s.texture, s.scale)), Some((0, 1.0)));
+            let got = mapped_normal_of(model);
+            assert!((got - tilted(Vec3::X)).length() < 0.01, "tangent {tangent:?}: {got}");
+            let got = mapped_normal_of(load_bytes(&normal_mapped_glb([128, 255, 255], tangent)).unwrap());
+            assert!((got - tilted(-Vec3::Y)).length() < 0.01, "tangent {tangent:?}: {got}");
+        }
+        // The file's handedness is what counts: w = +1 makes its bitangent
+        // z × x = +y, and green tilts that way, through the mirror.
+        let model = load_bytes(&normal_mapped_glb([128, 255, 255], Some([1.0, 0.0, 0.0, 1.0]))).unwrap();
+        let got = mapped_normal_of(model);
+        assert!((got - tilted(Vec3::Y)).length() < 0.01, "{got}");
+    }
+
+    #[test]
+    fn bad_tangents_are_errors_naming_the_attribute_or_are_replaced_never_a_panic() {
+        let edit = |f: fn(&mut Value)| {
+            let bytes = normal_mapped_glb([128, 128, 255], Some([1.0, 0.0, 0.0, 1.0]));
+            let mut doc = json_of(&bytes);
+            f(&mut doc);
+            load_bytes(&encode_glb(&doc.to_string(), &bin_of(&bytes)))
+        };
+        let e = edit(|d| d["accessors"][4]["type"] = json!("VEC3")).unwrap_err().to_string();
+        assert!(e.contains("TANGENT: accessor 4 is Vec3"), "{e}");
+        let e = edit(|d| d["accessors"][4]["count"] = json!(2)).unwrap_err().to_string();
+        assert!(e.contains("attributes have different counts"), "{e}");
+        let e = edit(|d| d["accessors"][4]["count"] = json!(4)).unwrap_err().to_string();
+        assert!(e.contains("runs past the end"), "{e}");
+        // Not-a-number tangents are no tangents: MikkTSpace's stand in.
+        let bytes = normal_mapped_glb([128, 255, 255], Some([f32::NAN, 0.0, 0.0, 1.0]));
+        let n = mapped_normal_of(load_bytes(&bytes).unwrap());
+        assert!((n - Vec3::new(0.0, -1.0, -1.0).normalize()).length() < 0.01, "{n}");
+    }
+
+    #[test]
+    fn a_normal_map_on_a_mesh_without_texture_coordinates_is_a_warning_naming_material_and_field() {
+        let mut bytes = normal_mapped_glb([128, 128, 255], None);
+        let mut doc = json_of(&bytes);
+        doc["meshes"][0]["primitives"][0]["attributes"].as_object_mut().unwrap().remove("TEXCOORD_0");
+        bytes = encode_glb(&doc.to_string(), &bin_of(&bytes));
+        let model = load_bytes(&bytes).unwrap();
+        assert_eq!(model.materials[0].1.normal_texture, None);
+        let w = model.warnings.join("\n");
+        // As for every texture slot (the scene prefixes the model's file).
+        assert!(
+            w.contains("material \"paint\": not used: normalTexture (it reads TEXCOORD_0, which the meshes do not have)"),
+            "{w}"
+        );
+    }
+
     fn png() -> Vec<u8> {
         let mut png = Vec::new();
         image::RgbImage::from_fn(2, 2, |x, y| {
@@ -1538,7 +1726,9 @@ mod tests {
                 "metallicRoughnessTexture": { "index": 0 },
                 "metallicFactor": 1.0
             },
-            "normalTexture": { "index": 0 },
+            "normalTexture": { "index": 0, "scale": 0.8 },
+            "alphaMode": "MASK",
+            "alphaCutoff": 0.4,
             "extensions": { "KHR_materials_ior": { "ior": 1.45 }, "KHR_materials_specular": { "specularFactor": 0.5 } }
         }]);
         doc["cameras"] = json!([{ "name": "Camera", "type": "perspective", "perspective": { "yfov": 0.6911, "znear": 0.1, "zfar": 100.0, "aspectRatio": 1.7778 } }]);
@@ -1680,9 +1870,14 @@ mod tests {
                 model.warnings
             );
         }
-        // The well-formed file decodes its texture.
+        // The well-formed file decodes its texture, once as colour and once
+        // as the (linear) normal map, and reads its alpha mode.
         let model = load_bytes(&triangle_glb(blender_like)).unwrap();
-        assert_eq!(model.materials[0].1.base_color_texture.map(|s| s.texture), Some(0));
+        let m = model.materials[0].1;
+        let (base, normal) = (m.base_color_texture.unwrap(), m.normal_texture.unwrap());
+        assert_eq!((base.texture, normal.texture, normal.scale), (0, 1, 0.8));
+        assert_eq!(m.alpha_mode, AlphaMode::Mask { cutoff: 0.4 });
+        assert_eq!(model.textures.len(), 2);
     }
 
     #[test]

@@ -32,9 +32,15 @@
 //! glTF's layout); `map_Ke` (sRGB) multiplies `Ke`, or white when the file
 //! gives no `Ke`. `Ps` (sheen) and `aniso`/`anisor` (anisotropy) have no
 //! counterpart in the material (its GGX lobe is isotropic and has no sheen)
-//! and are named; so is `norm` (a normal map), as is everything else
-//! (`Ka`, `map_Ks`, `map_Bump`, `map_d`, …): named in the part's warnings,
-//! never dropped silently.
+//! and are named, as is everything else (`Ka`, `map_Ks`, `map_d`, …):
+//! named in the part's warnings, never dropped silently.
+//!
+//! A normal map, in either model: the PBR extension's `norm`, else
+//! `map_Bump` or `bump` (as Blender writes and reads a normal map in MTL:
+//! a linear tangent-space image, glTF's convention), its `-bm` option the
+//! normal scale (default 1). A classic grey height map named by `map_Bump`
+//! is read as a normal map too, and tilts the surface wrongly: MTL does not
+//! say which of the two an image is.
 
 use std::path::{Path, PathBuf};
 
@@ -56,6 +62,11 @@ pub struct MtlMaterial {
     pub metallic_texture: Option<PathBuf>,
     /// The `map_Ke` image (sRGB), resolved the same way.
     pub emissive_texture: Option<PathBuf>,
+    /// The normal map (`norm`, else `map_Bump`/`bump`), resolved the same
+    /// way: linear tangent-space normals.
+    pub normal_texture: Option<PathBuf>,
+    /// The normal map's `-bm` option: how far its normals tilt (1 by default).
+    pub normal_scale: f32,
     /// MTL statements read but not used, in a sentence each.
     pub ignored: Vec<String>,
 }
@@ -144,6 +155,17 @@ pub fn from_mtl(m: &tobj::Material, dir: &Path) -> Result<MtlMaterial, String> {
     };
     let (roughness_texture, metallic_texture) = (map("map_Pr")?, map("map_Pm")?);
     let emissive_texture = map("map_Ke")?;
+    let normal_statement = match m.unknown_param.get("norm") {
+        Some(v) => Some(("norm", v.as_str())),
+        None => m.normal_texture.as_deref().map(|v| ("map_Bump", v)),
+    };
+    let (normal_texture, normal_scale) = match normal_statement {
+        None => (None, 1.0),
+        Some((key, value)) => match texture_file(value) {
+            "" => return Err(format!("{key} names no file")),
+            file => (Some(dir.join(file)), bump_multiplier(value).map_err(|e| format!("{key} {e}"))?),
+        },
+    };
     if emissive_texture.is_some() && m.emissive.is_none() {
         material.emission = Color::ONE;
     }
@@ -182,7 +204,10 @@ pub fn from_mtl(m: &tobj::Material, dir: &Path) -> Result<MtlMaterial, String> {
         ("map_Ka", m.ambient_texture.is_some()),
         ("map_Ks", m.specular_texture.is_some()),
         ("map_Ns", m.shininess_texture.is_some()),
-        ("map_Bump/norm", m.normal_texture.is_some()),
+        (
+            "map_Bump (norm gives the normal map)",
+            m.normal_texture.is_some() && normal_statement.is_some_and(|(k, _)| k == "norm"),
+        ),
         ("map_d", m.dissolve_texture.is_some()),
     ] {
         if value {
@@ -193,7 +218,6 @@ pub fn from_mtl(m: &tobj::Material, dir: &Path) -> Result<MtlMaterial, String> {
         ("Ps", "sheen: the material has no sheen lobe"),
         ("aniso", "anisotropy: the material's GGX lobe is isotropic"),
         ("anisor", "anisotropy: the material's GGX lobe is isotropic"),
-        ("norm", "a normal map: not read from MTL files"),
     ] {
         if m.unknown_param.contains_key(key) {
             ignored.push(format!("{key} ({why})"));
@@ -203,7 +227,32 @@ pub fn from_mtl(m: &tobj::Material, dir: &Path) -> Result<MtlMaterial, String> {
     let mut unknown: Vec<&String> = m.unknown_param.keys().filter(|k| !read.contains(&k.as_str())).collect();
     unknown.sort();
     ignored.extend(unknown.into_iter().cloned());
-    Ok(MtlMaterial { material, texture, roughness_texture, metallic_texture, emissive_texture, ignored })
+    Ok(MtlMaterial {
+        material,
+        texture,
+        roughness_texture,
+        metallic_texture,
+        emissive_texture,
+        normal_texture,
+        normal_scale,
+        ignored,
+    })
+}
+
+/// A texture statement's `-bm` (bump multiplier) option, 1 when absent;
+/// what is wrong with it otherwise.
+fn bump_multiplier(value: &str) -> Result<f32, String> {
+    let mut words = value.split_whitespace();
+    while let Some(word) = words.next() {
+        if word == "-bm" {
+            let v = words.next().unwrap_or("");
+            return match v.parse::<f32>() {
+                Ok(x) if x.is_finite() => Ok(x),
+                _ => Err(format!("-bm must be a number, got {v:?}")),
+            };
+        }
+    }
+    Ok(1.0)
 }
 
 /// The file name of a texture statement's value: MTL allows options before
@@ -234,10 +283,14 @@ mod tests {
         assert_eq!(got.metallic_texture, Some(PathBuf::from("models/m.png")));
         assert_eq!(got.emissive_texture, Some(PathBuf::from("models/e.png")));
         let ignored = got.ignored.join("; ");
-        for name in ["Ps (sheen", "aniso (anisotropy", "norm (a normal map"] {
+        for name in ["Ps (sheen", "aniso (anisotropy"] {
             assert!(ignored.contains(name), "{name}: {ignored}");
         }
-        assert!(!ignored.contains("map_P") && !ignored.contains("map_Ke"), "{ignored}");
+        assert!(
+            !ignored.contains("map_P") && !ignored.contains("map_Ke") && !ignored.contains("norm"),
+            "{ignored}"
+        );
+        assert_eq!((got.normal_texture, got.normal_scale), (Some(PathBuf::from("models/n.png")), 1.0));
         // Ke is kept and multiplied by its map.
         let got = from_mtl(&parse("newmtl a\nKe 2 2 2\nmap_Ke e.png\n"), Path::new(".")).unwrap();
         assert_eq!(got.material.emission, Color::splat(2.0));
@@ -278,6 +331,20 @@ mod tests {
     }
 
     #[test]
+    fn norm_or_map_bump_is_the_normal_map_and_bm_its_scale() {
+        let got = from_mtl(&parse("newmtl a\nmap_Bump -bm 0.5 tex/n.png\n"), Path::new("m")).unwrap();
+        assert_eq!((got.normal_texture, got.normal_scale), (Some(PathBuf::from("m/tex/n.png")), 0.5));
+        assert!(got.ignored.is_empty(), "{:?}", got.ignored);
+        // The PBR extension's norm wins over map_Bump, which is then named.
+        let got =
+            from_mtl(&parse("newmtl a\nPr 0.5\nnorm -bm 2 a.png\nbump b.png\n"), Path::new(".")).unwrap();
+        assert_eq!((got.normal_texture, got.normal_scale), (Some(PathBuf::from("./a.png")), 2.0));
+        assert_eq!(got.ignored, ["map_Bump (norm gives the normal map)"]);
+        let e = from_mtl(&parse("newmtl a\nmap_Bump -bm x n.png\n"), Path::new(".")).unwrap_err();
+        assert!(e.starts_with("map_Bump -bm must be a number"), "{e}");
+    }
+
+    #[test]
     fn mirror_illumination_models_turn_ks_into_a_mirror_and_weights_stay_energy_conserving() {
         let m = parse("newmtl a\nKs 1 0.8 0.4\nillum 3\nTr 0.5\n");
         let mat = from_mtl(&m, Path::new(".")).unwrap().material;
@@ -297,10 +364,8 @@ mod tests {
     fn unused_statements_are_named_and_bad_values_are_errors_naming_the_field() {
         let m = parse("newmtl a\nKa 1 1 1\nmap_Bump n.png\naniso 0.5\n");
         let got = from_mtl(&m, Path::new(".")).unwrap();
-        assert_eq!(
-            got.ignored,
-            ["Ka", "map_Bump/norm", "aniso (anisotropy: the material's GGX lobe is isotropic)"]
-        );
+        assert_eq!(got.ignored, ["Ka", "aniso (anisotropy: the material's GGX lobe is isotropic)"]);
+        assert_eq!((got.normal_texture, got.normal_scale), (Some(PathBuf::from("./n.png")), 1.0));
         for (text, field) in
             [("Kd -1 0 0", "Kd"), ("Ke 0 -2 0", "Ke"), ("Ni 0", "Ni"), ("Ni 500", "Ni"), ("Tr x", "Tr")]
         {

@@ -1,7 +1,7 @@
 //! OBJ files with their MTL materials as a [`Model`]: the faces split by
 //! material ([`Mesh::load_obj_parts`]), the MTL materials mapped onto
 //! rt-view's ([`crate::files::mtl`], which has the field-by-field table) and their
-//! `map_Kd` textures read ([`crate::materials::texture`]). An MTL file or a texture that
+//! textures (`map_Kd`, the PBR maps, the normal map) read ([`crate::materials::texture`]). An MTL file or a texture that
 //! cannot be read is a warning with a fallback; a bad MTL value an error.
 
 use std::collections::HashMap;
@@ -70,6 +70,12 @@ pub fn load(path: &Path, scale: Real, translate: Vec3) -> Result<Model, ModelErr
                 "material \"{name}\": its map_Pr/map_Pm/map_Ke are not used: its faces have no texture coordinates"
             ));
         }
+        if let Some(file) = mapped.normal_texture.as_ref().filter(|_| !mesh.has_uvs()) {
+            warnings.push(format!(
+                "material \"{name}\": its normal map {} is not used: its faces have no texture coordinates",
+                file.display()
+            ));
+        }
         let mut decode = |file: &PathBuf, encoding: Encoding, field: &str| {
             if !files.contains(file) {
                 files.push(file.clone());
@@ -77,7 +83,7 @@ pub fn load(path: &Path, scale: Real, translate: Vec3) -> Result<Model, ModelErr
             match Texture::load_as(file, encoding) {
                 Ok(t) => Some(t),
                 Err(e) => {
-                    warnings.push(format!("{e}: material \"{name}\" shows its {field} factor instead"));
+                    warnings.push(format!("{e}: material \"{name}\" shows {field} instead"));
                     None
                 }
             }
@@ -89,8 +95,10 @@ pub fn load(path: &Path, scale: Real, translate: Vec3) -> Result<Model, ModelErr
             Some(TextureSlot::new(textures.len() as u32 - 1))
         };
         if mapped.roughness_texture.is_some() || mapped.metallic_texture.is_some() {
-            let roughness = mapped.roughness_texture.as_ref().and_then(|f| decode(f, Encoding::Linear, "Pr"));
-            let metallic = mapped.metallic_texture.as_ref().and_then(|f| decode(f, Encoding::Linear, "Pm"));
+            let roughness =
+                mapped.roughness_texture.as_ref().and_then(|f| decode(f, Encoding::Linear, "its Pr factor"));
+            let metallic =
+                mapped.metallic_texture.as_ref().and_then(|f| decode(f, Encoding::Linear, "its Pm factor"));
             let combined = Texture::metallic_roughness(roughness.as_ref(), metallic.as_ref());
             m.metallic_roughness_texture = slot_of(combined, &mut textures);
         }
@@ -99,11 +107,24 @@ pub fn load(path: &Path, scale: Real, translate: Vec3) -> Result<Model, ModelErr
             m.emissive_texture = match texture_of.get(&key) {
                 Some(index) => index.map(TextureSlot::new),
                 None => {
-                    let slot = slot_of(decode(file, Encoding::Srgb, "Ke"), &mut textures);
+                    let slot = slot_of(decode(file, Encoding::Srgb, "its Ke factor"), &mut textures);
                     texture_of.insert(key, slot.map(|s| s.texture));
                     slot
                 }
             };
+        }
+        if let Some(file) = &mapped.normal_texture {
+            let key = (file.clone(), Encoding::Linear);
+            let slot = match texture_of.get(&key) {
+                Some(index) => index.map(TextureSlot::new),
+                None => {
+                    let slot = slot_of(decode(file, Encoding::Linear, "its unmapped normals"), &mut textures);
+                    texture_of.insert(key, slot.map(|s| s.texture));
+                    slot
+                }
+            };
+            m.normal_texture =
+                slot.filter(|_| has_uvs).map(|s| TextureSlot { scale: mapped.normal_scale, ..s });
         }
         if let Some(file) = mapped.texture {
             if !files.contains(&file) {
@@ -189,7 +210,13 @@ mod tests {
             (orange - Color::new(1.0, crate::materials::texture::srgb_decode(128.0 / 255.0), 0.0)).length()
                 < 1e-6
         );
-        assert_eq!(model.warnings, ["material \"tex\": not used: map_Bump/norm"]);
+        // Its normal map (map_Bump) is missing: named, with the fallback.
+        assert_eq!(model.warnings.len(), 1, "{:?}", model.warnings);
+        let w = &model.warnings[0];
+        assert!(
+            w.contains("n.png") && w.ends_with("material \"tex\" shows its unmapped normals instead"),
+            "{w}"
+        );
     }
 
     #[test]
@@ -224,6 +251,22 @@ mod tests {
             "{:?}",
             model.warnings
         );
+    }
+
+    #[test]
+    fn an_mtl_normal_map_becomes_a_linear_normal_slot_with_its_bump_multiplier() {
+        let dir = folder(&[
+            ("m.obj", TWO_MATERIALS),
+            ("m.mtl", b"newmtl red\nKd 1 0 0\nnewmtl tex\nKd 1 1 1\nmap_Bump -bm 0.5 n.png\n"),
+        ]);
+        png(dir.path(), "n.png");
+        let model = load(&dir.path().join("m.obj"), 1.0, Vec3::ZERO).unwrap();
+        let slot = model.materials[1].1.normal_texture.unwrap();
+        assert_eq!((slot.texture, slot.scale, slot.tex_coord), (0, 0.5, 0));
+        // Linear: 128/255 as it is, not sRGB-decoded.
+        assert_eq!(model.textures[0].sample(0.5, 0.5), Color::new(1.0, 128.0 / 255.0, 0.0));
+        assert!(model.warnings.is_empty(), "{:?}", model.warnings);
+        assert_eq!(model.materials[0].1.normal_texture, None);
     }
 
     #[test]

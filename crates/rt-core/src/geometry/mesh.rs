@@ -11,7 +11,7 @@ use crate::geometry::method::TriangleMethod;
 use crate::geometry::surface::SurfacePoint;
 use crate::geometry::triangle::{TriangleRay, geometric_normal, intersect_by, triangle_surface_point};
 use crate::math::ray::{Interval, Ray};
-use crate::math::real::{Real, Vec3, narrow, normalize_robust, to_f64, widen};
+use crate::math::real::{Real, Vec3, narrow, normalize_robust, to_f32, to_f64, widen};
 
 /// Most triangles one mesh may have (after fanning faces): 2²⁶ ≈ 67 M.
 pub const MAX_MESH_TRIANGLES: usize = 1 << 26;
@@ -100,6 +100,9 @@ struct VertexAttributes {
     /// A second set of texture coordinates (glTF's `TEXCOORD_1`), empty
     /// when the file has none.
     uvs1: Vec<[f32; 2]>,
+    /// Tangents `(x, y, z, w)` for normal maps ([`Mesh::tangent`]), empty
+    /// when there are none; a zero `(x, y, z)` is a vertex without one.
+    tangents: Vec<[f32; 4]>,
 }
 
 impl Mesh {
@@ -152,7 +155,8 @@ impl Mesh {
             .with_min_len(4096)
             .map(|n| normalize_robust(n).unwrap_or(Vec3::ZERO))
             .collect();
-        self.attributes = Some(Box::new(VertexAttributes { normals, uvs, uvs1: Vec::new() }));
+        self.attributes =
+            Some(Box::new(VertexAttributes { normals, uvs, uvs1: Vec::new(), tangents: Vec::new() }));
         Some(self)
     }
 
@@ -171,6 +175,94 @@ impl Mesh {
         Some(self)
     }
 
+    /// The mesh with per-vertex tangents `(x, y, z, w)` (glTF's `TANGENT`:
+    /// `(x, y, z)` along increasing `u`, `w` = ±1 the handedness, so that
+    /// the bitangent `w·(N × T)` points up the image; see
+    /// [`crate::materials::normal_map`]), empty or one per vertex. A zero or
+    /// non-finite `(x, y, z)` marks a vertex without one, which
+    /// [`Mesh::with_generated_tangents`] fills in; `w` is taken by its sign.
+    /// `None` if the list has the wrong length.
+    pub fn with_tangents(mut self, tangents: Vec<[f32; 4]>) -> Option<Self> {
+        if tangents.is_empty() {
+            if let Some(a) = &mut self.attributes {
+                a.tangents.clear();
+            }
+            return Some(self);
+        }
+        if tangents.len() != self.positions.len() {
+            return None;
+        }
+        let tangents = tangents
+            .into_iter()
+            .map(|[x, y, z, w]| {
+                let t = glam::Vec3::new(x, y, z);
+                match t.try_normalize() {
+                    Some(t) if t.is_finite() => [t.x, t.y, t.z, if w < 0.0 { -1.0 } else { 1.0 }],
+                    _ => [0.0; 4],
+                }
+            })
+            .collect();
+        self.attributes.get_or_insert_with(Default::default).tangents = tangents;
+        Some(self)
+    }
+
+    /// Whether the mesh has per-vertex tangents (for normal maps).
+    pub fn has_tangents(&self) -> bool {
+        !self.vertex_tangents().is_empty()
+    }
+
+    fn vertex_tangents(&self) -> &[[f32; 4]] {
+        self.attributes.as_ref().map_or(&[], |a| &a.tangents)
+    }
+
+    /// The mesh with a tangent at every vertex that has none (all of them
+    /// when it has none at all), made by MikkTSpace (Mikkelsen, "Simulation
+    /// of Wrinkled Surfaces Revisited", 2008: the tangent space glTF 2.0
+    /// and Blender bake normal maps in, so a map baked elsewhere reads back
+    /// the same), from the positions, the shading normals (the facet's
+    /// where a vertex has none) and the texture coordinates. Tangents the
+    /// mesh has are kept. A mesh without texture coordinates is returned
+    /// as it is; vertices MikkTSpace leaves without a tangent (on
+    /// triangles with zero-area coordinates and no neighbour to borrow
+    /// from) keep none, and the normal map falls back to any frame there.
+    pub fn with_generated_tangents(self) -> Self {
+        if !self.has_uvs()
+            || (self.has_tangents() && self.vertex_tangents().iter().all(|t| t[..3] != [0.0; 3]))
+        {
+            return self;
+        }
+        let mut generated = MikkInput { mesh: &self, tangents: vec![[0.0; 4]; self.positions.len()] };
+        // The crate's error type has no values: generation cannot fail.
+        let _ = bevy_mikktspace::generate_tangents(&mut generated);
+        let mut tangents = generated.tangents;
+        for (t, old) in tangents.iter_mut().zip(self.vertex_tangents()) {
+            if old[..3] != [0.0; 3] {
+                *t = *old;
+            }
+        }
+        self.with_tangents(tangents).expect("one tangent per vertex")
+    }
+
+    /// The tangent `(T, w)` at `p` on triangle `i` (a unit vector along
+    /// increasing `u` and the handedness ±1, see [`Mesh::with_tangents`]):
+    /// the corners' tangents weighted by `p`'s barycentric coordinates, and
+    /// the sign of their weighted `w`. `None` when the mesh has none, a
+    /// corner lacks one, or they cancel.
+    pub fn tangent(&self, i: usize, p: Vec3) -> Option<(Vec3, f32)> {
+        let tangents = self.vertex_tangents();
+        if tangents.is_empty() {
+            return None;
+        }
+        let corners = self.triangles[i].map(|v| tangents[v as usize].map(f64::from));
+        if corners.iter().any(|c| c[..3] == [0.0; 3]) {
+            return None;
+        }
+        let b = self.barycentric(i, p);
+        let at = |k: usize| b[0] * corners[0][k] + b[1] * corners[1][k] + b[2] * corners[2][k];
+        let t = normalize_robust(narrow(glam::DVec3::new(at(0), at(1), at(2))))?;
+        Some((t, if at(3) < 0.0 { -1.0 } else { 1.0 }))
+    }
+
     /// The meshes as one: their vertices and triangles one after another
     /// (vertex attributes kept where any mesh has them). `None` if there
     /// are none or the vertices overflow 32-bit indices.
@@ -181,8 +273,10 @@ impl Mesh {
         let normals = meshes.iter().any(Mesh::has_vertex_normals);
         let uvs = meshes.iter().any(Mesh::has_uvs);
         let uvs1 = meshes.iter().any(|m| !m.uvs_of_set(1).is_empty());
+        let tangents = meshes.iter().any(Mesh::has_tangents);
         let mut all = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut all_uvs1 = Vec::new();
+        let mut all_tangents = Vec::new();
         for m in meshes {
             let base = u32::try_from(all.0.len()).ok()?;
             let n = m.positions.len();
@@ -198,9 +292,15 @@ impl Mesh {
             if uvs1 {
                 all_uvs1.extend(if a.uvs1.is_empty() { vec![[0.0; 2]; n] } else { a.uvs1 });
             }
+            if tangents {
+                all_tangents.extend(if a.tangents.is_empty() { vec![[0.0; 4]; n] } else { a.tangents });
+            }
         }
         u32::try_from(all.0.len()).ok()?;
-        Self::new(all.0, all.1)?.with_vertex_attributes(all.2, all.3)?.with_second_uvs(all_uvs1)
+        Self::new(all.0, all.1)?
+            .with_vertex_attributes(all.2, all.3)?
+            .with_second_uvs(all_uvs1)?
+            .with_tangents(all_tangents)
     }
 
     /// Loads an OBJ file with tobj as one mesh, then scales every vertex by
@@ -258,6 +358,7 @@ impl Mesh {
             + size_of_val(self.vertex_normals())
             + size_of_val(self.uvs())
             + size_of_val(self.uvs_of_set(1))
+            + size_of_val(self.vertex_tangents())
     }
 
     /// Whether the mesh has per-vertex shading normals.
@@ -522,6 +623,41 @@ impl Mesh {
     }
 }
 
+/// A mesh as MikkTSpace reads it, and the tangents it writes back.
+struct MikkInput<'m> {
+    mesh: &'m Mesh,
+    tangents: Vec<[f32; 4]>,
+}
+
+impl bevy_mikktspace::Geometry for MikkInput<'_> {
+    fn num_faces(&self) -> usize {
+        self.mesh.triangles.len()
+    }
+    fn num_vertices_of_face(&self, _face: usize) -> usize {
+        3
+    }
+    fn position(&self, face: usize, vert: usize) -> [f32; 3] {
+        let p = self.mesh.positions[self.mesh.triangles[face][vert] as usize];
+        [p.x, p.y, p.z].map(to_f32)
+    }
+    fn normal(&self, face: usize, vert: usize) -> [f32; 3] {
+        let shading = self.mesh.vertex_normals().get(self.mesh.triangles[face][vert] as usize);
+        let n = shading.copied().filter(|n| *n != Vec3::ZERO).unwrap_or(self.mesh.normals[face]);
+        [n.x, n.y, n.z].map(to_f32)
+    }
+    fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
+        // MikkTSpace's bitangent w·(N × T) follows increasing v; ours
+        // points up the image, towards decreasing v (glTF's): give it −v.
+        let [u, v] = self.mesh.uvs()[self.mesh.triangles[face][vert] as usize];
+        [u, -v]
+    }
+    fn set_tangent(&mut self, tangent: Option<bevy_mikktspace::TangentSpace>, face: usize, vert: usize) {
+        if let Some(t) = tangent {
+            self.tangents[self.mesh.triangles[face][vert] as usize] = t.tangent_encoded();
+        }
+    }
+}
+
 /// An OBJ file split by material ([`Mesh::load_obj_parts`]).
 #[derive(Debug)]
 pub struct ObjParts {
@@ -761,6 +897,77 @@ mod tests {
         let collinear =
             flat.with_vertex_attributes(Vec::new(), vec![[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]).unwrap();
         assert_eq!(collinear.tangents(0), None);
+    }
+
+    /// The unit quad in z = 0 as two triangles wound towards +z, with
+    /// texture coordinates `uv(x, y)` at its corners.
+    fn quad(uv: impl Fn(f32, f32) -> [f32; 2]) -> Mesh {
+        let corners = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
+        let positions =
+            corners.iter().map(|&(x, y)| narrow(glam::DVec3::new(x.into(), y.into(), 0.0))).collect();
+        let uvs = corners.iter().map(|&(x, y)| uv(x, y)).collect();
+        Mesh::new(positions, vec![[0, 1, 2], [0, 2, 3]])
+            .unwrap()
+            .with_vertex_attributes(Vec::new(), uvs)
+            .unwrap()
+    }
+
+    #[test]
+    fn mikktspace_tangents_of_a_quad_run_along_u_with_the_bitangent_up_the_image() {
+        // u along +x, v down the image along −y (an image laid flat, its
+        // top at +y): T = +x and w·(N × T) = w·(z × x) = w·y must point up
+        // the image, +y, so w = +1. Mirrored in u, T = −x and w = −1.
+        let at = Vec3::new(0.3, 0.6, 0.0);
+        let normal = |m: &Mesh| m.normal(m.triangles.len() - 1);
+        let m = quad(|x, y| [x, 1.0 - y]).with_generated_tangents();
+        assert!(m.has_tangents() && normal(&m) == Vec3::Z);
+        for i in 0..2 {
+            let (t, w) = m.tangent(i, at).unwrap();
+            assert!((t - Vec3::X).length() < 1e-6 && w == 1.0, "triangle {i}: {t} {w}");
+        }
+        let mirrored = quad(|x, y| [1.0 - x, 1.0 - y]).with_generated_tangents();
+        let (t, w) = mirrored.tangent(1, at).unwrap();
+        assert!((t + Vec3::X).length() < 1e-6 && w == -1.0, "{t} {w}");
+        // Scaled and sheared coordinates: T still along ∂p/∂u's direction.
+        let sheared = quad(|x, y| [2.0 * x + y, 1.0 - y]).with_generated_tangents();
+        let (t, _) = sheared.tangent(0, at).unwrap();
+        assert!((t - Vec3::X).length() < 1e-6, "{t}");
+    }
+
+    #[test]
+    fn tangents_from_the_file_are_kept_and_only_missing_ones_generated() {
+        let t = Vec3::new(1.0, 1.0, 0.0).normalize();
+        let given = vec![[1.0, 1.0, 0.0, -1.0], [0.0; 4], [1.0, 1.0, 0.0, -1.0], [1.0, 1.0, 0.0, -1.0]];
+        let m = quad(|x, y| [x, 1.0 - y]).with_tangents(given).unwrap();
+        assert_eq!(m.tangent(0, Vec3::new(0.5, 0.2, 0.0)), None, "a corner has none yet");
+        let (t0, w0) = m.tangent(1, Vec3::new(0.2, 0.5, 0.0)).unwrap();
+        assert!((t0 - t).length() < 1e-6 && w0 == -1.0);
+        let m = m.with_generated_tangents();
+        let (t0, w0) = m.tangent(1, Vec3::new(0.2, 0.5, 0.0)).unwrap();
+        assert!((t0 - t).length() < 1e-6 && w0 == -1.0, "kept: {t0} {w0}");
+        let [x, y, z, w] = m.vertex_tangents()[1];
+        assert!((x - 1.0).abs() < 1e-6 && y.abs() < 1e-6 && z.abs() < 1e-6 && w == 1.0, "generated");
+        assert!(m.memory_bytes() > quad(|x, y| [x, y]).memory_bytes());
+        assert_eq!(quad(|x, y| [x, y]).with_tangents(vec![[0.0; 4]; 3]), None, "one per vertex");
+    }
+
+    #[test]
+    fn degenerate_texture_coordinates_give_finite_tangents_or_none_never_nan() {
+        // Every corner at one (u, v), or all on a line: MikkTSpace has no
+        // direction to give; what the mesh answers is finite or nothing.
+        for uv in
+            [|_: f32, _: f32| [0.5, 0.5], |x: f32, y: f32| [x + y, x + y], |x: f32, _: f32| [x, f32::NAN]]
+        {
+            let m = quad(uv).with_generated_tangents();
+            for i in 0..2 {
+                if let Some((t, w)) = m.tangent(i, Vec3::new(0.4, 0.3, 0.0)) {
+                    assert!(t.is_finite() && (t.length() - 1.0).abs() < 1e-5 && w.abs() == 1.0, "{t} {w}");
+                }
+            }
+        }
+        // Without texture coordinates there is nothing to generate from.
+        let flat = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]).unwrap();
+        assert!(!flat.with_generated_tangents().has_tangents());
     }
 
     #[test]

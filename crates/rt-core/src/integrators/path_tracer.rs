@@ -334,6 +334,7 @@ mod tests {
     use super::*;
     use crate::files::scene_file::LoadedScene;
     use crate::materials::material::Material;
+    use crate::materials::texture_slot::TextureSlot;
     use crate::render::Frame;
     use crate::render::settings::{ImageSize, RenderSettings};
     use crate::scene::effects::Effects;
@@ -914,7 +915,8 @@ mod tests {
         /// (albedo, mean free paths from 0.02 to 2 per channel, anisotropy),
         /// as does, in some scenes, a closed icosahedron; meshes carry
         /// tilted shading normals and texture coordinates, and some
-        /// materials a random texture.
+        /// materials a random texture (with alpha), also as a strongly
+        /// scaled normal map, and every alpha mode.
         #[test]
         fn no_sample_is_nan_infinite_or_negative_on_random_scenes(
             parts in crate::testing::test_support::random_parts(5.0, 6),
@@ -944,7 +946,9 @@ mod tests {
                 global_illumination: Some(GlobalIllumination { max_bounces: 6, russian_roulette: true, max_walk_steps: 256 }),
                 ..Effects::default()
             };
-            let texture = Texture::new(2, 2, texels.iter().map(|&t| Color::from_array(t)).collect()).unwrap();
+            let texture = Texture::new(2, 2, texels.iter().map(|&t| Color::from_array(t)).collect())
+                .and_then(|t| t.with_alpha(texels.iter().map(|t| t[1]).collect()))
+                .unwrap();
             let mut b = SceneBuilder::new()
                 .background(Color::splat(background))
                 .light(light)
@@ -978,6 +982,18 @@ mod tests {
                         specular: ior,
                         specular_color: Color::new(1.0, c, 0.5),
                     }),
+                    // The texture as a normal map too, strongly scaled, and
+                    // every alpha mode.
+                    normal_texture: textured[i].then_some(TextureSlot {
+                        scale: 1.0 + 4.0 * c,
+                        ..TextureSlot::new(0)
+                    }),
+                    alpha: c,
+                    alpha_mode: match (e * 3.0) as u32 {
+                        0 => crate::materials::alpha::AlphaMode::Opaque,
+                        1 => crate::materials::alpha::AlphaMode::Mask { cutoff: 0.3 },
+                        _ => crate::materials::alpha::AlphaMode::Blend,
+                    },
                 };
                 let (_, albedo, mfp, g) = media[i];
                 let medium = Subsurface { albedo: Color::from_array(albedo), mean_free_path: Color::from_array(mfp), anisotropy: g };

@@ -623,4 +623,72 @@ mod tests {
             (rmse(&lit_sphere(Primitive::Mesh(flat))), rmse(&lit_sphere(Primitive::Mesh(smooth))));
         assert!(e_smooth < e_flat / 3.0, "smooth {e_smooth} against flat {e_flat}");
     }
+
+    /// The mean radiance of a normal-mapped square facing the camera (u
+    /// along +x, up the image +y), its one-texel map holding `texel`, lit
+    /// by a directional light arriving from `from` (towards the light),
+    /// by the direct-lighting tracer or, with `gi`, the path tracer.
+    fn mean_of_normal_mapped_square(texel: [f32; 3], from: Vec3, gi: bool) -> f32 {
+        use crate::geometry::mesh::Mesh;
+        use crate::geometry::primitive::Primitive;
+        use crate::lights::light::{Light, LightKind};
+        use crate::materials::material::Material;
+        use crate::materials::texture::Texture;
+        use crate::scene::effects::{Effects, GlobalIllumination};
+        let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+        let positions = corners.iter().map(|&(x, y)| Vec3::new(x, y, 0.0)).collect();
+        let uvs = corners
+            .iter()
+            .map(|&(x, y)| {
+                [(crate::math::real::to_f32(x) + 1.0) / 2.0, (1.0 - crate::math::real::to_f32(y)) / 2.0]
+            })
+            .collect();
+        let mesh = Mesh::new(positions, vec![[0, 2, 1], [0, 3, 2]]).unwrap();
+        let mesh = mesh.with_vertex_attributes(Vec::new(), uvs).unwrap();
+        let light = Light {
+            kind: LightKind::Directional { direction: -from.normalize() },
+            power: Color::splat(2.0),
+            shadows: true,
+        };
+        let material = Material {
+            normal_texture: Some(crate::materials::texture_slot::TextureSlot::new(0)),
+            ..Material::flat(Color::splat(0.8))
+        };
+        let scene = crate::scene::SceneBuilder::new()
+            .light(light)
+            .texture(std::sync::Arc::new(Texture::from_linear(1, 1, 3, &texel).unwrap()))
+            .material("m", material)
+            .object(Primitive::Mesh(mesh), "m")
+            .build()
+            .unwrap();
+        let camera = crate::testing::test_support::camera_at(Vec3::new(0.0, 0.0, -4.0), Vec3::ZERO, 20.0);
+        let effects = Effects {
+            global_illumination: gi.then_some(GlobalIllumination {
+                max_bounces: 1,
+                russian_roulette: false,
+                max_walk_steps: 1,
+            }),
+            ..Effects::default()
+        };
+        let pixels = renderer_of(&scene, camera, effects, (8, 8, 4)).render(|_| {}).pixels;
+        pixels.iter().map(|c| c.x).sum::<f32>() / pixels.len() as f32
+    }
+
+    #[test]
+    fn a_normal_map_turns_the_surface_towards_the_light_it_leans_to_for_both_integrators() {
+        // Leaning 37° towards +u (+x, red 0.8) or up the image (+y, green
+        // 0.8), lit from that side at a slant: brighter than leaning away,
+        // and than not leaning at all.
+        for gi in [false, true] {
+            for (towards, away, from) in [
+                ([0.8, 0.5, 1.0], [0.2, 0.5, 1.0], Vec3::new(1.0, 0.0, -1.0)),
+                ([0.5, 0.8, 1.0], [0.5, 0.2, 1.0], Vec3::new(0.0, 1.0, -1.0)),
+            ] {
+                let lit = mean_of_normal_mapped_square(towards, from, gi);
+                let flat = mean_of_normal_mapped_square([0.5, 0.5, 1.0], from, gi);
+                let dark = mean_of_normal_mapped_square(away, from, gi);
+                assert!(lit > flat * 1.1 && flat > dark * 1.1, "gi {gi}, from {from}: {lit} {flat} {dark}");
+            }
+        }
+    }
 }

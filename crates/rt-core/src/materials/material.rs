@@ -1,6 +1,7 @@
 //! Materials: how a surface answers light. Its colours are linear RGB
 //! ([`crate::math::color`]).
 
+use crate::materials::alpha::AlphaMode;
 use crate::materials::medium::Subsurface;
 use crate::materials::principled::Principled;
 use crate::materials::texture_slot::TextureSlot;
@@ -75,6 +76,18 @@ pub struct Material {
     /// The physically based parameters ([`Principled`]): when set, the
     /// surface is shaded by the glTF 2.0 BSDF instead of the weights.
     pub physical: Option<Principled>,
+    /// A normal map (glTF's `normalTexture`, linear data) holding
+    /// tangent-space normals ([`crate::materials::normal_map`]): where the
+    /// surface has the slot's texture coordinates it replaces the shading
+    /// normal. The slot's `scale` is how far its normals tilt, multiplying
+    /// their x and y (glTF's `normalTexture.scale`, 1 by default).
+    pub normal_texture: Option<TextureSlot>,
+    /// The base colour's alpha factor in [0, 1] (glTF's
+    /// `baseColorFactor[3]`), multiplied by the texture's alpha where it has
+    /// one; used as `alpha_mode` says.
+    pub alpha: f32,
+    /// How alpha decides where the surface is ([`crate::materials::alpha`]).
+    pub alpha_mode: AlphaMode,
 }
 
 impl Material {
@@ -96,6 +109,9 @@ impl Material {
             emissive_texture: None,
             occlusion_texture: None,
             physical: None,
+            normal_texture: None,
+            alpha: 1.0,
+            alpha_mode: AlphaMode::Opaque,
         }
     }
 
@@ -164,9 +180,10 @@ impl Material {
             .flatten()
     }
 
-    /// Every texture slot the material has, the occlusion one included.
+    /// Every texture slot the material has, the normal map and occlusion
+    /// included.
     pub fn texture_slots(&self) -> impl Iterator<Item = &TextureSlot> {
-        self.applied_textures().chain(&self.occlusion_texture)
+        self.applied_textures().chain(&self.normal_texture).chain(&self.occlusion_texture)
     }
 
     /// Moves every texture slot's index up by `by`: a model's materials
@@ -177,6 +194,7 @@ impl Material {
             &mut self.base_color_texture,
             &mut self.metallic_roughness_texture,
             &mut self.emissive_texture,
+            &mut self.normal_texture,
             &mut self.occlusion_texture,
         ]
         .into_iter()

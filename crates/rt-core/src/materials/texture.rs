@@ -8,8 +8,10 @@
 //! (metallic-roughness, occlusion, normals) are read as stored, `b/255`.
 //! Filtering and shading then happen on linear values. One image used both
 //! ways is decoded twice; one decoding is shared (`Arc`) by every material
-//! and sampler that uses it ([`crate::materials::texture_slot`]). Alpha is
-//! ignored.
+//! and sampler that uses it ([`crate::materials::texture_slot`]). Alpha,
+//! where the image has it, is kept apart as it is (alpha is linear
+//! coverage, never sRGB-encoded), mip-mapped with the colour and filtered
+//! the same way ([`Texture::sample_alpha`], [`Texture::lookup_alpha`]).
 //!
 //! **Coordinates.** `(u, v)` with `u` to the right and `v` *down* the image:
 //! `(0, 0)` is the upper-left corner of the upper-left texel, `(1, 1)` the
@@ -36,8 +38,7 @@
 
 use std::path::{Path, PathBuf};
 
-pub use crate::materials::texture_slot::Wrap;
-use crate::materials::texture_slot::{Encoding, Filter, Sampler};
+use crate::materials::texture_slot::{Encoding, Filter, Sampler, Wrap};
 use crate::math::color::Color;
 use crate::math::real::{Real, to_f64};
 
@@ -76,50 +77,58 @@ struct Level {
     width: u32,
     height: u32,
     texels: Vec<Color>,
+    /// The alpha channel, one value per texel, or empty when the image has
+    /// none (alpha 1 everywhere).
+    alpha: Vec<f32>,
+}
+
+/// The value at integer coordinates `(i, j)` of a `w × h` grid of `values`
+/// (row by row from the top), wrapped.
+#[inline]
+fn wrapped<T: Copy>(values: &[T], w: i64, h: i64, wrap: [Wrap; 2], i: i64, j: i64) -> T {
+    values[(wrap[1].index(j, h) * w + wrap[0].index(i, w)) as usize]
+}
+
+/// A far coordinate brought back by whole mirrored periods (`n` texels on
+/// its axis), so its integer part stays exact; clamped under `ClampToEdge`.
+fn reduce(x: f64, n: f64, wrap: Wrap) -> f64 {
+    match wrap {
+        Wrap::ClampToEdge => x.clamp(-1.0, n),
+        _ => x.rem_euclid(2.0 * n),
+    }
 }
 
 impl Level {
-    /// The texel at integer coordinates `(i, j)`, wrapped.
-    #[inline]
-    fn texel(&self, wrap: [Wrap; 2], i: i64, j: i64) -> Color {
-        let (w, h) = (i64::from(self.width), i64::from(self.height));
-        self.texels[(wrap[1].index(j, h) * w + wrap[0].index(i, w)) as usize]
-    }
-
-    /// The texel `(u, v)` falls in (glTF's `NEAREST`).
-    fn nearest(&self, wrap: [Wrap; 2], u: f64, v: f64) -> Color {
+    /// The value in `values` (this level's texels or alpha) that `(u, v)`
+    /// falls in (glTF's `NEAREST`).
+    fn nearest<T: Copy>(&self, values: &[T], wrap: [Wrap; 2], u: f64, v: f64) -> T {
         let (w, h) = (f64::from(self.width), f64::from(self.height));
         let (x, y) = ((u * w).floor(), (v * h).floor());
         if !(x.is_finite() && y.is_finite()) {
-            return self.texels[0];
+            return values[0];
         }
-        // Reduced by whole mirrored periods first, so the index stays exact.
-        let reduce = |x: f64, n: f64, wrap: Wrap| match wrap {
-            Wrap::ClampToEdge => x.clamp(-1.0, n),
-            _ => x.rem_euclid(2.0 * n),
-        };
-        self.texel(wrap, reduce(x, w, wrap[0]) as i64, reduce(y, h, wrap[1]) as i64)
+        let (i, j) = (reduce(x, w, wrap[0]) as i64, reduce(y, h, wrap[1]) as i64);
+        wrapped(values, i64::from(self.width), i64::from(self.height), wrap, i, j)
     }
 
-    /// The bilinear filter at `(u, v)` (see the module documentation).
-    fn bilinear(&self, wrap: [Wrap; 2], u: f64, v: f64) -> Color {
+    /// The bilinear filter over `values` (this level's texels or alpha) at
+    /// `(u, v)` (see the module documentation).
+    fn bilinear<T>(&self, values: &[T], wrap: [Wrap; 2], u: f64, v: f64) -> T
+    where
+        T: Copy + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
+    {
         let (w, h) = (f64::from(self.width), f64::from(self.height));
         let (x, y) = (u * w - 0.5, v * h - 0.5);
         if !(x.is_finite() && y.is_finite()) {
-            return self.texels[0];
+            return values[0];
         }
-        // Far coordinates are reduced first (by a whole mirrored period),
-        // so the integer part stays exact.
-        let reduce = |x: f64, n: f64, wrap: Wrap| match wrap {
-            Wrap::ClampToEdge => x.clamp(-1.0, n),
-            _ => x.rem_euclid(2.0 * n),
-        };
         let (x, y) = (reduce(x, w, wrap[0]), reduce(y, h, wrap[1]));
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
         let (i, j) = (x0 as i64, y0 as i64);
-        let top = self.texel(wrap, i, j) * (1.0 - fx) + self.texel(wrap, i + 1, j) * fx;
-        let bottom = self.texel(wrap, i, j + 1) * (1.0 - fx) + self.texel(wrap, i + 1, j + 1) * fx;
+        let at = |i, j| wrapped(values, i64::from(self.width), i64::from(self.height), wrap, i, j);
+        let top = at(i, j) * (1.0 - fx) + at(i + 1, j) * fx;
+        let bottom = at(i, j + 1) * (1.0 - fx) + at(i + 1, j + 1) * fx;
         top * (1.0 - fy) + bottom * fy
     }
 
@@ -127,27 +136,48 @@ impl Level {
     /// a box filter — `2×2` texels averaged for even sides; for an odd side
     /// n, output texel `i` averages the source span `[i·n/m, (i+1)·n/m)`
     /// (m = ⌊n/2⌋), the texels at its ends weighted by how much of them it
-    /// covers, so no texel is dropped and the mean is kept exactly.
+    /// covers, so no texel is dropped and the mean is kept exactly. Alpha,
+    /// where there is some, is halved the same way.
     fn halved(&self) -> Level {
-        let (w, h) = (self.width as usize, self.height as usize);
-        let (w2, h2) = ((w / 2).max(1), (h / 2).max(1));
-        let rows: Vec<Color> =
-            (0..h).flat_map(|j| box_resample(&self.texels[j * w..(j + 1) * w], w2)).collect();
-        let mut texels = vec![Color::ZERO; w2 * h2];
-        for i in 0..w2 {
-            let column: Vec<Color> = (0..h).map(|j| rows[j * w2 + i]).collect();
-            for (j, c) in box_resample(&column, h2).into_iter().enumerate() {
-                texels[j * w2 + i] = c;
-            }
+        let (w2, h2) = ((self.width / 2).max(1), (self.height / 2).max(1));
+        Level {
+            width: w2,
+            height: h2,
+            texels: halve(&self.texels, self.width as usize, self.height as usize, Color::ZERO),
+            alpha: if self.alpha.is_empty() {
+                Vec::new()
+            } else {
+                halve(&self.alpha, self.width as usize, self.height as usize, 0.0)
+            },
         }
-        Level { width: w2 as u32, height: h2 as u32, texels }
     }
+}
+
+/// A `w × h` grid of `values` box-filtered to `max(w/2, 1) × max(h/2, 1)`
+/// ([`Level::halved`]), rows first, then columns.
+fn halve<T>(values: &[T], w: usize, h: usize, zero: T) -> Vec<T>
+where
+    T: Copy + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
+{
+    let (w2, h2) = ((w / 2).max(1), (h / 2).max(1));
+    let rows: Vec<T> = (0..h).flat_map(|j| box_resample(&values[j * w..(j + 1) * w], w2, zero)).collect();
+    let mut out = vec![zero; w2 * h2];
+    for i in 0..w2 {
+        let column: Vec<T> = (0..h).map(|j| rows[j * w2 + i]).collect();
+        for (j, c) in box_resample(&column, h2, zero).into_iter().enumerate() {
+            out[j * w2 + i] = c;
+        }
+    }
+    out
 }
 
 /// `values` box-filtered down to `m` values: output `i` is the mean over
 /// the span `[i·s, (i+1)·s)`, `s = n/m`, each source value weighted by its
 /// overlap with the span.
-fn box_resample(values: &[Color], m: usize) -> Vec<Color> {
+fn box_resample<T>(values: &[T], m: usize, zero: T) -> Vec<T>
+where
+    T: Copy + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
+{
     let n = values.len();
     if n == m {
         return values.to_vec();
@@ -156,20 +186,20 @@ fn box_resample(values: &[Color], m: usize) -> Vec<Color> {
     (0..m)
         .map(|i| {
             let (a, b) = (i as f64 * s, (i + 1) as f64 * s);
-            let mut sum = Color::ZERO;
+            let mut sum = zero;
             let (first, end) = (a.floor() as usize, (b.ceil() as usize).min(n));
             for (k, &value) in values.iter().enumerate().take(end).skip(first) {
                 let overlap = (b.min(k as f64 + 1.0) - a.max(k as f64)).max(0.0);
-                sum += value * (overlap / s) as f32;
+                sum = sum + value * (overlap / s) as f32;
             }
             sum
         })
         .collect()
 }
 
-/// An image of linear RGB texels with its mip-map pyramid (built when it
-/// is made, in linear space), and how it wraps when read without a
-/// sampler ([`Texture::sample`]).
+/// An image of linear RGB texels (and alpha, where it has some) with its
+/// mip-map pyramid (built when it is made, in linear space), and how it
+/// wraps when read without a sampler ([`Texture::sample`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
     /// Level 0 is the image; each next level is the previous one halved
@@ -182,8 +212,18 @@ impl Texture {
     /// A texture of `width × height` linear colours given row by row from
     /// the top. `None` if the sizes disagree or either side is 0.
     pub fn new(width: u32, height: u32, texels: Vec<Color>) -> Option<Self> {
-        (width > 0 && height > 0 && texels.len() as u64 == u64::from(width) * u64::from(height)).then(|| {
-            let mut levels = vec![Level { width, height, texels }];
+        Self::build(width, height, texels, Vec::new())
+    }
+
+    /// The pyramid over `texels` and `alpha` (empty, or one per texel).
+    fn build(width: u32, height: u32, texels: Vec<Color>, alpha: Vec<f32>) -> Option<Self> {
+        let count = u64::from(width) * u64::from(height);
+        (width > 0
+            && height > 0
+            && texels.len() as u64 == count
+            && (alpha.is_empty() || alpha.len() == texels.len()))
+        .then(|| {
+            let mut levels = vec![Level { width, height, texels, alpha }];
             while let Some(last) = levels.last().filter(|l| l.width > 1 || l.height > 1) {
                 let next = last.halved();
                 levels.push(next);
@@ -192,22 +232,54 @@ impl Texture {
         })
     }
 
+    /// The texture with an alpha channel (one value in [0, 1] per texel, row
+    /// by row from the top), mip-mapped as the colour is; `None` if the
+    /// count differs from the texels'.
+    pub fn with_alpha(mut self, alpha: Vec<f32>) -> Option<Self> {
+        let (width, height) = self.size();
+        if alpha.len() != self.levels[0].texels.len() {
+            return None;
+        }
+        let texels = std::mem::take(&mut self.levels[0].texels);
+        Self::build(width, height, texels, alpha).map(|t| t.with_wrap(self.wrap))
+    }
+
+    /// A texture from linear values in [0, 1] (a normal map's), `channels`
+    /// (1 to 4) per texel, row by row from the top, grey for 1 or 2
+    /// channels; a fourth channel is dropped. `None` if the sizes disagree.
+    pub fn from_linear(width: u32, height: u32, channels: usize, values: &[f32]) -> Option<Self> {
+        Self::decode_values(width, height, channels, values, Encoding::Linear, false)
+    }
+
     /// A texture from 8- or 16-bit sRGB-encoded values in [0, 1], `channels`
     /// (1 to 4) per texel, row by row from the top: grey (1 or 2 channels)
-    /// or RGB (3 or 4); alpha is dropped. `None` if the sizes disagree.
+    /// or RGB (3 or 4), the second or fourth channel being alpha (kept
+    /// linear). `None` if the sizes disagree.
     pub fn from_srgb(width: u32, height: u32, channels: usize, values: &[f32]) -> Option<Self> {
         Self::from_values(width, height, channels, values, Encoding::Srgb)
     }
 
     /// A texture from values in [0, 1] as [`Texture::from_srgb`] reads
-    /// them, decoded by `encoding`: sRGB colour to linear, or linear data
-    /// as it is.
+    /// them (alpha included), decoded by `encoding`: sRGB colour to linear,
+    /// or linear data as it is. Alpha is linear either way.
     pub fn from_values(
         width: u32,
         height: u32,
         channels: usize,
         values: &[f32],
         encoding: Encoding,
+    ) -> Option<Self> {
+        Self::decode_values(width, height, channels, values, encoding, true)
+    }
+
+    /// [`Texture::from_values`], its alpha kept or dropped.
+    fn decode_values(
+        width: u32,
+        height: u32,
+        channels: usize,
+        values: &[f32],
+        encoding: Encoding,
+        keep_alpha: bool,
     ) -> Option<Self> {
         if !(1..=4).contains(&channels) || values.len() != channels * width as usize * height as usize {
             return None;
@@ -226,7 +298,13 @@ impl Texture {
                 Color::from_array(rgb.map(decode))
             })
             .collect();
-        Self::new(width, height, texels)
+        let alpha = if channels % 2 == 1 || !keep_alpha {
+            Vec::new()
+        } else {
+            let linear = |v: f32| if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+            values.chunks_exact(channels).map(|t| linear(t[channels - 1])).collect()
+        };
+        Self::build(width, height, texels, alpha)
     }
 
     /// One metallic-roughness texture in glTF's layout (green: roughness,
@@ -262,7 +340,13 @@ impl Texture {
         Self::load_as(path, Encoding::Srgb)
     }
 
-    /// Reads an image file and decodes it by `encoding`.
+    /// Reads an image file of linear values (a normal map), as they are.
+    pub fn load_linear(path: &Path) -> Result<Self, TextureError> {
+        Self::load_as(path, Encoding::Linear)
+    }
+
+    /// Reads an image file and decodes it by `encoding`, alpha (linear)
+    /// kept where the image has it.
     pub fn load_as(path: &Path, encoding: Encoding) -> Result<Self, TextureError> {
         let read = |reason: String| TextureError::Read { path: path.to_owned(), reason };
         let mut reader = image::ImageReader::open(path)
@@ -273,7 +357,9 @@ impl Texture {
         limits.max_image_width = Some(MAX_TEXTURE_SIDE);
         limits.max_image_height = Some(MAX_TEXTURE_SIDE);
         reader.limits(limits);
-        let image = reader.decode().map_err(|e| read(e.to_string()))?.into_rgb8();
+        let decoded = reader.decode().map_err(|e| read(e.to_string()))?;
+        let has_alpha = decoded.color().has_alpha();
+        let image = decoded.into_rgba8();
         let (width, height) = image.dimensions();
         if width == 0 || height == 0 {
             return Err(TextureError::Size { path: path.to_owned(), width, height });
@@ -288,7 +374,9 @@ impl Texture {
         let texels = image
             .pixels()
             .map(|p| Color::new(table[p[0] as usize], table[p[1] as usize], table[p[2] as usize]));
-        Self::new(width, height, texels.collect()).ok_or_else(|| TextureError::Size {
+        let alpha =
+            if has_alpha { image.pixels().map(|p| f32::from(p[3]) / 255.0).collect() } else { Vec::new() };
+        Self::build(width, height, texels.collect(), alpha).ok_or_else(|| TextureError::Size {
             path: path.to_owned(),
             width,
             height,
@@ -313,14 +401,30 @@ impl Texture {
 
     /// Bytes of texel storage, every level.
     pub fn memory_bytes(&self) -> usize {
-        self.levels.iter().map(|l| l.texels.len() * size_of::<Color>()).sum()
+        self.levels
+            .iter()
+            .map(|l| l.texels.len() * size_of::<Color>() + l.alpha.len() * size_of::<f32>())
+            .sum()
+    }
+
+    /// Whether the image has an alpha channel.
+    pub fn has_alpha(&self) -> bool {
+        !self.levels[0].alpha.is_empty()
     }
 
     /// The bilinearly filtered colour of the full-size image at `(u, v)`
     /// (see the module documentation), wrapped by the texture's [`Wrap`]
     /// modes. Non-finite coordinates give the texel at (0, 0).
     pub fn sample(&self, u: Real, v: Real) -> Color {
-        self.levels[0].bilinear(self.wrap, to_f64(u), to_f64(v))
+        let l = &self.levels[0];
+        l.bilinear(&l.texels, self.wrap, to_f64(u), to_f64(v))
+    }
+
+    /// The alpha of the full-size image at `(u, v)`, filtered and wrapped
+    /// as [`Texture::sample`] filters colour; 1 for an image without alpha.
+    pub fn sample_alpha(&self, u: Real, v: Real) -> f32 {
+        let l = &self.levels[0];
+        if l.alpha.is_empty() { 1.0 } else { l.bilinear(&l.alpha, self.wrap, to_f64(u), to_f64(v)) }
     }
 
     /// The colour at `(u, v)` through `sampler`, for a footprint whose
@@ -332,12 +436,28 @@ impl Texture {
     /// by the fraction (trilinear filtering; continuous in `lod`). A NaN
     /// `lod` reads level 0.
     pub fn lookup(&self, u: Real, v: Real, lod: f32, sampler: &Sampler) -> Color {
+        self.lookup_in(u, v, lod, sampler, |l| &l.texels)
+    }
+
+    /// The alpha at `(u, v)` through `sampler` at level of detail `lod`,
+    /// filtered exactly as [`Texture::lookup`] filters colour (the same
+    /// levels, weights and wrap); 1 for an image without alpha.
+    pub fn lookup_alpha(&self, u: Real, v: Real, lod: f32, sampler: &Sampler) -> f32 {
+        if self.has_alpha() { self.lookup_in(u, v, lod, sampler, |l| &l.alpha) } else { 1.0 }
+    }
+
+    /// [`Texture::lookup`] over the values `pick` takes from each level.
+    #[inline]
+    fn lookup_in<T>(&self, u: Real, v: Real, lod: f32, sampler: &Sampler, pick: impl Fn(&Level) -> &[T]) -> T
+    where
+        T: Copy + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
+    {
         let (u, v) = (to_f64(u), to_f64(v));
         let read = |level: usize, filter: Filter| {
             let l = &self.levels[level.min(self.levels.len() - 1)];
             match filter {
-                Filter::Nearest => l.nearest(sampler.wrap, u, v),
-                Filter::Linear => l.bilinear(sampler.wrap, u, v),
+                Filter::Nearest => l.nearest(pick(l), sampler.wrap, u, v),
+                Filter::Linear => l.bilinear(pick(l), sampler.wrap, u, v),
             }
         };
         if lod.is_nan() || lod <= 0.0 {
@@ -430,6 +550,72 @@ mod tests {
     }
 
     #[test]
+    fn alpha_is_mip_mapped_and_looked_up_with_the_colours_levels_filter_and_weights() {
+        // A 5×3 image (odd sides) whose alpha equals its red channel: every
+        // lookup's alpha must be the lookup's red, at every level of detail
+        // and for every sampler.
+        let red = |k: usize| ((k * 7919) % 13) as f32 / 12.0;
+        let texels = (0..15).map(|k| Color::new(red(k), 0.5, 0.25)).collect();
+        let t = Texture::new(5, 3, texels).unwrap().with_alpha((0..15).map(red).collect()).unwrap();
+        assert_eq!(t.level_count(), 3);
+        let samplers = [
+            Sampler::DEFAULT,
+            Sampler {
+                mag: Filter::Nearest,
+                min: Filter::Nearest,
+                mip: Some(Filter::Nearest),
+                ..Sampler::DEFAULT
+            },
+            Sampler { mip: None, wrap: [Wrap::MirroredRepeat, Wrap::ClampToEdge], ..Sampler::DEFAULT },
+        ];
+        for s in &samplers {
+            for lod in [-1.0, 0.0, 0.4, 1.0, 1.7, 2.0, 9.0] {
+                for (u, v) in [(0.1, 0.2), (0.55, 0.5), (0.93, 0.81), (-0.3, 1.4)] {
+                    let (c, a) = (t.lookup(u, v, lod, s), t.lookup_alpha(u, v, lod, s));
+                    assert!((c.x - a).abs() < 1e-6, "lod {lod} at ({u}, {v}): {} vs {a}", c.x);
+                }
+            }
+        }
+        // The top level's alpha is the image's mean, as its colour is.
+        let mean = (0..15).map(red).sum::<f32>() / 15.0;
+        assert!((t.lookup_alpha(0.5, 0.5, 9.0, &Sampler::DEFAULT) - mean).abs() < 1e-6);
+        // Without alpha: 1 everywhere.
+        let opaque = Texture::new(1, 1, vec![Color::ONE]).unwrap();
+        assert_eq!(opaque.lookup_alpha(0.5, 0.5, 3.0, &Sampler::DEFAULT), 1.0);
+    }
+
+    #[test]
+    fn alpha_is_kept_linear_and_filtered_where_the_image_has_it() {
+        // 2×1 RGBA: alpha 0 and 1, colours sRGB-decoded, alpha not.
+        let t = Texture::from_srgb(2, 1, 4, &[0.5, 0.5, 0.5, 0.0, 1.0, 1.0, 1.0, 1.0]).unwrap();
+        assert!(t.has_alpha());
+        assert_eq!(
+            (t.sample_alpha(0.25, 0.5), t.sample_alpha(0.75, 0.5), t.sample_alpha(0.5, 0.5)),
+            (0.0, 1.0, 0.5)
+        );
+        assert!((t.sample(0.25, 0.5).x - srgb_decode(0.5)).abs() < 1e-6);
+        // Grey with alpha (2 channels); none without.
+        let g = Texture::from_srgb(1, 1, 2, &[1.0, 0.25]).unwrap();
+        assert_eq!(g.sample_alpha(0.3, 0.3), 0.25);
+        let rgb = Texture::from_srgb(1, 1, 3, &[1.0, 0.5, 0.0]).unwrap();
+        assert!(!rgb.has_alpha() && rgb.sample_alpha(0.5, 0.5) == 1.0);
+        // A normal map is linear and has no alpha.
+        let n = Texture::from_linear(1, 1, 4, &[0.5, 0.25, 1.0, 0.0]).unwrap();
+        assert_eq!((n.sample(0.5, 0.5), n.has_alpha()), (Color::new(0.5, 0.25, 1.0), false));
+        // An RGBA file keeps its alpha; an RGB one has none.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.png");
+        image::RgbaImage::from_pixel(1, 1, image::Rgba([255, 255, 255, 51])).save(&path).unwrap();
+        let t = Texture::load(&path).unwrap();
+        assert!((t.sample_alpha(0.5, 0.5) - 0.2).abs() < 1e-6);
+        assert_eq!(t.memory_bytes(), size_of::<Color>() + size_of::<f32>());
+        image::RgbImage::from_pixel(1, 1, image::Rgb([255, 128, 0])).save(&path).unwrap();
+        assert!(!Texture::load(&path).unwrap().has_alpha());
+        let linear = Texture::load_linear(&path).unwrap().sample(0.5, 0.5);
+        assert!((linear - Color::new(1.0, 128.0 / 255.0, 0.0)).abs().max_element() < 1e-6, "{linear}");
+    }
+
+    #[test]
     fn srgb_decoding_inverts_the_encoding() {
         for i in 0..=255 {
             let v = i as f32 / 255.0;
@@ -509,7 +695,8 @@ mod tests {
             let k = k as f32;
             let at = t.lookup(u, v, k, &s);
             // At a whole level: that level's bilinear filter.
-            let exact = t.levels[k as usize].bilinear(s.wrap, to_f64(u), to_f64(v));
+            let exact =
+                t.levels[k as usize].bilinear(&t.levels[k as usize].texels, s.wrap, to_f64(u), to_f64(v));
             assert!((at - exact).abs().max_element() < 1e-6, "level {k}");
             for e in [1e-3, -1e-3] {
                 let near = t.lookup(u, v, k + e, &s);

@@ -58,6 +58,10 @@ pub struct Scene {
     light_sampler: LightSampler,
     source_files: Vec<PathBuf>,
     warnings: Vec<String>,
+    /// Whether an object's material cuts holes by alpha
+    /// ([`crate::materials::alpha`]): only then do ray queries look at
+    /// alpha, so opaque scenes pay one flag test per query.
+    cuts: bool,
 }
 
 /// Why a [`SceneBuilder`] cannot make a scene.
@@ -286,7 +290,9 @@ impl SceneBuilder {
             .into_iter()
             .enumerate()
             .map(|(index, (primitive, name))| match material_names.iter().position(|n| *n == name) {
-                Some(material) => Ok(Object { primitive, material }),
+                Some(material) => {
+                    Ok(Object { primitive: with_tangents(primitive, &materials[material]), material })
+                }
                 None => Err(SceneBuildError::UnknownMaterial {
                     index,
                     kind: primitive.kind(),
@@ -319,6 +325,19 @@ impl SceneBuilder {
                 });
             }
         }
+        let mut warnings = self.warnings;
+        for (index, o) in objects.iter().enumerate() {
+            let Some(slot) = materials[o.material].normal_texture else { continue };
+            let uvs = matches!(&o.primitive, Primitive::Mesh(mesh) if mesh.has_uv_set(slot.tex_coord));
+            if !uvs {
+                warnings.push(format!(
+                    "material \"{}\": normal_texture is not used on objects[{index}] ({}): it has no texture \
+                     coordinates",
+                    material_names[o.material],
+                    o.primitive.kind()
+                ));
+            }
+        }
         let mut emitters = Vec::new();
         let mut emitter_of = vec![None; objects.len()];
         for (index, o) in objects.iter().enumerate() {
@@ -331,6 +350,7 @@ impl SceneBuilder {
             }
         }
         let bvh = Bvh::build(&objects);
+        let cuts = objects.iter().any(|o| materials[o.material].alpha_mode.cuts());
         let radius = bvh.bounds().map_or(1.0, |b| (0.5 * b.size().length()).max(1.0));
         let light_sampler = LightSampler::new(&self.lights, &emitters, &self.environment, radius);
         Ok(Scene {
@@ -347,8 +367,20 @@ impl SceneBuilder {
             emitter_of,
             light_sampler,
             source_files: self.source_files,
-            warnings: self.warnings,
+            warnings,
+            cuts,
         })
+    }
+}
+
+/// `primitive` with MikkTSpace tangents where it is a mesh lacking them
+/// and `material` has a normal map ([`crate::geometry::mesh::Mesh::with_generated_tangents`]).
+fn with_tangents(primitive: Primitive, material: &Material) -> Primitive {
+    match primitive {
+        Primitive::Mesh(mesh) if material.normal_texture.is_some() => {
+            Primitive::Mesh(mesh.with_generated_tangents())
+        }
+        other => other,
     }
 }
 
@@ -399,7 +431,9 @@ impl Scene {
     }
 
     /// The nearest hit over all objects with `t` in `range`; ties keep the
-    /// object listed first (and the lower triangle within a mesh). A ray with
+    /// object listed first (and the lower triangle within a mesh). Points
+    /// that alpha cuts out ([`crate::materials::alpha`]) are not hit: the
+    /// ray goes on through them, for every query alike. A ray with
     /// a zero or non-finite direction, or a non-finite origin, hits nothing.
     /// The direction may have any magnitude: it is rescaled by a power of two
     /// first ([`Ray::rescaled`]).
@@ -411,8 +445,110 @@ impl Scene {
     /// The BVH query on a ray already rescaled by `2ᵏ`, with `t` mapped back.
     fn closest_hit_rescaled(&self, unit: &Ray, range: Interval, k: i32) -> Option<Hit> {
         let mut hit = self.bvh.closest_hit(&self.objects, unit, range, self.methods)?;
+        if self.cuts && self.cut_out(unit, &hit) {
+            hit = self.closest_past_cut_outs(unit, Interval::new(hit.t, range.max))?;
+        }
         hit.t = rescale_t(hit.t, k)?;
         Some(hit)
+    }
+
+    /// The nearest hit on `unit` (rescaled) in `range` that alpha does not
+    /// cut out: the same query again past each cut-out point, on the exact
+    /// same ray, from the `t` of the point (the range is open, so that
+    /// triangle is not found again, and every surface behind it is). A
+    /// surface at exactly the same `t` as a cut-out point that loses the
+    /// tie to it (coincident geometry) is skipped with it.
+    fn closest_past_cut_outs(&self, unit: &Ray, mut range: Interval) -> Option<Hit> {
+        loop {
+            let hit = self.bvh.closest_hit(&self.objects, unit, range, self.methods)?;
+            if !self.cut_out(unit, &hit) {
+                return Some(hit);
+            }
+            range.min = hit.t;
+        }
+    }
+
+    /// Whether alpha removes the point `hit` of the ray `ray` (the rescaled
+    /// ray of the query, so a packet and a single ray decide alike): its
+    /// material's [`crate::materials::alpha::AlphaMode`] applied to the alpha there.
+    fn cut_out(&self, ray: &Ray, hit: &Hit) -> bool {
+        let m = self.object_material(hit.object);
+        if !m.alpha_mode.cuts() {
+            return false;
+        }
+        let alpha = self.alpha_at(hit.object, hit.primitive, ray.at(hit.t));
+        !m.alpha_mode.is_there(alpha, || {
+            crate::materials::alpha::blend_coin(ray.origin, ray.dir, hit.t, hit.object, hit.primitive)
+        })
+    }
+
+    /// The alpha of `object` at the point `p` of its `primitive`, read at
+    /// the full-size image (a ray query carries no cone): its material's
+    /// factor times its base colour slot's alpha where the surface has the
+    /// slot's texture coordinates ([`Scene::alpha_at_footprint`]).
+    pub fn alpha_at(&self, object: usize, primitive: usize, p: Vec3) -> f32 {
+        self.alpha_at_footprint(object, primitive, p, Footprint::POINT)
+    }
+
+    /// The alpha of `object` at `p` for a ray of footprint `footprint`: the
+    /// material's `alpha` (glTF's `baseColorFactor[3]`) times the base
+    /// colour texture's alpha, read through the base colour slot (its
+    /// coordinate set, transform and sampler) at the level of detail the
+    /// base colour is read at; the factor alone without a base colour
+    /// texture or texture coordinates.
+    pub fn alpha_at_footprint(&self, object: usize, primitive: usize, p: Vec3, footprint: Footprint) -> f32 {
+        let o = &self.objects[object];
+        let m = &self.materials[o.material];
+        let texture_alpha = m.base_color_texture.as_ref().and_then(|slot| {
+            let Primitive::Mesh(mesh) = &o.primitive else { return None };
+            self.slot_read(mesh, primitive, slot, p, footprint, |t, u, v, lod, s| {
+                t.lookup_alpha(u, v, lod, s)
+            })
+        });
+        m.alpha * texture_alpha.unwrap_or(1.0)
+    }
+
+    /// The texel of `object`'s normal map at `p` for a ray of footprint
+    /// `footprint` (linear, not yet a normal: [`crate::materials::normal_map`]),
+    /// with the slot's scale; `None` without a normal map or texture
+    /// coordinates in the slot's set.
+    pub fn normal_texel_at(
+        &self,
+        object: usize,
+        primitive: usize,
+        p: Vec3,
+        footprint: Footprint,
+    ) -> Option<(Color, f32)> {
+        let o = &self.objects[object];
+        let slot = self.materials[o.material].normal_texture.as_ref()?;
+        let Primitive::Mesh(mesh) = &o.primitive else { return None };
+        let texel =
+            self.slot_read(mesh, primitive, slot, p, footprint, |t, u, v, lod, s| t.lookup(u, v, lod, s))?;
+        Some((texel, slot.scale))
+    }
+
+    /// `read` applied to `slot`'s texture at the point `p` of `mesh`'s
+    /// triangle `primitive`: at the slot's transformed coordinates, with its
+    /// sampler, at the level of detail `footprint` asks for
+    /// ([`crate::materials::texture_lod`]); `None` where the mesh lacks the
+    /// slot's coordinate set.
+    #[inline]
+    fn slot_read<T>(
+        &self,
+        mesh: &crate::geometry::mesh::Mesh,
+        primitive: usize,
+        slot: &TextureSlot,
+        p: Vec3,
+        footprint: Footprint,
+        read: impl Fn(&Texture, Real, Real, f32, &crate::materials::texture_slot::Sampler) -> T,
+    ) -> Option<T> {
+        let uv = mesh.uv_of_set(primitive, slot.tex_coord, p)?;
+        let texture = &self.textures[slot.texture as usize];
+        let (w, h) = texture.size();
+        let area = mesh.uv_per_world_area(primitive, slot.tex_coord) * slot.transform.area_scale();
+        let lod = footprint.level_of_detail(w as f32 * h as f32, area);
+        let (u, v) = slot.transformed(uv);
+        Some(read(texture, u, v, lod, &slot.sampler))
     }
 
     /// The same query by testing every object in order: the reference the
@@ -432,10 +568,13 @@ impl Scene {
         Some(hit)
     }
 
-    /// Whether anything is hit with `t` in `range` (for shadow rays).
+    /// Whether anything is hit with `t` in `range` (for shadow rays); a
+    /// point alpha cuts out is not ([`Scene::closest_hit`]).
     pub fn any_hit(&self, ray: &Ray, range: Interval) -> bool {
-        rescaled_query(ray, range)
-            .is_some_and(|(unit, range, _)| self.bvh.any_hit(&self.objects, &unit, range, self.methods))
+        rescaled_query(ray, range).is_some_and(|(unit, range, _)| {
+            self.bvh.any_hit(&self.objects, &unit, range, self.methods)
+                && (!self.cuts || self.closest_past_cut_outs(&unit, range).is_some())
+        })
     }
 
     /// The nearest hit of a ray whose history is unknown (a `cast` query or a
@@ -474,6 +613,10 @@ impl Scene {
                 *hit = scale.and_then(|k| {
                     next += 1;
                     let mut h = found[next - 1]?;
+                    if self.cuts && self.cut_out(&units[next - 1], &h) {
+                        let range = Interval::new(h.t, ranges[next - 1].max);
+                        h = self.closest_past_cut_outs(&units[next - 1], range)?;
+                    }
                     h.t = rescale_t(h.t, k)?;
                     Some(h)
                 });
@@ -535,14 +678,9 @@ impl Scene {
         }
         let Primitive::Mesh(mesh) = &o.primitive else { return Cow::Borrowed(m) };
         let read = |slot: &Option<TextureSlot>| {
-            let slot = slot.as_ref()?;
-            let uv = mesh.uv_of_set(primitive, slot.tex_coord, p)?;
-            let texture = &self.textures[slot.texture as usize];
-            let (w, h) = texture.size();
-            let area = mesh.uv_per_world_area(primitive, slot.tex_coord) * slot.transform.area_scale();
-            let lod = footprint.level_of_detail(w as f32 * h as f32, area);
-            let (u, v) = slot.transformed(uv);
-            Some(texture.lookup(u, v, lod, &slot.sampler))
+            self.slot_read(mesh, primitive, slot.as_ref()?, p, footprint, |t, u, v, lod, s| {
+                t.lookup(u, v, lod, s)
+            })
         };
         let (base, metal_rough, emissive) =
             (read(&m.base_color_texture), read(&m.metallic_roughness_texture), read(&m.emissive_texture));
@@ -682,6 +820,7 @@ fn rescaled_query(ray: &Ray, range: Interval) -> Option<(Ray, Interval, i32)> {
 mod tests {
     use super::*;
     use crate::geometry::sphere::Sphere;
+    use crate::materials::texture::Texture;
     use crate::math::real::Vec3;
     use crate::testing::test_support::{primitives_of, random_parts, scene_of, v};
     use proptest::prelude::*;
@@ -791,6 +930,156 @@ mod tests {
                 prop_assert!(ray.at(hit.t).is_finite());
             }
         }
+    }
+
+    /// A square of side 2 in the plane z = `z`, centred on the z axis,
+    /// facing −z, with texture coordinates spanning [0, 1]² (u along +x).
+    fn square(z: Real) -> Primitive {
+        let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+        let positions = corners.iter().map(|&(x, y)| Vec3::new(x, y, z)).collect();
+        let uvs = corners
+            .iter()
+            .map(|&(x, y)| {
+                [(crate::math::real::to_f32(x) + 1.0) / 2.0, (1.0 - crate::math::real::to_f32(y)) / 2.0]
+            })
+            .collect();
+        let mesh = crate::geometry::mesh::Mesh::new(positions, vec![[0, 2, 1], [0, 3, 2]]).unwrap();
+        Primitive::Mesh(mesh.with_vertex_attributes(Vec::new(), uvs).unwrap())
+    }
+
+    /// A square at z = 0 cut by `mode` with alpha from an n×n checkerboard
+    /// of alpha 0 and `alpha` (top-left texel 0), times the factor 1, and
+    /// an opaque square just behind it at z = 10⁻³.
+    fn cut_square(mode: AlphaMode, n: u32, alpha: f32) -> Scene {
+        let texels = vec![Color::ONE; (n * n) as usize];
+        let checker =
+            (0..n * n).map(|k| if (k % n + k / n).is_multiple_of(2) { 0.0 } else { alpha }).collect();
+        let texture = Texture::new(n, n, texels).unwrap().with_alpha(checker).unwrap();
+        let cut = Material {
+            base_color_texture: Some(TextureSlot::new(0)),
+            alpha_mode: mode,
+            ..Material::flat(Color::ONE)
+        };
+        SceneBuilder::new()
+            .texture(Arc::new(texture))
+            .material("cut", cut)
+            .material("wall", Material::flat(Color::splat(0.5)))
+            .object(square(0.0), "cut")
+            .object(square(1e-3), "wall")
+            .build()
+            .unwrap()
+    }
+
+    use crate::materials::alpha::AlphaMode;
+
+    #[test]
+    fn rays_go_through_what_a_mask_cuts_out_and_stop_where_it_does_not() {
+        // 2×2 checker: the texel centres at (±0.5, ±0.5) have alpha 0
+        // top-left and bottom-right, 1 in the other two.
+        let s = cut_square(AlphaMode::Mask { cutoff: 0.5 }, 2, 1.0);
+        let ray = |x: Real, y: Real| Ray::new(Vec3::new(x, y, -2.0), Vec3::Z);
+        let all = Interval::new(0.0, Real::INFINITY);
+        let cases = [(-0.5, 0.5, 1), (0.5, -0.5, 1), (0.5, 0.5, 0), (-0.5, -0.5, 0)];
+        let rays: Vec<Ray> = cases.iter().map(|&(x, y, _)| ray(x, y)).collect();
+        let mut packet = vec![None; rays.len()];
+        s.cast_all(&rays, &mut packet);
+        for (&(x, y, object), from_packet) in cases.iter().zip(packet) {
+            let hit = s.cast(&ray(x, y)).unwrap();
+            assert_eq!(hit.object, object, "({x}, {y})");
+            assert_eq!(Some(hit), from_packet, "a packet finds what a single ray finds");
+            assert_eq!(s.closest_hit(&ray(x, y), all).unwrap().object, object);
+            // A shadow ray that ends before the wall is blocked only by the
+            // part that is there.
+            assert_eq!(s.any_hit(&ray(x, y), Interval::new(0.0, 2.0005)), object == 0, "({x}, {y})");
+            assert!(s.any_hit(&ray(x, y), all));
+        }
+        // Opaque, the same square stops every ray.
+        let opaque = cut_square(AlphaMode::Opaque, 2, 1.0);
+        assert!(cases.iter().all(|&(x, y, _)| opaque.cast(&ray(x, y)).unwrap().object == 0));
+    }
+
+    #[test]
+    fn alpha_is_read_through_the_base_colour_slot_its_transform_and_its_factor() {
+        // 2×2 checker: alpha 0 at the top-left texel centre (u, v) = (¼, ¼),
+        // 1 at (¾, ¼). The point (−0.5, 0.5) is (u, v) = (¼, ¼).
+        let s = cut_square(AlphaMode::Mask { cutoff: 0.5 }, 2, 1.0);
+        let p = Vec3::new(-0.5, 0.5, 0.0);
+        assert_eq!(s.alpha_at(0, 0, p) + s.alpha_at(0, 1, p), 0.0);
+        // Offset by half the image in u: the same point reads the opaque texel.
+        let mut m = s.materials[0];
+        let slot = m.base_color_texture.unwrap();
+        let transform =
+            crate::materials::texture_slot::UvTransform::new([0.5, 0.0], 0.0, [1.0, 1.0]).unwrap();
+        m.base_color_texture = Some(TextureSlot { transform, ..slot });
+        m.alpha = 0.5;
+        let shifted = SceneBuilder::new()
+            .texture(Arc::new(s.textures[0].as_ref().clone()))
+            .material("cut", m)
+            .object(square(0.0), "cut")
+            .build()
+            .unwrap();
+        let (a, b) = (shifted.alpha_at(0, 0, p), shifted.alpha_at(0, 1, p));
+        assert_eq!(a.max(b), 0.5, "texel alpha 1 times the factor 0.5");
+        // Seen from afar (a wide footprint), alpha is the mip-mapped mean, as
+        // the base colour is.
+        let far = crate::materials::texture_lod::Footprint::new(1e3, 1.0);
+        assert!((s.alpha_at_footprint(0, 0, p, far) - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn the_normal_map_is_read_through_its_slot_at_the_footprints_level_of_detail() {
+        // 2×2 normal map: left column tilted to +x, right column to −x.
+        let (a, b) = (Color::new(0.9, 0.5, 0.6), Color::new(0.1, 0.5, 0.6));
+        let map = Texture::new(2, 2, vec![a, b, a, b]).unwrap();
+        let slot = TextureSlot { scale: 0.5, ..TextureSlot::new(0) };
+        let s = SceneBuilder::new()
+            .texture(Arc::new(map))
+            .material("n", Material { normal_texture: Some(slot), ..Material::flat(Color::ONE) })
+            .object(square(0.0), "n")
+            .build()
+            .unwrap();
+        let p = Vec3::new(-0.5, 0.5, 0.0);
+        let at = |footprint| (0..2).find_map(|t| s.normal_texel_at(0, t, p, footprint)).unwrap();
+        assert_eq!(at(Footprint::POINT), (a, 0.5));
+        // From afar, the mip-mapped mean: the tilts cancel.
+        let (far, scale) = at(Footprint::new(1e3, 1.0));
+        assert!((far - (a + b) * 0.5).abs().max_element() < 1e-6 && scale == 0.5, "{far}");
+    }
+
+    /// The share of `n`×`n` rays along +z, spread over the square, that
+    /// pass the cut square and stop at z = 5·10⁻⁴ (shadow rays).
+    fn share_through(s: &Scene, n: u32) -> f64 {
+        let mut through = 0;
+        for i in 0..n {
+            for j in 0..n {
+                let (x, y) =
+                    ((i as Real + 0.5) / n as Real * 2.0 - 1.0, (j as Real + 0.5) / n as Real * 2.0 - 1.0);
+                let ray = Ray::new(Vec3::new(x, y, -1.0), Vec3::Z);
+                through += usize::from(!s.any_hit(&ray, Interval::new(0.0, 1.0005)));
+            }
+        }
+        through as f64 / f64::from(n * n)
+    }
+
+    #[test]
+    fn a_checkerboard_mask_lets_half_the_light_through_and_blend_lets_one_minus_alpha() {
+        // 8×8 texels filtered bilinearly: alpha ≥ 0.5 on exactly half the
+        // area by symmetry; 400×400 shadow rays measure it.
+        let mask = cut_square(AlphaMode::Mask { cutoff: 0.5 }, 8, 1.0);
+        let share = share_through(&mask, 400);
+        assert!((share - 0.5).abs() < 0.01, "{share}");
+        // BLEND with alpha ¼ on a 1×1 texture: three rays in four pass.
+        let blend = cut_square(AlphaMode::Blend, 1, 0.25);
+        let blend = Scene {
+            materials: vec![
+                Material { alpha: 0.25, base_color_texture: None, ..blend.materials[0] },
+                blend.materials[1],
+            ],
+            ..blend
+        };
+        let share = share_through(&blend, 200);
+        assert!((share - 0.75).abs() < 0.015, "{share}");
+        assert_eq!(share_through(&cut_square(AlphaMode::Opaque, 8, 1.0), 50), 0.0);
     }
 
     #[test]

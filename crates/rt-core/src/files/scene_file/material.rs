@@ -3,10 +3,11 @@
 use serde::Deserialize;
 
 use super::values::{ColorDesc, Finite};
+use crate::materials::alpha::{AlphaMode, DEFAULT_ALPHA_CUTOFF};
 use crate::materials::material::Material;
 use crate::materials::medium::Subsurface;
 use crate::materials::principled::Principled;
-use crate::materials::texture::Wrap;
+use crate::materials::texture_slot::Wrap;
 use crate::materials::texture_slot::{Encoding, Filter, Sampler, TextureSlot, UvTransform};
 use crate::math::color::Color;
 use crate::math::real::{Real, to_f32};
@@ -73,6 +74,17 @@ pub(super) struct MaterialFields {
     metallic_roughness_texture: Option<TextureDesc>,
     #[serde(default, deserialize_with = "super::values::present")]
     emissive_texture: Option<TextureDesc>,
+    // Normal map and alpha, in either model (see `SurfaceFields`).
+    #[serde(default, deserialize_with = "super::values::present")]
+    normal_texture: Option<TextureDesc>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    normal_scale: Option<Finite>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    alpha: Option<Finite>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    alpha_mode: Option<AlphaModeDesc>,
+    #[serde(default, deserialize_with = "super::values::present")]
+    alpha_cutoff: Option<Finite>,
 }
 
 /// A texture a material uses: an image file's path (relative to the scene
@@ -175,6 +187,7 @@ pub(super) enum TextureField {
     BaseColor,
     MetallicRoughness,
     Emissive,
+    Normal,
 }
 
 impl TextureField {
@@ -184,6 +197,7 @@ impl TextureField {
             Self::BaseColor => "base_color_texture",
             Self::MetallicRoughness => "metallic_roughness_texture",
             Self::Emissive => "emissive_texture",
+            Self::Normal => "normal_texture",
         }
     }
 
@@ -193,7 +207,56 @@ impl TextureField {
             Self::BaseColor => material.base_color_texture = Some(slot),
             Self::MetallicRoughness => material.metallic_roughness_texture = Some(slot),
             Self::Emissive => material.emissive_texture = Some(slot),
+            Self::Normal => material.normal_texture = Some(slot),
         }
+    }
+}
+
+/// A material's normal map's scale and alpha: `normal_scale` (default 1:
+/// how far the normals of `normal_texture`, an image of linear
+/// tangent-space normals in glTF's convention,
+/// [`crate::materials::normal_map`], tilt), and `alpha` (default 1) with `alpha_mode` (`Opaque`, the
+/// default, `Mask` with `alpha_cutoff`, default 0.5, or `Blend`:
+/// [`crate::materials::alpha`]).
+struct SurfaceFields {
+    has_normal_texture: bool,
+    normal_scale: Option<Finite>,
+    alpha: Option<Finite>,
+    alpha_mode: Option<AlphaModeDesc>,
+    alpha_cutoff: Option<Finite>,
+}
+
+/// `alpha_mode: Opaque | Mask | Blend`.
+#[derive(Deserialize, Clone, Copy, PartialEq)]
+enum AlphaModeDesc {
+    Opaque,
+    Mask,
+    Blend,
+}
+
+impl SurfaceFields {
+    /// `m` with the alpha fields set, and the normal map's scale.
+    fn apply(self, m: Material) -> Result<(Material, f32), String> {
+        let unit = |v: Option<Finite>, default: f32, name: &str| match v {
+            None => Ok(default),
+            Some(Finite(v)) if (0.0..=1.0).contains(&v) => Ok(to_f32(v)),
+            Some(Finite(v)) => Err(format!("material {name} must be 0 to 1, got {v}")),
+        };
+        let cutoff = unit(self.alpha_cutoff, DEFAULT_ALPHA_CUTOFF, "alpha_cutoff")?;
+        let alpha_mode = match self.alpha_mode.unwrap_or(AlphaModeDesc::Opaque) {
+            AlphaModeDesc::Mask => AlphaMode::Mask { cutoff },
+            _ if self.alpha_cutoff.is_some() => {
+                return Err("material alpha_cutoff applies to alpha_mode: Mask only".into());
+            }
+            AlphaModeDesc::Opaque => AlphaMode::Opaque,
+            AlphaModeDesc::Blend => AlphaMode::Blend,
+        };
+        if self.normal_scale.is_some() && !self.has_normal_texture {
+            return Err("material normal_scale needs a normal_texture".into());
+        }
+        let normal_scale = self.normal_scale.map_or(1.0, |s| to_f32(s.0));
+        let alpha = unit(self.alpha, 1.0, "alpha")?;
+        Ok((Material { alpha, alpha_mode, ..m }, normal_scale))
     }
 }
 
@@ -238,6 +301,7 @@ impl TryFrom<SubsurfaceFields> for SubsurfaceDesc {
     }
 }
 
+/// A material, and the textures it reads.
 #[derive(Deserialize)]
 #[serde(try_from = "MaterialFields")]
 pub(super) struct MaterialDesc(pub(super) Material, pub(super) TextureUses);
@@ -250,6 +314,7 @@ impl TryFrom<MaterialFields> for MaterialDesc {
             (TextureField::BaseColor, &f.base_color_texture, Encoding::Srgb),
             (TextureField::MetallicRoughness, &f.metallic_roughness_texture, Encoding::Linear),
             (TextureField::Emissive, &f.emissive_texture, Encoding::Srgb),
+            (TextureField::Normal, &f.normal_texture, Encoding::Linear),
         ] {
             if let Some(desc) = desc {
                 let (file, slot) = desc.slot(field.name())?;
@@ -379,11 +444,7 @@ impl TryFrom<MaterialFields> for MaterialDesc {
                     ior,
                     emission,
                     subsurface,
-                    base_color_texture: None,
-                    metallic_roughness_texture: None,
-                    emissive_texture: None,
-                    occlusion_texture: None,
-                    physical: None,
+                    ..flat
                 };
                 if m.reflectivity + m.transparency > 1.0 {
                     return Err(format!(
@@ -394,6 +455,19 @@ impl TryFrom<MaterialFields> for MaterialDesc {
                 m
             }
         };
+        let surface = SurfaceFields {
+            has_normal_texture: f.normal_texture.is_some(),
+            normal_scale: f.normal_scale,
+            alpha: f.alpha,
+            alpha_mode: f.alpha_mode,
+            alpha_cutoff: f.alpha_cutoff,
+        };
+        let (m, normal_scale) = surface.apply(m)?;
+        for (field, _, _, slot) in &mut uses {
+            if *field == TextureField::Normal {
+                slot.scale = normal_scale;
+            }
+        }
         Ok(Self(m, TextureUses(uses)))
     }
 }
@@ -441,6 +515,81 @@ mod tests {
     }
 
     #[test]
+    fn a_normal_map_and_alpha_are_read_and_bad_ones_named() {
+        use crate::materials::alpha::AlphaMode;
+        let dir = tempfile::tempdir().unwrap();
+        image::RgbImage::from_pixel(2, 2, image::Rgb([255, 128, 255]))
+            .save(dir.path().join("n.png"))
+            .unwrap();
+        std::fs::write(
+            dir.path().join("quad.obj"),
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n",
+        )
+        .unwrap();
+        let scene = |material: &str, object: &str| {
+            let text = format!(
+                "Scene(camera: (position: (0, 0, -5), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 40, near: 1),
+                image: (width: 8, height: 8), materials: {{ \"m\": {material} }}, objects: [{object}])"
+            );
+            crate::parse_scene(&text, "s.ron", dir.path())
+        };
+        let mesh = r#"Mesh(file: "quad.obj", material: "m")"#;
+        let s = scene(
+            r#"(base_color: (1, 1, 1), normal_texture: "n.png", normal_scale: 0.5, alpha: 0.8, alpha_mode: Mask, alpha_cutoff: 0.3)"#,
+            mesh,
+        )
+        .unwrap()
+        .scene;
+        let m = *s.material(0);
+        assert_eq!(m.normal_texture.map(|s| (s.texture, s.scale)), Some((0, 0.5)));
+        assert_eq!((m.alpha, m.alpha_mode), (0.8, AlphaMode::Mask { cutoff: 0.3 }));
+        // Linear: 255 reads 1, 128 reads 128/255, not sRGB-decoded.
+        let texel = s.texture(0).sample(0.5, 0.5);
+        assert!((texel - Color::new(1.0, 128.0 / 255.0, 1.0)).abs().max_element() < 1e-6, "{texel}");
+        assert!(s.warnings().is_empty(), "{:?}", s.warnings());
+        assert!(s.source_files().iter().any(|f| f.ends_with("n.png")));
+        let m = *scene("(color: (1, 1, 1), alpha_mode: Blend)", mesh).unwrap().scene.material(0);
+        assert_eq!((m.alpha, m.alpha_mode, m.normal_texture), (1.0, AlphaMode::Blend, None));
+        // The options form, as for every texture: set, transform, sampler;
+        // normal_scale is the slot's scale.
+        let s = scene(
+            r#"(color: (1, 1, 1), normal_texture: (file: "n.png", scale: (4, 4), filter: Nearest), normal_scale: 2)"#,
+            mesh,
+        )
+        .unwrap()
+        .scene;
+        let slot = s.material(0).normal_texture.unwrap();
+        assert_eq!(
+            (slot.scale, slot.sampler.mag, slot.transform.is_identity()),
+            (2.0, crate::materials::texture_slot::Filter::Nearest, false)
+        );
+        // A missing map is an error naming file, material and field, as for
+        // the other textures; a sphere has no texture coordinates to map.
+        let e =
+            scene(r#"(base_color: (1, 1, 1), normal_texture: "gone.png")"#, mesh).map(|_| ()).unwrap_err();
+        let e = e.to_string();
+        assert!(
+            e.starts_with("s.ron: material \"m\": normal_texture: cannot read texture")
+                && e.contains("gone.png"),
+            "{e}"
+        );
+        let sphere = r#"Sphere(center: (0, 0, 0), radius: 1, material: "m")"#;
+        let s = scene(r#"(base_color: (1, 1, 1), normal_texture: "n.png")"#, sphere).unwrap().scene;
+        let w = s.warnings().join("\n");
+        assert!(w.contains("material \"m\": normal_texture is not used on objects[0] (Sphere)"), "{w}");
+        for (text, expected) in [
+            ("(base_color: (1, 1, 1), alpha: 1.5)", "material alpha must be 0 to 1, got 1.5"),
+            ("(base_color: (1, 1, 1), alpha_cutoff: 0.2)", "alpha_cutoff applies to alpha_mode: Mask only"),
+            ("(base_color: (1, 1, 1), alpha_mode: Mask, alpha_cutoff: -1)", "alpha_cutoff must be 0 to 1"),
+            ("(base_color: (1, 1, 1), normal_scale: 2)", "normal_scale needs a normal_texture"),
+            ("(base_color: (1, 1, 1), alpha_mode: Sometimes)", "s.ron:"),
+        ] {
+            let error = scene(text, sphere).map(|_| ()).unwrap_err().to_string();
+            assert!(error.contains(expected), "{text}: {error}");
+        }
+    }
+
+    #[test]
     fn mixing_the_two_models_or_bad_values_are_refused_naming_the_field() {
         let cases = [
             (
@@ -476,7 +625,7 @@ mod tests {
 
     #[test]
     fn textures_are_read_by_path_with_their_options_and_shared_between_materials() {
-        use crate::materials::texture::Wrap;
+        use crate::materials::texture_slot::Wrap;
         use crate::materials::texture_slot::{Filter, Sampler};
         let dir = tempfile::tempdir().unwrap();
         image::RgbImage::from_pixel(2, 2, image::Rgb([128, 64, 255])).save(dir.path().join("t.png")).unwrap();
