@@ -34,6 +34,9 @@ pub struct Model {
     pub warnings: Vec<String>,
     /// The other files it was read from (MTL files, textures), to watch.
     pub files: Vec<PathBuf>,
+    /// How many cameras the file defines (glTF): a scene uses one only where
+    /// its camera names the file, so the scene says when they go unused.
+    pub cameras: usize,
 }
 
 /// Why a model file cannot be used.

@@ -160,7 +160,7 @@ pub fn load(path: &Path, scale: Real, translate: Vec3) -> Result<Model, ModelErr
                 .to_owned(),
         );
     }
-    Ok(Model { parts, materials, textures, warnings, files })
+    Ok(Model { parts, materials, textures, warnings, files, cameras: 0 })
 }
 
 #[cfg(test)]

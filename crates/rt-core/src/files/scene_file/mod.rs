@@ -208,6 +208,10 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<LoadedScen
     // A mesh with its file's materials adds an object per material: the
     // scene's object k came from the file's `entry_of[k]`.
     let mut entry_of = Vec::new();
+    let camera_file = match &desc.camera {
+        CameraDesc::Gltf { file: gltf, .. } => Some(base_dir.join(gltf)),
+        CameraDesc::Ready(_) => None,
+    };
     for (index, entry) in desc.objects.into_iter().enumerate() {
         match entry.0 {
             Shape::Ready { primitive, material } => scene = scene.object(primitive, material),
@@ -215,9 +219,20 @@ pub fn parse_scene(text: &str, file: &str, base_dir: &Path) -> Result<LoadedScen
                 let path = base_dir.join(&obj);
                 let written = obj.display().to_string();
                 let added;
-                (scene, added) =
-                    model::add_model(scene, &path, &written, (scale, translate), material, lights)
-                        .map_err(|reason| SceneError::Model { file: file.to_owned(), index, reason })?;
+                (scene, added) = model::add_model(
+                    scene,
+                    &path,
+                    &written,
+                    (scale, translate),
+                    material,
+                    lights,
+                    camera_file.as_deref() == Some(path.as_path()),
+                )
+                .map_err(|reason| SceneError::Model {
+                    file: file.to_owned(),
+                    index,
+                    reason,
+                })?;
                 entry_of.extend(std::iter::repeat_n(index, added.saturating_sub(1)));
             }
         }

@@ -48,6 +48,7 @@ pub(super) fn add_model(
     (scale, translate): (Real, Vec3),
     material: Option<String>,
     with_lights: bool,
+    camera_named: bool,
 ) -> Result<(SceneBuilder, usize), ModelError> {
     let mut scene = scene.source_file(path);
     if let Some(material) = material {
@@ -74,6 +75,13 @@ pub(super) fn add_model(
     }
     for warning in model.warnings {
         scene = scene.warning(format!("{written}: {warning}"));
+    }
+    if model.cameras > 0 && !camera_named {
+        scene = scene.warning(format!(
+            "{written}: its {} camera(s) are not used: the scene's camera is its own; \
+             camera: (gltf: \"{written}\", index: N) would take one",
+            model.cameras
+        ));
     }
     let first_texture = scene.texture_count() as u32;
     for texture in model.textures {
@@ -142,6 +150,15 @@ mod tests {
             assert_eq!(lights.len(), 2, "{mesh}");
             assert!(matches!(lights[1].kind, LightKind::Spot { .. }), "{mesh}: {lights:?}");
         }
+    }
+
+    #[test]
+    fn a_gltf_files_cameras_are_called_unused_only_when_the_scene_does_not_take_one() {
+        let says = |w: &String| w.starts_with("m.glb: its 1 camera(s) are not used");
+        let own = scene_with(CAMERA, "Mesh(file: \"m.glb\")").unwrap();
+        assert!(own.scene.warnings().iter().any(says), "{:?}", own.scene.warnings());
+        let taken = scene_with("(gltf: \"m.glb\", index: 0)", "Mesh(file: \"m.glb\")").unwrap();
+        assert!(!taken.scene.warnings().iter().any(|w| w.contains("camera")), "{:?}", taken.scene.warnings());
     }
 
     #[test]
