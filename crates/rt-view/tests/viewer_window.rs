@@ -221,6 +221,16 @@ impl<'a> Window<'a> {
     }
 }
 
+impl Window<'_> {
+    /// Waits until the first render job has shown `rows` rows.
+    fn wait_for_rows(&mut self, rows: u64) {
+        self.wait_for("the render under way", 60.0, |lines| {
+            let first = jobs(lines).first().map(|j| j.generation);
+            first.is_some_and(|g| frames(lines).last().is_some_and(|f| rows_of(f, g) >= rows))
+        });
+    }
+}
+
 impl Drop for Window<'_> {
     fn drop(&mut self) {
         let _ = self.child.kill();
@@ -444,6 +454,37 @@ fn heavy_scene(dir: &Path) -> String {
     .to_owned()
 }
 
+/// `scenes/effects.ron` at 256 samples per pixel, written into `dir` (its
+/// meshes still read from `scenes/`): a render that takes far longer than
+/// any test that watches it.
+fn slow_effects_scene(dir: &Path) -> std::path::PathBuf {
+    let meshes = scenes_dir().join("meshes/");
+    let effects = std::fs::read_to_string(scenes_dir().join("effects.ron")).unwrap();
+    let slow = effects
+        .replace("file: \"meshes/", &format!("file: \"{}", meshes.display()))
+        .replace("samples_per_pixel: 4,", "samples_per_pixel: 256,");
+    let scene = dir.join("scene.ron");
+    std::fs::write(&scene, slow).unwrap();
+    scene
+}
+
+/// The value under `key` of every frame in `frames`, in milliseconds.
+fn times_of(frames: &[&Value], key: &str) -> Vec<f64> {
+    frames.iter().map(|f| number(f, key)).collect()
+}
+
+/// The largest of `times`.
+fn slowest(times: &[f64]) -> f64 {
+    times.iter().copied().fold(0.0, f64::max)
+}
+
+/// The median of `times` (the upper one of an even count).
+fn median_of(times: &[f64]) -> f64 {
+    let mut sorted = times.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    sorted[sorted.len() / 2]
+}
+
 #[test]
 fn loading_a_heavy_scene_mid_render_never_holds_up_a_frame() {
     if !can_run() {
@@ -453,19 +494,10 @@ fn loading_a_heavy_scene_mid_render_never_holds_up_a_frame() {
     let dir = folder_with_scale(1.0);
     let heavy = heavy_scene(dir.path());
     // effects.ron with 256 samples: still rendering long after the load.
-    let meshes = scenes_dir().join("meshes/");
-    let effects = std::fs::read_to_string(scenes_dir().join("effects.ron")).unwrap();
-    let slow = effects
-        .replace("file: \"meshes/", &format!("file: \"{}", meshes.display()))
-        .replace("samples_per_pixel: 4,", "samples_per_pixel: 256,");
-    let scene = dir.path().join("scene.ron");
-    std::fs::write(&scene, slow).unwrap();
+    let scene = slow_effects_scene(dir.path());
     let display = Display::start();
     let mut window = Window::open(&display, &scene, dir.path());
-    window.wait_for("the render under way", 60.0, |lines| {
-        let first = jobs(lines).first().map(|j| j.generation);
-        first.is_some_and(|g| frames(lines).last().is_some_and(|f| rows_of(f, g) >= 90))
-    });
+    window.wait_for_rows(90);
 
     // The scene file is saved with the heavy scene: the viewer reloads it.
     // Meanwhile the pointer moves over the image every 20 ms, as a user's
@@ -486,9 +518,7 @@ fn loading_a_heavy_scene_mid_render_never_holds_up_a_frame() {
     let during: Vec<&Value> = frames(&lines).take(shown_at + 1).skip(before + 1).collect();
     assert!(during.iter().any(|f| f["loading"] == true), "the reload was never seen loading");
     let (t0, t1) = (number(during[0], "t"), number(during.last().unwrap(), "t"));
-    let times = |key: &str| -> Vec<f64> { during.iter().map(|f| number(f, key)).collect() };
-    let (updates, intervals) = (times("update_ms"), times("interval_ms"));
-    let slowest = |times: &[f64]| times.iter().copied().fold(0.0, f64::max);
+    let (updates, intervals) = (times_of(&during, "update_ms"), times_of(&during, "interval_ms"));
     let (update, interval) = (slowest(&updates), slowest(&intervals));
     let late = intervals.iter().filter(|&&ms| ms >= FRAME_LIMIT_MS).count();
     let slow_frame = |times: &[f64], ms: f64| during[times.iter().position(|&t| t == ms).unwrap()];
@@ -501,9 +531,7 @@ fn loading_a_heavy_scene_mid_render_never_holds_up_a_frame() {
     );
     assert!(update < FREEZE_MS, "the window froze for {update:.1} ms: {}", slow_frame(&updates, update));
     assert!(interval < FREEZE_MS, "no frame for {interval:.1} ms: {}", slow_frame(&intervals, interval));
-    let mut sorted = intervals.clone();
-    sorted.sort_by(f64::total_cmp);
-    let median = sorted[sorted.len() / 2];
+    let median = median_of(&intervals);
     assert!(median < FRAME_LIMIT_MS, "frames came {median:.1} ms apart (median) while the scene loaded");
 }
 
@@ -515,19 +543,10 @@ fn orbiting_the_scene_view_with_a_pixel_pinned_mid_render_never_holds_up_a_frame
     let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let dir = folder_with_scale(1.0);
     // effects.ron with 256 samples: still rendering all through the test.
-    let meshes = scenes_dir().join("meshes/");
-    let effects = std::fs::read_to_string(scenes_dir().join("effects.ron")).unwrap();
-    let slow = effects
-        .replace("file: \"meshes/", &format!("file: \"{}", meshes.display()))
-        .replace("samples_per_pixel: 4,", "samples_per_pixel: 256,");
-    let scene = dir.path().join("scene.ron");
-    std::fs::write(&scene, slow).unwrap();
+    let scene = slow_effects_scene(dir.path());
     let display = Display::start();
     let mut window = Window::open(&display, &scene, dir.path());
-    window.wait_for("the render under way", 60.0, |lines| {
-        let first = jobs(lines).first().map(|j| j.generation);
-        first.is_some_and(|g| frames(lines).last().is_some_and(|f| rows_of(f, g) >= 60))
-    });
+    window.wait_for_rows(60);
     // Closed, the scene view renders nothing.
     assert!(frames(&window.lines()).all(|f| f["scene_view"].is_null()), "the closed view reported renders");
     // Key 3 opens it beside the image; its first flat render starts.
@@ -562,13 +581,9 @@ fn orbiting_the_scene_view_with_a_pixel_pinned_mid_render_never_holds_up_a_frame
         "the orbit started {} flat renders",
         renders_after - renders_before
     );
-    let times = |key: &str| -> Vec<f64> { during.iter().map(|f| number(f, key)).collect() };
-    let (updates, intervals) = (times("update_ms"), times("interval_ms"));
-    let slowest = |times: &[f64]| times.iter().copied().fold(0.0, f64::max);
+    let (updates, intervals) = (times_of(&during, "update_ms"), times_of(&during, "interval_ms"));
     let (update, interval) = (slowest(&updates), slowest(&intervals));
-    let mut sorted = intervals.clone();
-    sorted.sort_by(f64::total_cmp);
-    let median = sorted[sorted.len() / 2];
+    let median = median_of(&intervals);
     eprintln!(
         "{} frames while orbiting; {} flat renders; slowest update {update:.1} ms, slowest interval \
          {interval:.1} ms, median interval {median:.1} ms",
@@ -580,8 +595,6 @@ fn orbiting_the_scene_view_with_a_pixel_pinned_mid_render_never_holds_up_a_frame
     assert!(median < FRAME_LIMIT_MS, "frames came {median:.1} ms apart (median) while orbiting");
     // The window's own work per frame stays small: the flat renders and the
     // record run on threads of their own.
-    let mut sorted = updates.clone();
-    sorted.sort_by(f64::total_cmp);
-    let median = sorted[sorted.len() / 2];
+    let median = median_of(&updates);
     assert!(median < 10.0, "a frame's update took {median:.1} ms (median) while orbiting");
 }

@@ -239,16 +239,7 @@ mod tests {
     /// map of texel `texel` (linear) on `material`.
     fn normal_mapped_square(material: Material, texel: [f32; 3]) -> Scene {
         use crate::geometry::primitive::Primitive;
-        let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
-        let positions = corners.iter().map(|&(x, y)| Vec3::new(x, y, 0.0)).collect();
-        let uvs = corners
-            .iter()
-            .map(|&(x, y)| {
-                [(crate::math::real::to_f32(x) + 1.0) / 2.0, (1.0 - crate::math::real::to_f32(y)) / 2.0]
-            })
-            .collect();
-        let mesh = crate::geometry::mesh::Mesh::new(positions, vec![[0, 2, 1], [0, 3, 2]]).unwrap();
-        let mesh = mesh.with_vertex_attributes(Vec::new(), uvs).unwrap();
+        let mesh = crate::testing::test_support::textured_square(0.0);
         let map = crate::materials::texture::Texture::from_linear(1, 1, 3, &texel).unwrap();
         crate::SceneBuilder::new()
             .texture(std::sync::Arc::new(map))

@@ -629,22 +629,12 @@ mod tests {
     /// by a directional light arriving from `from` (towards the light),
     /// by the direct-lighting tracer or, with `gi`, the path tracer.
     fn mean_of_normal_mapped_square(texel: [f32; 3], from: Vec3, gi: bool) -> f32 {
-        use crate::geometry::mesh::Mesh;
         use crate::geometry::primitive::Primitive;
         use crate::lights::light::{Light, LightKind};
         use crate::materials::material::Material;
         use crate::materials::texture::Texture;
         use crate::scene::effects::{Effects, GlobalIllumination};
-        let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
-        let positions = corners.iter().map(|&(x, y)| Vec3::new(x, y, 0.0)).collect();
-        let uvs = corners
-            .iter()
-            .map(|&(x, y)| {
-                [(crate::math::real::to_f32(x) + 1.0) / 2.0, (1.0 - crate::math::real::to_f32(y)) / 2.0]
-            })
-            .collect();
-        let mesh = Mesh::new(positions, vec![[0, 2, 1], [0, 3, 2]]).unwrap();
-        let mesh = mesh.with_vertex_attributes(Vec::new(), uvs).unwrap();
+        let mesh = crate::testing::test_support::textured_square(0.0);
         let light = Light {
             kind: LightKind::Directional { direction: -from.normalize() },
             power: Color::splat(2.0),

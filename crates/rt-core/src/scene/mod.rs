@@ -935,16 +935,7 @@ mod tests {
     /// A square of side 2 in the plane z = `z`, centred on the z axis,
     /// facing −z, with texture coordinates spanning [0, 1]² (u along +x).
     fn square(z: Real) -> Primitive {
-        let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
-        let positions = corners.iter().map(|&(x, y)| Vec3::new(x, y, z)).collect();
-        let uvs = corners
-            .iter()
-            .map(|&(x, y)| {
-                [(crate::math::real::to_f32(x) + 1.0) / 2.0, (1.0 - crate::math::real::to_f32(y)) / 2.0]
-            })
-            .collect();
-        let mesh = crate::geometry::mesh::Mesh::new(positions, vec![[0, 2, 1], [0, 3, 2]]).unwrap();
-        Primitive::Mesh(mesh.with_vertex_attributes(Vec::new(), uvs).unwrap())
+        Primitive::Mesh(crate::testing::test_support::textured_square(z))
     }
 
     /// A square at z = 0 cut by `mode` with alpha from an n×n checkerboard

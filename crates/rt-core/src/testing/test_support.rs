@@ -161,3 +161,14 @@ pub fn grid_mesh(n: u32, vertex: impl Fn(u32, u32) -> Vec3) -> Mesh {
         .collect();
     Mesh::new(positions, triangles).unwrap()
 }
+
+/// A square of side 2 in the plane z = `z`, centred on the z axis, facing
+/// −z, its two triangles carrying texture coordinates that span [0, 1]²:
+/// u along +x, v down the image (v = 0 at y = 1), as glTF lays them out.
+pub fn textured_square(z: Real) -> Mesh {
+    let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+    let positions = corners.iter().map(|&(x, y)| Vec3::new(x, y, z)).collect();
+    let uvs = corners.iter().map(|&(x, y)| [(to_f32(x) + 1.0) / 2.0, (1.0 - to_f32(y)) / 2.0]).collect();
+    let mesh = Mesh::new(positions, vec![[0, 2, 1], [0, 3, 2]]).unwrap();
+    mesh.with_vertex_attributes(Vec::new(), uvs).unwrap()
+}
