@@ -270,6 +270,33 @@ mod tests {
     }
 
     #[test]
+    fn an_mtl_colour_of_one_number_is_a_grey_and_of_none_or_two_a_warning_naming_the_line() {
+        // The MTL specification's `Kd r` is `Kd r r r`. tobj 4.0.5 panicked
+        // on colours of fewer than three numbers.
+        let dir = folder(&[("m.obj", TWO_MATERIALS), ("m.mtl", b"newmtl red\nKd 0.25\nKe 2\nnewmtl tex\n")]);
+        let model = load(&dir.path().join("m.obj"), 1.0, Vec3::ZERO).unwrap();
+        let red = &model.materials[0].1;
+        assert_eq!((red.color, red.emission), (Color::splat(0.25), Color::splat(2.0)));
+        for (statement, line) in [("Ks 0.5 0.5", 3), ("Ka", 3), ("Ke 1 0", 3)] {
+            let mtl = format!("newmtl red\nKd 1 0 0\n{statement}\nnewmtl tex\n");
+            let dir = folder(&[("m.obj", TWO_MATERIALS), ("m.mtl", mtl.as_bytes())]);
+            let model = load(&dir.path().join("m.obj"), 1.0, Vec3::ZERO).unwrap();
+            assert!(model.materials.is_empty(), "{statement}");
+            let key = statement.split(' ').next().unwrap();
+            assert!(
+                model.warnings[0].starts_with("its materials cannot be read (")
+                    && model.warnings[0].contains(&format!("m.mtl line {line}: {key} gives")),
+                "{:?}",
+                model.warnings
+            );
+        }
+        // Not UTF-8: unreadable, said, as tobj says of a line it cannot read.
+        let dir = folder(&[("m.obj", TWO_MATERIALS), ("m.mtl", b"newmtl red\nKd 1\n\xff\n")]);
+        let model = load(&dir.path().join("m.obj"), 1.0, Vec3::ZERO).unwrap();
+        assert!(model.warnings[0].contains("m.mtl: not UTF-8 text"), "{:?}", model.warnings);
+    }
+
+    #[test]
     fn missing_materials_and_textures_are_warnings_with_a_fallback() {
         // No MTL file at all: every face grey, said once.
         let dir = folder(&[("m.obj", TWO_MATERIALS)]);

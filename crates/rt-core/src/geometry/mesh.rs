@@ -345,8 +345,7 @@ impl Mesh {
         if parts.is_empty() {
             return Err(MeshError::Empty(path.to_owned()));
         }
-        let materials = file.materials.map_err(|e| e.to_string());
-        Ok(ObjParts { parts, materials, mtl_files: file.mtl_files })
+        Ok(ObjParts { parts, materials: file.materials, mtl_files: file.mtl_files })
     }
 
     /// Bytes of vertex positions, index triples, per-triangle normals and
@@ -680,7 +679,8 @@ fn nth(values: &[f32], i: u32, width: usize) -> Option<&[f32]> {
 /// A parsed OBJ file: tobj's models and materials.
 struct ObjFile {
     models: Vec<tobj::Model>,
-    materials: Result<Vec<tobj::Material>, tobj::LoadError>,
+    /// The MTL materials, or why they cannot be read.
+    materials: Result<Vec<tobj::Material>, String>,
     /// The MTL files it names (read or not).
     mtl_files: Vec<PathBuf>,
 }
@@ -705,13 +705,55 @@ impl ObjFile {
         let dir = path.parent().unwrap_or(Path::new("."));
         let mut reader = std::io::BufReader::new(file);
         let mtl_files = std::cell::RefCell::new(Vec::new());
+        let mtl_problem = std::cell::RefCell::new(None);
         let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |mtl| {
             mtl_files.borrow_mut().push(dir.join(mtl));
-            tobj::load_mtl(dir.join(mtl))
+            load_mtl(&dir.join(mtl), &mut mtl_problem.borrow_mut())
         })
         .map_err(|reason| MeshError::Load { path: path.to_owned(), reason })?;
+        let materials = materials.map_err(|e| mtl_problem.into_inner().unwrap_or_else(|| e.to_string()));
         Ok(Self { models, materials, mtl_files: mtl_files.into_inner() })
     }
+}
+
+/// Reads an MTL file with tobj, the colour statements (`Ka`, `Kd`, `Ks`,
+/// `Ke`) checked first: the MTL specification lets one number stand for a
+/// grey (`Kd 0.5` is `Kd 0.5 0.5 0.5`), which is written out in full here,
+/// and tobj 4.0.5 panics on a colour of fewer than three numbers (it
+/// unwraps their conversion into an array), so none or two are refused
+/// here, the file and line put in `problem`, before tobj reads the file.
+fn load_mtl(path: &Path, problem: &mut Option<String>) -> tobj::MTLLoadResult {
+    let bytes = std::fs::read(path).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+    let Ok(text) = String::from_utf8(bytes) else {
+        *problem = Some(format!("{}: not UTF-8 text", path.display()));
+        return Err(tobj::LoadError::ReadError);
+    };
+    let mut checked = String::with_capacity(text.len() + 64);
+    for (line_index, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        if let Some(key @ ("Ka" | "Kd" | "Ks" | "Ke")) = words.next() {
+            let values: Vec<&str> = words.collect();
+            match values.len() {
+                1 => {
+                    checked.push_str(&format!("{key} {0} {0} {0}\n", values[0]));
+                    continue;
+                }
+                0 | 2 => {
+                    *problem = Some(format!(
+                        "{} line {}: {key} gives {} numbers: a colour is 3 (r g b) or 1 (a grey)",
+                        path.display(),
+                        line_index + 1,
+                        values.len()
+                    ));
+                    return Err(tobj::LoadError::MaterialParseError);
+                }
+                _ => {}
+            }
+        }
+        checked.push_str(line);
+        checked.push('\n');
+    }
+    tobj::load_mtl_buf(&mut checked.as_bytes())
 }
 
 /// One mesh from `models` of the OBJ file at `path`, transformed.
