@@ -140,7 +140,8 @@ fn first_checkpoint(min_samples: u32) -> u32 {
 pub fn passes(min_samples: u32, samples: u32) -> Vec<Range<u32>> {
     let samples = samples.max(1);
     let first = first_checkpoint(min_samples.max(1)).min(samples);
-    let mut out = vec![0..first];
+    let mut out = Vec::new();
+    out.push(0..first);
     let mut end = first;
     while end < samples {
         let next = end.saturating_mul(4).min(samples);
