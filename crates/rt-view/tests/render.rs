@@ -698,7 +698,7 @@ fn the_sobol_sampler_and_adaptive_sampling_are_chosen_on_the_command_line_and_re
     let (ok, err, _) = render("adaptive.png", &["--noise-threshold", "0.1", "--min-samples", "8"]);
     assert!(ok, "{err}");
     assert!(
-        err.contains("adaptive sampling (noise threshold 0.1, at least 8 samples, 3 passes):")
+        err.contains("adaptive sampling (noise threshold 0.1, at least 8 samples, 2 passes):")
             && err.contains("of 32768 samples taken")
             && err.contains("% saved"),
         "{err}"

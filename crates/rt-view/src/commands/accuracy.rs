@@ -6,6 +6,10 @@
 //!   render of the same scene, and the intersection methods on the showcase
 //!   against the default methods' image. Error is the RMSE and the largest
 //!   difference of the 8-bit pixel values (as in the PNG), scaled to [0, 1].
+//!   On the Cornell box, global illumination's error against time also for
+//!   the Sobol sampler, adaptive sampling (noise thresholds at up to 256
+//!   spp) and OIDN denoising (where the library is found), beside the
+//!   stratified sampler's, all against the same stratified reference.
 //! - **geometry**: every intersection method on the fixed ray sets of
 //!   [`rt_core::accuracy::hard_cases`]: nanoseconds per ray, wrong hits or misses, and
 //!   the largest error of `t`.
@@ -18,6 +22,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use anyhow::{Context, bail};
@@ -25,7 +30,13 @@ use clap::Args;
 use plotters::prelude::*;
 use rt_core::accuracy::hard_cases::{CaseKind, all_cases};
 use rt_core::geometry::method::{BoxMethod, Methods, SphereMethod, TriangleMethod};
+use rt_core::render::adaptive::StoppingRule;
+use rt_core::render::settings::AdaptiveSampling;
+use rt_core::sampling::sampler::SamplerKind;
 use rt_core::{Camera, RenderSettings, Renderer, SamplesPerPixel, Scene, load_scene};
+
+use crate::commands::accuracy_labels;
+use crate::commands::render_outputs::{Denoised, denoise_frame};
 
 use crate::timing::median_time;
 
@@ -51,6 +62,10 @@ pub struct AccuracyArgs {
     /// Folder of the measured scene files.
     #[arg(long, default_value = "scenes")]
     pub scenes: PathBuf,
+    /// Measure nothing: read the rows of an accuracy.csv written before and
+    /// write accuracy.md and accuracy.png from them to --out.
+    #[arg(long, value_name = "CSV")]
+    pub replot: Option<PathBuf>,
 }
 
 /// The geometry's precision in this build.
@@ -134,6 +149,13 @@ pub fn run(args: &AccuracyArgs) -> anyhow::Result<()> {
             binary.display()
         );
     }
+    if let Some(csv) = &args.replot {
+        let rows = read_csv(csv)?;
+        std::fs::write(args.out.join("accuracy.md"), markdown(&rows)).context("cannot write accuracy.md")?;
+        plot(&args.out.join("accuracy.png"), &rows)?;
+        eprintln!("wrote accuracy.md and accuracy.png from {} to {}", csv.display(), args.out.display());
+        return Ok(());
+    }
     let runs = args.runs.max(1);
     let mut rows = geometry_rows(runs);
     if !args.geometry_only {
@@ -177,8 +199,14 @@ fn f64_rows(binary: &Path, out: &Path, runs: usize) -> anyhow::Result<Vec<Row>> 
         bail!("{} accuracy --geometry-only failed ({status})", binary.display());
     }
     let path = out.join("accuracy-f64.csv");
-    let text = std::fs::read_to_string(&path)
-        .with_context(|| format!("{} wrote no {} (is it an f64 build?)", binary.display(), path.display()))?;
+    read_csv(&path).with_context(|| {
+        format!("{} wrote no readable {} (is it an f64 build?)", binary.display(), path.display())
+    })
+}
+
+/// The rows of an accuracy CSV ([`HEADER`] and one [`Row`] a line).
+fn read_csv(path: &Path) -> anyhow::Result<Vec<Row>> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     text.lines()
         .skip(1)
         .enumerate()
@@ -245,6 +273,9 @@ struct Sweep {
     /// Samples per pixel of every render of the sweep (`None`: the scene's,
     /// or the setting's own).
     spp: Option<u32>,
+    /// Whether the reference is a row of the sweep (not where it is another
+    /// sweep's method: it would only repeat that sweep's last point).
+    reference_row: bool,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -258,6 +289,13 @@ enum Setting {
     Roulette(bool, u32),
     /// Global illumination's `max_walk_steps` (subsurface random walks).
     WalkSteps(u32),
+    /// The Sobol sampler at a sample count.
+    Sobol(u32),
+    /// Adaptive sampling to a noise threshold, at most a sample count
+    /// (the default stopping rule, 16 samples at least).
+    Adaptive(f32, u32),
+    /// OIDN-denoised, at a sample count (the denoiser's time included).
+    Denoised(u32),
 }
 
 impl Setting {
@@ -273,6 +311,9 @@ impl Setting {
             Self::Bounces(n) => format!("max_bounces={n}"),
             Self::Roulette(on, n) => format!("roulette={}/{n}spp", if on { "on" } else { "off" }),
             Self::WalkSteps(n) => format!("max_walk_steps={n}"),
+            Self::Sobol(n) => format!("sobol spp={n}"),
+            Self::Adaptive(t, n) => format!("threshold={t}/{n}spp"),
+            Self::Denoised(n) => format!("denoised spp={n}"),
         }
     }
 }
@@ -288,6 +329,7 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         settings: spps.iter().map(|&n| Setting::Spp(n)).collect(),
         reference: Setting::Spp(reference_spp),
         spp: None,
+        reference_row: true,
     };
     let depth_sweep = |experiment, scene| Sweep {
         experiment,
@@ -295,6 +337,7 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         settings: depths.iter().map(|&n| Setting::Depth(n)).collect(),
         reference: Setting::Depth(rt_core::scene::effects::MAX_DEPTH),
         spp: None,
+        reference_row: true,
     };
     // Global illumination on the Cornell box: noise against samples; bias
     // against the bounce limit (same samples, so the same random numbers for
@@ -308,6 +351,7 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         settings: [0, 1, 2, 3, 4, 6, 8].iter().map(|&n| Setting::Bounces(n)).collect(),
         reference: Setting::Bounces(64),
         spp: Some(gi_spp),
+        reference_row: true,
     };
     let roulette_sweep = Sweep {
         experiment: "global illumination (roulette)",
@@ -315,6 +359,7 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         settings: vec![Setting::Roulette(true, gi_spp), Setting::Roulette(false, gi_spp)],
         reference: Setting::Roulette(false, reference_spp),
         spp: None,
+        reference_row: true,
     };
     // Subsurface scattering (random walks through the translucent sphere and
     // box of subsurface.ron): noise against samples, and the bias of capping
@@ -325,6 +370,7 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         settings: [1, 4, 16, 64, 256, 1024, 4096].iter().map(|&n| Setting::WalkSteps(n)).collect(),
         reference: Setting::WalkSteps(rt_core::scene::effects::MAX_WALK_STEPS),
         spp: Some(gi_spp),
+        reference_row: true,
     };
     let d = Methods::default();
     let method_sweep = Sweep {
@@ -338,6 +384,37 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         ],
         reference: Setting::Methods(d),
         spp: None,
+        reference_row: true,
+    };
+    // The Cornell box's noise against time with each way of lowering it,
+    // against the stratified sweep's reference: the Sobol sampler, adaptive
+    // sampling (thresholds, at most 256 spp) and, where OIDN is found,
+    // denoising (albedo and normal passes fed to it).
+    let gi_sweep = |experiment, settings: Vec<Setting>| Sweep {
+        experiment,
+        scene: "cornell_box.ron",
+        settings,
+        reference: Setting::Spp(reference_spp),
+        spp: None,
+        reference_row: false,
+    };
+    let sobol_sweep =
+        gi_sweep("global illumination (Sobol)", spps.iter().map(|&n| Setting::Sobol(n)).collect());
+    let (adaptive_spp, thresholds) =
+        if args.quick { (16, vec![0.2, 0.05]) } else { (256, vec![0.2, 0.1, 0.05, 0.02]) };
+    let adaptive_sweep = gi_sweep(
+        "global illumination (adaptive)",
+        thresholds.into_iter().map(|t| Setting::Adaptive(t, adaptive_spp)).collect(),
+    );
+    let denoise_sweep = match crate::denoise::find_and_load() {
+        Ok(_) => Some(gi_sweep(
+            "global illumination (denoised)",
+            spps.iter().filter(|&&n| n <= 64).map(|&n| Setting::Denoised(n)).collect(),
+        )),
+        Err(e) => {
+            eprintln!("warning: no denoised rows: {e}");
+            None
+        }
     };
     let sweeps = [
         spp_sweep("edges (spp)", "antialiasing.ron"),
@@ -347,13 +424,15 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         depth_sweep("glass (depth)", "glass.ron"),
         method_sweep,
         spp_sweep("global illumination (spp)", "cornell_box.ron"),
+        sobol_sweep,
+        adaptive_sweep,
         bounce_sweep,
         roulette_sweep,
         spp_sweep("subsurface (spp)", "subsurface.ron"),
         walk_sweep,
     ];
     let mut rows = Vec::new();
-    for sweep in sweeps {
+    for sweep in sweeps.into_iter().chain(denoise_sweep) {
         let path = args.scenes.join(sweep.scene);
         let loaded = load_scene(&path).with_context(|| format!("cannot load {}", path.display()))?;
         eprintln!("images: {} ({}) ...", sweep.experiment, path.display());
@@ -374,7 +453,9 @@ fn image_rows(args: &AccuracyArgs, runs: usize) -> anyhow::Result<Vec<Row>> {
         }
         // The reference too (its error is 0 by definition), timed once: it is the slowest.
         let reference = render(&loaded.scene, loaded.camera, settings, sweep.reference, 1)?;
-        renders.push((sweep.reference, reference.clone()));
+        if sweep.reference_row {
+            renders.push((sweep.reference, reference.clone()));
+        }
         for (setting, (image, time)) in renders {
             let (rmse, max_error) = image_error(&image.0, &reference.0.0);
             rows.push(Row {
@@ -418,12 +499,41 @@ fn render(
             settings.samples = SamplesPerPixel::new(n)?;
         }
         (Setting::WalkSteps(n), Some(gi)) => gi.max_walk_steps = n,
+        (Setting::Sobol(n) | Setting::Adaptive(_, n) | Setting::Denoised(n), _) => {
+            settings.samples = SamplesPerPixel::new(n)?;
+            if let Setting::Sobol(_) = setting {
+                settings = settings.with_sampler(SamplerKind::Sobol);
+            }
+        }
         (_, None) => bail!("{setting:?} needs a scene with global illumination"),
     }
     let renderer = Renderer::new(other_methods.as_ref().unwrap_or(scene), camera, &settings)?;
+    let stop = AtomicBool::new(false);
     let mut frame = None;
-    let time = median_time(runs, || frame = Some(renderer.render(|_| {})));
-    let frame = frame.expect("at least one run");
+    let mut failed = None;
+    let time = median_time(runs, || {
+        frame = match setting {
+            Setting::Adaptive(threshold, _) => {
+                AdaptiveSampling::new(threshold, AdaptiveSampling::DEFAULT_MIN_SAMPLES)
+                    .ok()
+                    .and_then(|a| renderer.render_adaptive_with(a, StoppingRule::LastPass, |_| {}, &stop))
+                    .map(|a| a.frame)
+            }
+            Setting::Denoised(_) => {
+                renderer.render_with_features_until(|_| {}, &stop).map(|(mut frame, features)| {
+                    if let Denoised::Skipped(why) = denoise_frame(&mut frame, &features) {
+                        failed = Some(why);
+                    }
+                    frame
+                })
+            }
+            _ => Some(renderer.render(|_| {})),
+        }
+    });
+    if let Some(why) = failed {
+        bail!("{}: not denoised: {why}", setting.label());
+    }
+    let frame = frame.context("the render gave no image")?;
     Ok(((frame.to_rgb8(), frame.rays.total()), time))
 }
 
@@ -542,6 +652,7 @@ fn plot_images(area: &Area, rows: &[Row]) -> anyhow::Result<()> {
         .draw()?;
     let mut experiments: Vec<&str> = images.iter().map(|r| r.experiment.as_str()).collect();
     experiments.dedup();
+    let mut labels = Vec::new();
     for (i, experiment) in experiments.into_iter().enumerate() {
         let color = Palette99::pick(i).to_rgba();
         let points: Vec<(f64, f64, &str)> = images
@@ -553,13 +664,14 @@ fn plot_images(area: &Area, rows: &[Row]) -> anyhow::Result<()> {
             .draw_series(LineSeries::new(points.iter().map(|p| (p.0, p.1)), color.stroke_width(2)))?
             .label(experiment)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
-        chart.draw_series(points.iter().map(|&(x, y, label)| {
-            let text = label.split('=').nth(1).unwrap_or(label).to_string();
-            EmptyElement::at((x, y))
-                + Circle::new((0, 0), 3, color.filled())
-                + Text::new(text, (4, -14), ("sans-serif", 12))
-        }))?;
+        chart.draw_series(points.iter().map(|&(x, y, _)| Circle::new((x, y), 3, color.filled())))?;
+        labels.extend(
+            points
+                .iter()
+                .map(|&(x, y, label)| ((x, y), label.split('=').nth(1).unwrap_or(label).to_string())),
+        );
     }
+    draw_labels(&mut chart, &labels, 12)?;
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::UpperRight)
@@ -607,11 +719,35 @@ fn plot_geometry(area: &Area, rows: &[Row]) -> anyhow::Result<()> {
         .y_desc("fraction of rays wrong (floor = none)")
         .label_style(("sans-serif", 15))
         .draw()?;
-    chart.draw_series(points.iter().enumerate().map(|(i, (label, ns, wrong))| {
+    chart.draw_series(points.iter().map(|(label, ns, wrong)| {
         let color = if label.contains("f64") { BLUE } else { RED };
-        EmptyElement::at((*ns, wrong.max(FLOOR)))
-            + Circle::new((0, 0), 4, color.filled())
-            + Text::new(label.clone(), (6, if i % 2 == 0 { -16 } else { 4 }), ("sans-serif", 13))
+        Circle::new((*ns, wrong.max(FLOOR)), 4, color.filled())
+    }))?;
+    let labels: Vec<((f64, f64), String)> =
+        points.iter().map(|(label, ns, wrong)| ((*ns, wrong.max(FLOOR)), label.clone())).collect();
+    draw_labels(&mut chart, &labels, 13)?;
+    Ok(())
+}
+
+type LogChart<'a, 'b> = ChartContext<'a, BitMapBackend<'b>, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>;
+
+/// Draws each text beside its point where [`accuracy_labels::place`] puts
+/// it (no label over another, each box padded so neighbours keep a gap),
+/// with a grey leader line to labels pushed away from their points.
+fn draw_labels(chart: &mut LogChart, labels: &[((f64, f64), String)], size: u32) -> anyhow::Result<()> {
+    let font = ("sans-serif", size).into_text_style(chart.plotting_area());
+    let pixels: Vec<(i32, i32)> = labels.iter().map(|(p, _)| chart.backend_coord(p)).collect();
+    let sizes = labels
+        .iter()
+        .map(|(_, text)| chart.plotting_area().estimate_text_size(text, &font).map(|(w, h)| (w + 8, h + 2)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let placed = accuracy_labels::place(&pixels, &sizes);
+    let grey = RGBColor(150, 150, 150);
+    chart.draw_series(labels.iter().zip(placed).map(|((p, text), l)| {
+        let to = if l.leader { (l.offset.0, l.offset.1 + l.size.1 as i32 / 2) } else { (0, 0) };
+        EmptyElement::at(*p)
+            + PathElement::new(vec![(0, 0), to], grey)
+            + Text::new(text.clone(), l.offset, font.clone())
     }))?;
     Ok(())
 }

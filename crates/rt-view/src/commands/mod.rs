@@ -1,6 +1,7 @@
 //! The headless commands, each in its own module with its own arguments.
 
 pub mod accuracy;
+pub mod accuracy_labels;
 pub mod bench;
 pub mod cast;
 pub mod explain;

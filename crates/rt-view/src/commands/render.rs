@@ -54,7 +54,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "T")]
     pub noise_threshold: Option<f32>,
     /// Adaptive sampling: the samples every pixel takes before its noise is
-    /// first estimated (default: the scene's, else 16).
+    /// first estimated, rounded up to 1, 4, 16, 64, 256, 1024 or a multiple
+    /// of 1024 (default: the scene's, else 16).
     #[arg(long, value_name = "N")]
     pub min_samples: Option<u32>,
     /// Print to stderr: scene load and BVH build times, the effects
