@@ -13,7 +13,9 @@ environment map, with or without a thin lens; and the skies of the three.
     $B bench/cycles_env_compare.py sky                      # Preetham / Hosek–Wilkie numbers
 
 `compare` exports the scene with `rt-view export` and builds it in Blender
-directly (no file format between them):
+directly (no file format between them), through bench/common/cycles.py
+(which also converts mirrors, glass, emitters and media; the scenes here
+use the following):
 
 - rt-view's world is left-handed with +y up, Blender's right-handed with +z
   up: a point (x, y, z) is Blender's (−x, −z, y) (the x mirror of

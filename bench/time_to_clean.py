@@ -96,6 +96,8 @@ def parse_args():
     p.add_argument("--picture-spp", type=int, default=16)
     p.add_argument("--rt-view", default="target/release/rt-view")
     p.add_argument("--out", default="time-to-clean-out")
+    p.add_argument("--summary-of", nargs="*", metavar="DIR",
+                   help="render nothing: write the summary of earlier runs' scene folders (their result.json)")
     return p.parse_args()
 
 
@@ -338,7 +340,7 @@ def run_scene(args, scene_path, width, height, counts):
                 runs[label][2].append(images.ssim(images.srgb_luminance(image), ref_lum))
                 if n == args.picture_spp and run == 0:
                     pictures[label] = image
-        for label in list(active):
+        for label in [m[0] for m in chosen if m[0] in active]:
             times, errs, ssims = runs[label]
             row = (n, float(np.median(times)), math.sqrt(float(np.mean(errs))), float(np.mean(ssims)))
             results[label].append(row)
@@ -353,7 +355,7 @@ def run_scene(args, scene_path, width, height, counts):
             last = results[label][-1]
             if smallest_target is not None and last[2] <= smallest_target:
                 active.discard(label)
-            elif last[1] * 4 > args.max_render_s:
+            elif last[1] * 4 > args.max_render_s and n != counts[-1]:
                 active.discard(label)
                 notes.append(f"{label}: stopped after {n} spp (the next count would take about {4 * last[1]:.0f} s)")
     targets = targets_of(results)
@@ -394,7 +396,7 @@ def run_scene(args, scene_path, width, height, counts):
         labels = ["reference"] + [label for label in results if label in pictures]
         with open(os.path.join(folder, f"strip-{args.picture_spp}spp.txt"), "w") as f:
             f.write(" | ".join(labels) + "\n")
-    return {
+    result = {
         "scene": name,
         "reference_s": reference_s,
         "reference_rmse": math.sqrt(ref_noise2),
@@ -403,6 +405,9 @@ def run_scene(args, scene_path, width, height, counts):
         "to_target": {f"{label}@{k}": v for (label, k), v in to_target.items()},
         "notes": notes,
     }
+    with open(os.path.join(folder, "result.json"), "w") as f:
+        json.dump(result, f, indent=1)
+    return result
 
 
 def ratio(a, b):
@@ -426,6 +431,13 @@ def main():
         scenes = [os.path.join("scenes", s + ".ron") for s in DEFAULT_SCENES]
     done, skipped = [], []
     started = time.perf_counter()
+    if args.summary_of is not None:
+        scenes = []
+        for folder in args.summary_of:
+            with open(os.path.join(folder, "result.json")) as f:
+                d = json.load(f)
+            d["targets"] = {int(k): v for k, v in d["targets"].items()}
+            done.append(d)
     for scene in scenes:
         try:
             done.append(run_scene(args, scene, width, height, counts))

@@ -302,7 +302,7 @@ mod tests {
             last_image: None,
         };
         let mut canvas = Canvas::new(1, 2, 2, 16);
-        let mut frame = |trace: &mut Trace, canvas: &Canvas| {
+        let frame = |trace: &mut Trace, canvas: &Canvas| {
             let frame =
                 Frame { scene: None, loading: false, zoom: None, canvas: Some(canvas), scene_view: None };
             trace.frame(Instant::now(), Duration::ZERO, frame).unwrap();
