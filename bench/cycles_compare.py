@@ -83,6 +83,11 @@ import time
 
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from common import cycles  # noqa: E402
+from common.cycles import read_exr, write_png  # noqa: E402
+from common.images import agreement, block_means, srgb  # noqa: E402
+
 
 def parse_args():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -156,45 +161,8 @@ def cycles_scene(bpy, glb, desc, width, height, threads, multiscatter):
             if node.type == "BSDF_PRINCIPLED" and not multiscatter and node.distribution != "GGX":
                 node.distribution = "GGX"
                 notes.append(f"material {mat.name!r}: distribution MULTI_GGX → GGX")
-    world = bpy.data.worlds.new("background")
-    world.use_nodes = True
-    world.node_tree.nodes["Background"].inputs["Color"].default_value = (*desc["background"], 1.0)
-    world.node_tree.nodes["Background"].inputs["Strength"].default_value = 1.0
-    scene.world = world
-
-    r = scene.render
-    r.engine = "CYCLES"
-    r.resolution_x, r.resolution_y, r.resolution_percentage = width, height, 100
-    r.threads_mode = "FIXED"
-    r.threads = threads
-    r.film_transparent = False
-    r.use_persistent_data = True
-    r.image_settings.file_format = "OPEN_EXR"
-    r.image_settings.color_depth = "32"
-    r.image_settings.exr_codec = "ZIP"
-    scene.view_settings.view_transform = "Standard"
-    scene.view_settings.look = "None"
-    scene.view_settings.exposure = 0.0
-    scene.view_settings.gamma = 1.0
-
-    c = scene.cycles
-    c.device = "CPU"
-    c.use_adaptive_sampling = False
-    c.use_denoising = False
-    c.pixel_filter_type = "BOX"
-    c.filter_width = 1.0
-    c.sample_clamp_direct = 0.0
-    c.sample_clamp_indirect = 0.0
-    c.blur_glossy = 0.0
-    c.caustics_reflective = True
-    c.caustics_refractive = True
-    c.light_sampling_threshold = 0.0
-    c.use_guiding = False
-    bounces = desc["global_illumination"]["max_bounces"] - 1
-    c.max_bounces = c.diffuse_bounces = c.glossy_bounces = c.transmission_bounces = bounces
-    c.transparent_max_bounces = bounces
-    c.volume_bounces = 0
-    c.use_animated_seed = False
+    scene.world = cycles.uniform_world(bpy, desc["background"])
+    cycles.settings(scene, width, height, threads, desc["global_illumination"]["max_bounces"] - 1)
     return scene, notes
 
 
@@ -292,20 +260,6 @@ def mitsuba_scene(mi, bpy, scene, desc, folder, width, height):
     return out
 
 
-def agreement(a, b, block, z, rel):
-    """Block agreement of two lists of independent images: (the share of
-    blocks that agree, how many, the blocks' z-scores, the block means of
-    each, their standard errors, whole-image means a/b)."""
-    ba = np.stack([block_means(im, block) for im in a])
-    bb = np.stack([block_means(im, block) for im in b])
-    n = len(a)
-    ma, mb = ba.mean(0), bb.mean(0)
-    sa, sb = ba.std(0, ddof=1) / math.sqrt(n), bb.std(0, ddof=1) / math.sqrt(n)
-    agree = (np.abs(ma - mb) <= z * np.sqrt(sa**2 + sb**2) + rel * np.maximum(np.abs(ma), np.abs(mb))).all(axis=2)
-    ratio = np.mean(a, axis=0).mean(axis=(0, 1)) / np.maximum(np.mean(b, axis=0).mean(axis=(0, 1)), 1e-30)
-    return agree, ratio
-
-
 def disc_ratio(a, b, cx, cy, r):
     """Mean luminance over a disc, a/b, and two standard errors of it."""
     lum = np.array([0.2126, 0.7152, 0.0722])
@@ -315,42 +269,6 @@ def disc_ratio(a, b, cx, cy, r):
     n = len(a)
     se = q * math.sqrt((la.std(ddof=1) / la.mean()) ** 2 / n + (lb.std(ddof=1) / lb.mean()) ** 2 / n)
     return q, 2 * se
-
-
-def read_exr(bpy, path):
-    """Linear RGB of an OpenEXR file, rows top to bottom, as float64."""
-    img = bpy.data.images.load(os.path.abspath(path), check_existing=False)
-    w, h = img.size
-    pixels = np.empty(w * h * 4, dtype=np.float32)
-    img.pixels.foreach_get(pixels)
-    bpy.data.images.remove(img)
-    return pixels.reshape(h, w, 4)[::-1, :, :3].astype(np.float64)
-
-
-def write_png(bpy, path, rgb8):
-    """An 8-bit PNG of rows top to bottom."""
-    h, w, _ = rgb8.shape
-    img = bpy.data.images.new(os.path.basename(path), w, h, alpha=False)
-    rgba = np.ones((h, w, 4), dtype=np.float32)
-    rgba[..., :3] = rgb8[::-1] / 255.0
-    img.pixels.foreach_set(rgba.ravel())
-    img.filepath_raw = os.path.abspath(path)
-    img.file_format = "PNG"
-    img.save()
-    bpy.data.images.remove(img)
-
-
-def block_means(image, block):
-    h, w, _ = image.shape
-    bh, bw = h // block, w // block
-    cut = image[: bh * block, : bw * block]
-    return cut.reshape(bh, block, bw, block, 3).mean(axis=(1, 3))
-
-
-def srgb(image):
-    x = np.clip(image, 0, 1)
-    x = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
-    return (x * 255 + 0.5).astype(np.uint8)
 
 
 def object_discs(bpy, scene, width, height):

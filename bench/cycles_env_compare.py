@@ -13,7 +13,9 @@ environment map, with or without a thin lens; and the skies of the three.
     $B bench/cycles_env_compare.py sky                      # Preetham / Hosek–Wilkie numbers
 
 `compare` exports the scene with `rt-view export` and builds it in Blender
-directly (no file format between them):
+directly (no file format between them), through bench/common/cycles.py
+(which also converts mirrors, glass, emitters and media; the scenes here
+use the following):
 
 - rt-view's world is left-handed with +y up, Blender's right-handed with +z
   up: a point (x, y, z) is Blender's (−x, −z, y) (the x mirror of
@@ -73,6 +75,8 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from common import cycles  # noqa: E402
+from common.cycles import to_blender  # noqa: E402
 
 
 def parse_args():
@@ -96,11 +100,6 @@ def parse_args():
     p.add_argument("--turbidity", type=float, default=3.0, help="sky: turbidity")
     p.add_argument("--elevation", type=float, default=35.0, help="sky: sun elevation in degrees")
     return p.parse_args()
-
-
-def to_blender(p):
-    """rt-view's left-handed, y-up point or direction in Blender's frame."""
-    return (-p[0], -p[2], p[1])
 
 
 def run(command, threads):
@@ -128,41 +127,6 @@ def read_hdr_plain(path):
     return np.array(mi.Bitmap(path), dtype=np.float32)[:, :, :3]
 
 
-def cycles_settings(scene, width, height, threads, bounces):
-    """Cycles set up as bench/cycles_compare.py does (see its module comment)."""
-    r = scene.render
-    r.engine = "CYCLES"
-    r.resolution_x, r.resolution_y, r.resolution_percentage = width, height, 100
-    r.threads_mode = "FIXED"
-    r.threads = threads
-    r.film_transparent = False
-    r.use_persistent_data = True
-    r.image_settings.file_format = "OPEN_EXR"
-    r.image_settings.color_depth = "32"
-    r.image_settings.exr_codec = "ZIP"
-    scene.view_settings.view_transform = "Standard"
-    scene.view_settings.look = "None"
-    scene.view_settings.exposure = 0.0
-    scene.view_settings.gamma = 1.0
-    c = scene.cycles
-    c.device = "CPU"
-    c.use_adaptive_sampling = False
-    c.use_denoising = False
-    c.pixel_filter_type = "BOX"
-    c.filter_width = 1.0
-    c.sample_clamp_direct = 0.0
-    c.sample_clamp_indirect = 0.0
-    c.blur_glossy = 0.0
-    c.caustics_reflective = True
-    c.caustics_refractive = True
-    c.light_sampling_threshold = 0.0
-    c.use_guiding = False
-    c.max_bounces = c.diffuse_bounces = c.glossy_bounces = c.transmission_bounces = bounces
-    c.transparent_max_bounces = bounces
-    c.volume_bounces = 0
-    c.use_animated_seed = False
-
-
 def environment_world(bpy, exr, strength, rotation_degrees):
     """A world of the map `exr` in rt-view's convention (module comment)."""
     world = bpy.data.worlds.new("environment")
@@ -184,118 +148,13 @@ def environment_world(bpy, exr, strength, rotation_degrees):
     return world
 
 
-def blender_camera(bpy, cam_desc, scene, aperture_scale=1.0):
-    """A camera at rt-view's eye looking at its centre of interest, the same
-    vertical field of view, and its thin lens (module comment)."""
-    from mathutils import Matrix, Vector
-
-    data = bpy.data.cameras.new("camera")
-    obj = bpy.data.objects.new("camera", data)
-    scene.collection.objects.link(obj)
-    eye = Vector(to_blender(cam_desc["position"]))
-    target = Vector(to_blender(cam_desc["center_of_interest"]))
-    up = Vector(to_blender(cam_desc["up"]))
-    forward = (target - eye).normalized()
-    right = forward.cross(up).normalized()
-    true_up = right.cross(forward)
-    rot = Matrix((right, true_up, -forward)).transposed()
-    obj.matrix_world = Matrix.Translation(eye) @ rot.to_4x4()
-    data.sensor_fit = "VERTICAL"
-    data.angle_y = math.radians(cam_desc["fov_y"])
-    data.clip_start = 1e-3
-    data.clip_end = 1e5
-    aperture = cam_desc.get("aperture", 0.0) * aperture_scale
-    if aperture > 0:
-        data.dof.use_dof = True
-        data.dof.focus_distance = cam_desc["focus_distance"]
-        data.dof.aperture_fstop = data.lens * 1e-3 / (2.0 * aperture)
-        data.dof.aperture_blades = 0
-        data.dof.aperture_ratio = 1.0
-    scene.camera = obj
-    return obj
-
-
-def blender_material(bpy, m):
-    """The Cycles material of an rt-view legacy material (module comment)."""
-    bad = [k for k in ("reflectivity", "transparency") if m.get(k, 0) > 0]
-    if max(m["emission"]) > 0:
-        bad.append("emission")
-    if m.get("physical") or m.get("textured") or m.get("subsurface"):
-        bad.append("physical, textured or translucent")
-    if bad:
-        sys.exit(f"material {m['name']!r}: {', '.join(bad)}: not converted")
-    mat = bpy.data.materials.new(m["name"])
-    mat.use_nodes = True
-    nodes, links = mat.node_tree.nodes, mat.node_tree.links
-    for n in list(nodes):
-        if n.type != "OUTPUT_MATERIAL":
-            nodes.remove(n)
-    out = next(n for n in nodes if n.type == "OUTPUT_MATERIAL")
-    diffuse = nodes.new("ShaderNodeBsdfDiffuse")
-    diffuse.inputs["Color"].default_value = (*[m["diffuse"] * c for c in m["color"]], 1.0)
-    diffuse.inputs["Roughness"].default_value = 0.0
-    glossy = nodes.new("ShaderNodeBsdfGlossy")
-    glossy.distribution = "GGX"
-    glossy.inputs["Color"].default_value = (*m.get("specular_color", [1.0, 1.0, 1.0]), 1.0)
-    glossy.inputs["Roughness"].default_value = math.sqrt(m["roughness"])
-    mix = nodes.new("ShaderNodeMixShader")
-    mix.inputs["Fac"].default_value = m["specular"]
-    links.new(diffuse.outputs["BSDF"], mix.inputs[1])
-    links.new(glossy.outputs["BSDF"], mix.inputs[2])
-    links.new(mix.outputs["Shader"], out.inputs["Surface"])
-    return mat
-
-
-def read_obj_triangles(path):
-    verts, faces = [], []
-    with open(path) as f:
-        for line in f:
-            parts = line.split()
-            if not parts:
-                continue
-            if parts[0] == "v":
-                verts.append(to_blender([float(t) for t in parts[1:4]]))
-            elif parts[0] == "f":
-                a, b, c = (int(t.split("/")[0]) - 1 for t in parts[1:4])
-                faces.append((a, c, b))  # the mirror turns the winding round
-    return verts, faces
-
-
 def blender_scene(bpy, desc, folder, exr, width, height, threads, aperture_scale=1.0):
-    """Blender's scene of an rt-view export (module comment)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    if desc["camera"]["projection"] != "Perspective":
-        sys.exit("only perspective cameras are converted")
-    if desc["lights"]:
-        sys.exit("the scene has lights besides the map: not converted")
-    materials = {m["name"]: blender_material(bpy, m) for m in desc["materials"]}
-    for i, o in enumerate(desc["objects"]):
-        if o["kind"] == "Sphere":
-            bpy.ops.mesh.primitive_uv_sphere_add(
-                segments=256, ring_count=128, radius=o["radius"], location=to_blender(o["center"])
-            )
-            obj = bpy.context.active_object
-            bpy.ops.object.shade_smooth()
-        elif o["kind"] == "Triangles":
-            if o.get("smooth"):
-                sys.exit(f"object {i}: vertex normals are not exported")
-            verts, faces = read_obj_triangles(os.path.join(folder, o["file"]))
-            mesh = bpy.data.meshes.new(f"object-{i}")
-            mesh.from_pydata(verts, [], faces)
-            mesh.update()
-            obj = bpy.data.objects.new(f"object-{i}", mesh)
-            scene.collection.objects.link(obj)
-        else:
-            sys.exit(f"object {i}: a {o['kind']} is not converted")
-        obj.data.materials.append(materials[o["material"]])
+    """Blender's scene of an rt-view export under its map (module comment)."""
     env = desc["environment"]
     if env.get("sun"):
         sys.exit("the environment has a sun disc: not converted")
-    scene.world = environment_world(bpy, exr, env["strength"], env["rotation_degrees"])
-    blender_camera(bpy, desc["camera"], scene, aperture_scale)
-    cycles_settings(scene, width, height, threads, desc["global_illumination"]["max_bounces"] - 1)
-    return scene
+    world = lambda: environment_world(bpy, exr, env["strength"], env["rotation_degrees"])  # noqa: E731
+    return cycles.scene_from_export(bpy, desc, folder, width, height, threads, world, aperture_scale)
 
 
 def scene_with_map(scene_path, exr, folder):
@@ -327,7 +186,8 @@ def compare(args):
     import bpy
     import json
 
-    from cycles_compare import agreement, block_means, read_exr, srgb, write_png
+    from common.cycles import read_exr, write_png
+    from common.images import agreement, block_means, srgb
 
     name = os.path.splitext(os.path.basename(args.scene))[0]
     folder = os.path.abspath(os.path.join(args.out, name))
@@ -450,7 +310,7 @@ def convention(args):
     import bpy
     import json
 
-    from cycles_compare import read_exr
+    from common.cycles import read_exr
 
     folder = os.path.abspath(os.path.join(args.out, "convention"))
     shutil.rmtree(folder, ignore_errors=True)
@@ -531,7 +391,7 @@ def cycles_sky(bpy, kind, sun_blender, turbidity, albedo, width, height, out, th
     """Cycles' Sky Texture of `kind` through an equirectangular camera,
     turned so that the image is in rt-view's map layout: the camera looks
     along Blender's −Y (rt-view's +z), +Z up."""
-    from cycles_compare import read_exr
+    from common.cycles import read_exr
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
@@ -551,7 +411,7 @@ def cycles_sky(bpy, kind, sun_blender, turbidity, albedo, width, height, out, th
     scene.collection.objects.link(obj)
     obj.rotation_euler = (math.pi / 2, 0.0, math.pi)  # −Z → +Y, then turned to −Y
     scene.camera = obj
-    cycles_settings(scene, width, height, threads, 0)
+    cycles.settings(scene, width, height, threads, 0)
     render_cycles(bpy, scene, out, 4, 0)
     return read_exr(bpy, out)
 
@@ -715,7 +575,8 @@ def sky(args):
     # Picture: the skies above the horizon, one under another in the order
     # of the table, each divided by its own zenith luminance (shape and
     # colour, not scale), ×0.25, sRGB, each texel 2 × 2 pixels.
-    from cycles_compare import srgb, write_png
+    from common.cycles import write_png
+    from common.images import srgb
 
     rows = [srgb(0.25 * m[: grid_h // 2] / facts[k][1]) for k, m in maps.items()]
     picture = np.concatenate(rows, axis=0)

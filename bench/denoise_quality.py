@@ -28,6 +28,10 @@ import sys
 
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from common.images import rmse_clamped as rmse  # noqa: E402
+from common.images import srgb_luminance, ssim  # noqa: E402
+
 
 def read_layers(mi, path):
     """The EXR at `path` as {layer name: H×W×C array} ('' for R, G, B)."""
@@ -42,37 +46,6 @@ def read_layers(mi, path):
     if "noisy" in layers:
         out["noisy"] = layers["noisy"][0][:, :, :3]
     return out
-
-
-def srgb_luminance(rgb):
-    """Luminance (Rec. 709 weights) of `rgb` clamped to [0, 1], sRGB-encoded."""
-    y = np.clip(rgb, 0, 1) @ np.array([0.2126, 0.7152, 0.0722])
-    return np.where(y <= 0.0031308, 12.92 * y, 1.055 * np.power(y, 1 / 2.4) - 0.055)
-
-
-def gaussian_filter(image, sigma=1.5, radius=5):
-    """`image` convolved with a normalised Gaussian, separably; edges reflected."""
-    x = np.arange(-radius, radius + 1)
-    k = np.exp(-(x * x) / (2 * sigma * sigma))
-    k /= k.sum()
-    padded = np.pad(image, radius, mode="reflect")
-    rows = sum(k[i] * padded[:, i : i + image.shape[1]] for i in range(len(k)))
-    return sum(k[i] * rows[i : i + image.shape[0], :] for i in range(len(k)))
-
-
-def ssim(a, b):
-    """Mean SSIM of two images in [0, 1] (Wang et al. 2004, eq. 13)."""
-    c1, c2 = 0.01**2, 0.03**2
-    mu_a, mu_b = gaussian_filter(a), gaussian_filter(b)
-    var_a = gaussian_filter(a * a) - mu_a**2
-    var_b = gaussian_filter(b * b) - mu_b**2
-    cov = gaussian_filter(a * b) - mu_a * mu_b
-    s = ((2 * mu_a * mu_b + c1) * (2 * cov + c2)) / ((mu_a**2 + mu_b**2 + c1) * (var_a + var_b + c2))
-    return float(s.mean())
-
-
-def rmse(a, b):
-    return float(np.sqrt(np.mean((np.clip(a, 0, 1) - np.clip(b, 0, 1)) ** 2)))
 
 
 def render(rt_view, scene, out, spp, size, seed, denoise):

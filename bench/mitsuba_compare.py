@@ -60,6 +60,9 @@ import time
 
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from common.images import block_means, srgb  # noqa: E402,F401  (srgb: also used by importers)
+
 
 def parse_args():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -365,19 +368,6 @@ def export_scene(rt_view, scene, folder):
 
 def read_exr(mi, path):
     return np.array(mi.Bitmap(path), dtype=np.float64)[:, :, :3]
-
-
-def block_means(image, block):
-    h, w, _ = image.shape
-    bh, bw = h // block, w // block
-    cut = image[: bh * block, : bw * block]
-    return cut.reshape(bh, block, bw, block, 3).mean(axis=(1, 3))
-
-
-def srgb(image):
-    x = np.clip(image, 0, 1)
-    x = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
-    return (x * 255 + 0.5).astype(np.uint8)
 
 
 def main():

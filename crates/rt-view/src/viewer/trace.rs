@@ -10,7 +10,8 @@
 //! has no line):
 //!
 //! ```json
-//! {"t":1.204,"job":7,"view":3,"kind":"preview","size":[320,180]}
+//! {"t":1.204,"job":7,"view":3,"kind":"preview","size":[320,180],
+//!  "camera":{"position":[0,1,-5],"center_of_interest":[0,1,0],"up":[0,1,0],"fov_y":40}}
 //! ```
 //!
 //! - `job`: its generation (the number its rows carry);
@@ -18,7 +19,9 @@
 //!   camera, the effect toggles or the scene itself (a reload too) differ
 //!   from the previous job's — a preview and the full render after it are
 //!   one view;
-//! - `kind`: `preview` or `full`; `size`: its image in pixels.
+//! - `kind`: `preview` or `full`; `size`: its image in pixels;
+//! - `camera`: its eye, centre of interest, up vector and vertical field of
+//!   view (degrees), so that a measurement can render the same view.
 //!
 //! A frame line:
 //!
@@ -41,8 +44,18 @@
 //!   generation, an older one's carried over from the image it replaced, or
 //!   0 for rows no job has drawn (black). Every row applied in a frame is
 //!   uploaded in that frame, so this is the texture the frame shows;
+//! - `samples`: the fewest and the most samples per pixel of the rows of
+//!   the image on screen (`null` without one);
 //! - `scene_view`: with the scene view open, how many flat renders of it
 //!   have started so far (`null` while it is closed).
+//! - `image`: with `RT_VIEW_TRACE_IMAGES=DIR` also set, the file the
+//!   image on screen was written to in this frame, once every row of it has
+//!   arrived at the same samples and whenever a row changed since: its linear colours as
+//!   little-endian `f32` RGB triples, rows top to bottom, in
+//!   `DIR/frame-N-WxH.f32` (`null` when nothing was written). It is
+//!   written on the UI thread, so it is for measurements (bench/viewer_timing.py
+//!   finds how long a camera move takes to a clean image), never on by
+//!   default.
 
 use std::fs::{File, OpenOptions};
 use std::hash::{DefaultHasher, Hash, Hasher};
@@ -60,6 +73,10 @@ use super::render_job::RenderJob;
 /// The environment variable naming the trace file.
 pub const TRACE_VAR: &str = "RT_VIEW_TRACE";
 
+/// The environment variable naming the folder complete images on screen are
+/// written to, with a trace.
+pub const TRACE_IMAGES_VAR: &str = "RT_VIEW_TRACE_IMAGES";
+
 /// The trace file and what the next lines are measured against.
 pub(super) struct Trace {
     file: File,
@@ -71,6 +88,10 @@ pub(super) struct Trace {
     last_job: Option<u64>,
     /// What the last job written showed ([`view_key`]), and its view number.
     last_view: Option<(u64, u64)>,
+    /// Where complete images go (`RT_VIEW_TRACE_IMAGES`), if anywhere.
+    images: Option<PathBuf>,
+    /// The canvas (generation, changes) written last.
+    last_image: Option<(u64, u64)>,
 }
 
 /// What a frame shows, for its trace line.
@@ -102,6 +123,8 @@ impl Trace {
                 frames: 0,
                 last_job: None,
                 last_view: None,
+                images: std::env::var_os(TRACE_IMAGES_VAR).map(PathBuf::from),
+                last_image: None,
             }),
             Err(e) => {
                 eprintln!("warning: {}: cannot write the trace: {e}", path.display());
@@ -130,6 +153,12 @@ impl Trace {
             "view": view,
             "kind": if preview { "preview" } else { "full" },
             "size": [spec.width, spec.height],
+            "camera": {
+                "position": spec.camera.position().to_array(),
+                "center_of_interest": spec.camera.center_of_interest().to_array(),
+                "up": spec.camera.up().to_array(),
+                "fov_y": spec.camera.fov_y(),
+            },
         });
         self.write(&line)
     }
@@ -140,6 +169,14 @@ impl Trace {
         let interval = self.previous_frame.map(|p| (began - p).as_secs_f64() * 1e3);
         self.previous_frame = Some(began);
         self.frames += 1;
+        let samples = frame.canvas.map(|c| {
+            let counts = (0..c.size()[1] as u32).map(|y| c.row_samples(y));
+            counts.fold([u32::MAX, 0], |[lo, hi], n| [lo.min(n), hi.max(n)])
+        });
+        let image = match (frame.canvas, samples) {
+            (Some(c), Some([lo, hi])) if lo == hi => self.write_image(c)?,
+            _ => None,
+        };
         let line = json!({
             "t": (began - self.start).as_secs_f64(),
             "frame": self.frames,
@@ -151,8 +188,30 @@ impl Trace {
             "canvas": frame.canvas.map(Canvas::generation),
             "texture": frame.canvas.map(|c| runs(c.display_sources())),
             "scene_view": frame.scene_view,
+            "samples": samples,
+            "image": image.map(|p| p.display().to_string()),
         });
         self.write(&line)
+    }
+
+    /// Writes `canvas`'s linear image into the images folder if there is
+    /// one, every row has arrived, and it changed since the last written;
+    /// returns the file written. (Called only when every row has the same
+    /// samples: a pass half streamed in is not an image anyone measures.)
+    fn write_image(&mut self, canvas: &Canvas) -> std::io::Result<Option<PathBuf>> {
+        let Some(dir) = &self.images else { return Ok(None) };
+        let key = (canvas.generation(), canvas.changes());
+        if !canvas.is_complete() || self.last_image == Some(key) {
+            return Ok(None);
+        }
+        self.last_image = Some(key);
+        let [width, height] = canvas.size();
+        let path = dir.join(format!("frame-{}-{width}x{height}.f32", self.frames));
+        let bytes: Vec<u8> = canvas.linear().iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+        std::fs::write(&path, bytes).map_err(|e| {
+            std::io::Error::new(e.kind(), format!("{}: cannot write the image: {e}", path.display()))
+        })?;
+        Ok(Some(path))
     }
 
     /// Appends `line`, in one write so a reader never sees half of it.
@@ -214,5 +273,58 @@ mod tests {
     fn display_rows_are_written_as_runs_of_one_generation() {
         assert_eq!(runs(&[]), Vec::<[u64; 2]>::new());
         assert_eq!(runs(&[3, 3, 2, 2, 2, 0, 3]), [[3, 2], [2, 3], [0, 1], [3, 1]]);
+    }
+
+    fn row(y: u32, samples: u32, value: f32) -> super::super::render_job::Row {
+        let pixels = vec![egui::Color32::GRAY; 2];
+        super::super::render_job::Row {
+            generation: 1,
+            y,
+            samples,
+            pixels,
+            linear: vec![[value, 0.5, 2.0]; 2],
+        }
+    }
+
+    #[test]
+    fn a_frame_gives_the_samples_on_screen_and_writes_the_image_once_whole_at_one_count_and_changed() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("trace.jsonl");
+        let mut trace = Trace {
+            file: File::create(&path).unwrap(),
+            path: path.clone(),
+            start: Instant::now(),
+            previous_frame: None,
+            frames: 0,
+            last_job: None,
+            last_view: None,
+            images: Some(dir.path().to_owned()),
+            last_image: None,
+        };
+        let mut canvas = Canvas::new(1, 2, 2, 16);
+        let frame = |trace: &mut Trace, canvas: &Canvas| {
+            let frame =
+                Frame { scene: None, loading: false, zoom: None, canvas: Some(canvas), scene_view: None };
+            trace.frame(Instant::now(), Duration::ZERO, frame).unwrap();
+        };
+        assert!(canvas.apply(&row(0, 4, 0.25)));
+        frame(&mut trace, &canvas); // half the rows: no image
+        assert!(canvas.apply(&row(1, 4, 0.75)));
+        frame(&mut trace, &canvas); // whole at 4: written
+        frame(&mut trace, &canvas); // unchanged: not again
+        assert!(canvas.apply(&row(0, 8, 0.5)));
+        frame(&mut trace, &canvas); // rows at 8 and 4: not an image
+        let text = std::fs::read_to_string(&path).unwrap();
+        let lines: Vec<serde_json::Value> = text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+        let samples: Vec<_> = lines.iter().map(|l| l["samples"].clone()).collect();
+        assert_eq!(samples, [json!([0, 4]), json!([4, 4]), json!([4, 4]), json!([4, 8])]);
+        let images: Vec<_> = lines.iter().map(|l| l["image"].as_str().map(str::to_owned)).collect();
+        let written = dir.path().join("frame-2-2x2.f32");
+        assert_eq!(images, [None, Some(written.display().to_string()), None, None]);
+        let bytes = std::fs::read(&written).unwrap();
+        let values: Vec<f32> =
+            bytes.chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect();
+        let expected: Vec<f32> = [0.25, 0.25, 0.75, 0.75].iter().flat_map(|&v| [v, 0.5, 2.0]).collect();
+        assert_eq!(values, expected);
     }
 }
