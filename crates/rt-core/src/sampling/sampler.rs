@@ -8,9 +8,16 @@
 //! (`docs/conventions.md`): one sample per pixel is the
 //! pixel centre (0.5, 0.5). For n > 1 samples the pixel is split into a grid
 //! of n cells of equal area (an m × m grid when n = m²), sample k goes to
-//! cell k, and is jittered inside its cell: stratified jitter
+//! one cell of its own, and is jittered inside its cell: stratified jitter
 //! ([`stratified`]). Area-light and ambient-occlusion samples are
 //! stratified the same way.
+//!
+//! The cells are visited in an order that spreads every prefix of the
+//! samples over the whole pixel ([`Strata`]), not row by row: the viewer
+//! shows a fixed-count render after its first 1, 4, 16, … samples, and a
+//! partial merge of a split render holds some sample ranges only; in
+//! row-major order both would see the top of each pixel only (after 64 of
+//! 256 samples, its top quarter), and edges would be wrong until the end.
 //!
 //! That layout needs the count n before the first sample, so an open-ended
 //! render (the viewer's "no limit") uses [`Sampler::open_ended`] instead:
@@ -78,9 +85,18 @@ pub fn stratified(k: u32, n: u32, jitter: (Real, Real)) -> (Real, Real) {
 /// `⌊n/rows⌋ + 1` cells, the others `⌊n/rows⌋`, and each row's height is its
 /// number of cells over n, so every cell has area exactly 1/n and a uniform
 /// `jitter` gives a uniform point (a grid with empty cells would not). For
-/// n = m² this is the m × m grid, cell (k mod m, k div m). Made once per
-/// sample count (a renderer keeps its pixels'), so the square root and
-/// divisions that lay out the rows are not paid per sample.
+/// n = m² this is the m × m grid. Made once per sample count (a renderer
+/// keeps its pixels'), so the square root and divisions that lay out the
+/// rows are not paid per sample.
+///
+/// Point k goes to cell `order(k)`, a permutation of 0..n ([`CellOrder`]):
+/// where the grid is 2ᶜ × 2ᶜ or 2ᶜ⁺¹ × 2ᶜ (n = 2, 4, 8, 16, 64, 256, 1024,
+/// …) the bit-reversed Morton order, so that the first 4ʲ points fall one
+/// in each cell of the 2ʲ × 2ʲ grid (the first 4 one per quadrant, as the
+/// (0, 2)-sequences of Kollig and Keller's "Efficient Multidimensional
+/// Sampling", 2002, are stratified in every prefix of 4ʲ); for other n a
+/// stride through the cells by the integer nearest n/φ that is prime to n,
+/// whose prefixes spread over the rows as the golden-ratio sequence does.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Strata {
     n: u32,
@@ -94,6 +110,78 @@ pub struct Strata {
     /// and `1/n`, which are exact, so multiplying by them gives the
     /// quotients' very bits without a division.
     powers_of_two: Option<(u32, Real, Real)>,
+    /// The order the cells are visited in.
+    order: CellOrder,
+}
+
+/// The order in which [`Strata`] hands out its cells: a permutation of
+/// 0..n, so that every cell still holds exactly one of the n points.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum CellOrder {
+    /// Bit-reversed Morton order on a 2ᶜ-row grid with 2ᶜ (`wide` false)
+    /// or 2ᶜ⁺¹ (`wide` true) columns: bit i of the point's index becomes,
+    /// from the most significant down, alternately a bit of the column and
+    /// of the row, the column's first; the wide grid's last column bit is
+    /// the index's top bit. `bits` is log₂ n.
+    Morton { bits: u32, wide: bool },
+    /// Cell `(k · stride) mod n`, the stride prime to n.
+    Stride(u32),
+}
+
+impl CellOrder {
+    /// The order for `n` cells in rows of `base` (`extra` rows of one more).
+    fn new(n: u32, base: u32, extra: u32) -> Self {
+        let rows = n / base;
+        if extra == 0 && n.is_power_of_two() && base.is_power_of_two() && (base == rows || base == 2 * rows) {
+            return Self::Morton { bits: n.trailing_zeros(), wide: base == 2 * rows };
+        }
+        // The integer nearest n/φ that shares no factor with n (1 always does not).
+        let golden = (n as f64 * 0.618_033_988_749_895).round() as u32;
+        let gcd = |mut a: u32, mut b: u32| {
+            while b != 0 {
+                (a, b) = (b, a % b);
+            }
+            a
+        };
+        let stride = (0..n)
+            .flat_map(|d| [golden.saturating_sub(d), golden + d])
+            .find(|&s| s >= 1 && gcd(s, n) == 1)
+            .unwrap_or(1);
+        Self::Stride(stride)
+    }
+
+    /// The row-major index of point `k`'s cell (`k` < n) in a grid of rows
+    /// of `base` cells (`shift` = log₂ `base`, Morton order only).
+    #[inline]
+    fn cell(self, k: u32, n: u32, shift: u32) -> u32 {
+        match self {
+            Self::Morton { bits: 0, .. } => 0,
+            Self::Morton { bits, wide } => {
+                // The index's bits reversed: its lowest bit is now the top one.
+                let mut r = k.reverse_bits() >> (32 - bits);
+                let last_column_bit = if wide { r & 1 } else { 0 };
+                if wide {
+                    r >>= 1;
+                }
+                // Even bits of r are the row's, odd bits the column's.
+                let (row, column) = (compact_even_bits(r), compact_even_bits(r >> 1));
+                let column = if wide { column << 1 | last_column_bit } else { column };
+                row << shift | column
+            }
+            Self::Stride(stride) => ((k as u64 * stride as u64) % n as u64) as u32,
+        }
+    }
+}
+
+/// The even-numbered bits of `x` (bits 0, 2, 4, …) packed together: the
+/// inverse of spreading a number's bits for a Morton code.
+#[inline]
+fn compact_even_bits(mut x: u32) -> u32 {
+    x &= 0x5555_5555;
+    x = (x | x >> 1) & 0x3333_3333;
+    x = (x | x >> 2) & 0x0f0f_0f0f;
+    x = (x | x >> 4) & 0x00ff_00ff;
+    (x | x >> 8) & 0x0000_ffff
 }
 
 impl Strata {
@@ -104,14 +192,15 @@ impl Strata {
         let (base, extra) = (n / rows, n % rows);
         let powers_of_two = (extra == 0 && base.is_power_of_two() && n.is_power_of_two())
             .then(|| (base.trailing_zeros(), 1.0 / base as Real, 1.0 / n as Real));
-        Self { n, base, extra, wide: extra * (base + 1), powers_of_two }
+        let order = CellOrder::new(n, base, extra);
+        Self { n, base, extra, wide: extra * (base + 1), powers_of_two, order }
     }
 
     /// Point `k` placed at `jitter` ∈ [0,1)² inside its cell.
     #[inline]
     pub fn point(&self, k: u32, jitter: (Real, Real)) -> (Real, Real) {
-        let Strata { n, base, extra, wide, powers_of_two } = *self;
-        let k = k.min(n - 1);
+        let Strata { n, base, extra, wide, powers_of_two, order } = *self;
+        let k = order.cell(k.min(n - 1), n, base.trailing_zeros());
         // `(c + j) / n < 1` for j < 1 in exact arithmetic; `min` keeps it so after rounding.
         let below_one = 1.0 - Real::EPSILON / 2.0;
         if let Some((shift, inv_base, inv_n)) = powers_of_two {
@@ -670,6 +759,47 @@ mod tests {
     }
 
     #[test]
+    fn every_prefix_of_four_to_the_j_samples_falls_one_in_each_cell_of_the_coarser_grid() {
+        // The viewer shows a 256-sample render after 1, 4, 16 and 64 samples:
+        // each must cover the whole pixel (row-major order put the first 64
+        // in its top quarter).
+        for n in [4, 16, 64, 256, 1024] {
+            let mut j = 0;
+            while 1 << (2 * j) <= n {
+                let (prefix, side) = (1u32 << (2 * j), 1u32 << j);
+                let mut seen = vec![false; prefix as usize];
+                for k in 0..prefix {
+                    let (x, y) = stratified(k, n, (0.5, 0.5));
+                    let cell = (y * side as Real) as usize * side as usize + (x * side as Real) as usize;
+                    assert!(!seen[cell], "n = {n}: sample {k} shares a cell of the {side}×{side} grid");
+                    seen[cell] = true;
+                }
+                j += 1;
+            }
+        }
+        // 8 samples (a 4 × 2 grid): the first two in the left and right halves.
+        let (a, b) = (stratified(0, 8, (0.5, 0.5)), stratified(1, 8, (0.5, 0.5)));
+        assert!((a.0 < 0.5) != (b.0 < 0.5), "{a:?} {b:?}");
+    }
+
+    #[test]
+    fn other_counts_visit_every_cell_once_and_spread_their_first_quarter_and_half_over_the_rows() {
+        // Row-major order put the first quarter of the points in the top
+        // quarter of the pixel: none below the middle.
+        for n in (2..1100).filter(|n| !matches!(Strata::new(*n).order, CellOrder::Morton { .. })) {
+            let strata = Strata::new(n);
+            let mut cells: Vec<u32> = (0..n).map(|k| strata.order.cell(k, n, 0)).collect();
+            for prefix in [n / 4, n / 2].into_iter().filter(|&m| m >= 2) {
+                let below = (0..prefix).filter(|&k| strata.point(k, (0.5, 0.5)).1 >= 0.5).count();
+                let half = prefix as f64 / 2.0;
+                assert!((below as f64 - half).abs() <= 1.0 + half * 0.3, "n = {n}: {below} of {prefix} below");
+            }
+            cells.sort_unstable();
+            assert_eq!(cells, (0..n).collect::<Vec<_>>(), "n = {n}");
+        }
+    }
+
+    #[test]
     fn one_sample_is_the_pixel_centre() {
         assert_eq!(subpixel_offset(7, 3, 0, 1, 0), (0.5, 0.5));
     }
@@ -735,13 +865,13 @@ mod tests {
     }
 
     #[test]
-    fn the_largest_jitter_stays_below_one_and_an_index_past_the_count_stays_in_the_last_cell() {
-        // Jitter just below 1 in the last cell gives the largest number below
-        // 1 (not 1, not less); k ≥ n is sample n − 1.
+    fn the_largest_jitter_stays_below_one_and_an_index_past_the_count_stays_in_the_last_point_s_cell() {
+        // Jitter just below 1 in the last cell (whichever point has it) gives
+        // the largest number below 1 (not 1, not less); k ≥ n is point n − 1.
         let top = 1.0 - Real::EPSILON / 2.0;
         for n in [1, 5, 16, 17] {
             let strata = Strata::new(n);
-            assert_eq!(strata.point(n - 1, (top, top)), (top, top), "n = {n}");
+            assert!((0..n).any(|k| strata.point(k, (top, top)) == (top, top)), "n = {n}");
             assert_eq!(strata.point(n + 3, (0.25, 0.75)), strata.point(n - 1, (0.25, 0.75)), "n = {n}");
         }
     }
