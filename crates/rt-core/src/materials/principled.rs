@@ -375,12 +375,12 @@ impl Lobes {
             fresnel_average: 0.0,
         };
         let f0_max = lobes.f0.max_element();
-        let weight_average = if lobes.exact_ior > 0.0 && p.transmission < 1.0 {
-            exact_weight_average(lobes.exact_ior)
+        let f0_max_weighted = if lobes.exact_ior > 0.0 && p.transmission < 1.0 {
+            (1.0 - f0_max) * exact_weight_average(lobes.exact_ior)
         } else {
-            1.0 / 21.0
+            (1.0 - f0_max) / 21.0
         };
-        lobes.fresnel_average = lobes.weight * (f0_max + (1.0 - f0_max) * weight_average);
+        lobes.fresnel_average = lobes.weight * (f0_max + f0_max_weighted);
         let keep = 1.0 - coat;
         let fd = lobes.weight * lobes.dielectric_fresnel(cos_o).max_element();
         let (m, t) = (lobes.metallic, lobes.transmission);
