@@ -38,9 +38,11 @@ a constant `background` and global illumination. Cycles renders the same
   linear sRGB), with the Standard view transform (not used by EXR anyway).
 
 What still differs between the two models, by design, is listed in
-docs/models.md ("Compared with Blender Cycles"): Cycles' dielectric Fresnel
-is exact, not Schlick's; its diffuse base is scaled by the specular layer's
-tabulated albedo; a metal's edge uses the F82-tint model; Cycles offsets
+docs/models.md ("Compared with Blender Cycles"): Cycles' Fresnel for an
+opaque dielectric is exact, not Schlick's (rt-view's glass uses the exact
+one too); its diffuse base is scaled by the specular layer's tabulated
+albedo at the view, where rt-view's reciprocal weighting also takes it at
+the light; rt-view mip-maps normal maps, Cycles reads them full-size; a metal's edge uses the F82-tint model; Cycles offsets
 shadow rays of smooth meshes (its shadow-terminator geometry offset, 0.1),
 where rt-view uses Chiang et al.'s terminator term.
 

@@ -226,12 +226,20 @@ impl Mesh {
     /// triangles with zero-area coordinates and no neighbour to borrow
     /// from) keep none, and the normal map falls back to any frame there.
     pub fn with_generated_tangents(self) -> Self {
-        if !self.has_uvs()
+        self.with_generated_tangents_of_set(0)
+    }
+
+    /// [`Mesh::with_generated_tangents`] from texture-coordinate set `set`
+    /// (`TEXCOORD_set`): a normal map's tangent space follows the set the
+    /// map is read through (glTF's `normalTexture.texCoord`). A mesh
+    /// without that set is returned as it is.
+    pub fn with_generated_tangents_of_set(self, set: u32) -> Self {
+        if !self.has_uv_set(set)
             || (self.has_tangents() && self.vertex_tangents().iter().all(|t| t[..3] != [0.0; 3]))
         {
             return self;
         }
-        let mut generated = MikkInput { mesh: &self, tangents: vec![[0.0; 4]; self.positions.len()] };
+        let mut generated = MikkInput { mesh: &self, set, tangents: vec![[0.0; 4]; self.positions.len()] };
         // The crate's error type has no values: generation cannot fail.
         let _ = bevy_mikktspace::generate_tangents(&mut generated);
         let mut tangents = generated.tangents;
@@ -625,6 +633,8 @@ impl Mesh {
 /// A mesh as MikkTSpace reads it, and the tangents it writes back.
 struct MikkInput<'m> {
     mesh: &'m Mesh,
+    /// The texture-coordinate set the tangents follow.
+    set: u32,
     tangents: Vec<[f32; 4]>,
 }
 
@@ -647,7 +657,7 @@ impl bevy_mikktspace::Geometry for MikkInput<'_> {
     fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
         // MikkTSpace's bitangent w·(N × T) follows increasing v; ours
         // points up the image, towards decreasing v (glTF's): give it −v.
-        let [u, v] = self.mesh.uvs()[self.mesh.triangles[face][vert] as usize];
+        let [u, v] = self.mesh.uvs_of_set(self.set)[self.mesh.triangles[face][vert] as usize];
         [u, -v]
     }
     fn set_tangent(&mut self, tangent: Option<bevy_mikktspace::TangentSpace>, face: usize, vert: usize) {
@@ -952,6 +962,23 @@ mod tests {
             .unwrap()
             .with_vertex_attributes(Vec::new(), uvs)
             .unwrap()
+    }
+
+    #[test]
+    fn mikktspace_tangents_follow_the_texture_coordinate_set_they_are_made_for() {
+        // Set 0 runs u along +x, set 1 along +y (the image turned a quarter):
+        // the tangents of set 1 run along +y, those of set 0 along +x.
+        let at = Vec3::new(0.3, 0.6, 0.0);
+        let with_both = || {
+            let turned = [[0.0, 1.0], [0.0, 0.0], [1.0, 0.0], [1.0, 1.0]].to_vec();
+            quad(|x, y| [x, 1.0 - y]).with_second_uvs(turned).unwrap()
+        };
+        let (t, _) = with_both().with_generated_tangents_of_set(1).tangent(0, at).unwrap();
+        assert!((t - Vec3::Y).length() < 1e-6, "set 1: {t}");
+        let (t, _) = with_both().with_generated_tangents_of_set(0).tangent(0, at).unwrap();
+        assert!((t - Vec3::X).length() < 1e-6, "set 0: {t}");
+        // A set the mesh lacks makes none.
+        assert!(!quad(|x, y| [x, y]).with_generated_tangents_of_set(1).has_tangents());
     }
 
     #[test]

@@ -45,6 +45,10 @@ pub struct SurfaceInteraction<'s> {
     /// by the material's normal map), or `None` where it is the geometric
     /// normal.
     pub shading_normal: Option<Vec3>,
+    /// Where the material's normal map bent the shading normal: the normal
+    /// it bent (the interpolated one, or `None` for the geometric one), for
+    /// the normal-map rules of [`Bsdf::mapped`].
+    pub unmapped_normal: Option<Option<Vec3>>,
     /// The object's material at the point, its texture applied.
     pub material: Cow<'s, Material>,
     /// The object hit.
@@ -76,11 +80,23 @@ impl<'s> SurfaceInteraction<'s> {
         let footprint = Footprint::new(cone_width, d.dot(point.normal));
         let material = scene.material_at_footprint(hit.object, hit.primitive, point.p, footprint);
         let mut shading_normal = shape.primitive.shading_normal(hit.primitive, point.p);
-        if let Some((texel, scale)) = scene.normal_texel_at(hit.object, hit.primitive, point.p, footprint) {
-            shading_normal =
-                normal_mapped(shape, hit.primitive, &point, shading_normal, texel, scale).or(shading_normal);
+        let mut unmapped_normal = None;
+        if let Some((texel, scale)) = scene.normal_texel_at(hit.object, hit.primitive, point.p, footprint)
+            && let Some(mapped) = normal_mapped(shape, hit.primitive, &point, shading_normal, texel, scale)
+        {
+            unmapped_normal = Some(shading_normal);
+            shading_normal = Some(mapped);
         }
-        Self { object: hit.object, primitive: hit.primitive, point, wo: -d, shading_normal, material, shape }
+        Self {
+            object: hit.object,
+            primitive: hit.primitive,
+            point,
+            wo: -d,
+            shading_normal,
+            unmapped_normal,
+            material,
+            shape,
+        }
     }
 
     /// Whether the ray arrived on the side the geometric normal points to
@@ -112,10 +128,14 @@ impl<'s> SurfaceInteraction<'s> {
 
     /// The BSDF of `material` here, about `shading` (or the geometric
     /// normal): the boundary of a translucent object is flat and clear.
+    /// About the normal map's normal, the rules of [`Bsdf::mapped`] apply.
     #[inline]
     pub fn bsdf_of(&self, material: &Material, shading: Option<Vec3>) -> Bsdf {
         let n = self.point.normal;
-        Bsdf::shaded(material, n, shading.unwrap_or(n), self.wo)
+        match (shading, self.unmapped_normal) {
+            (Some(mapped), Some(smooth)) => Bsdf::mapped(material, n, smooth.unwrap_or(n), mapped, self.wo),
+            _ => Bsdf::shaded(material, n, shading.unwrap_or(n), self.wo),
+        }
     }
 
     /// A ray leaving the surface along `dir`, from the point pushed off the

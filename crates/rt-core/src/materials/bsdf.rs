@@ -76,12 +76,53 @@
 //!
 //! With `n_s = n_g` (every primitive but a mesh with vertex normals) all
 //! three are the plain rules above, and nothing changes.
+//!
+//! # Normal maps
+//!
+//! A normal map ([`crate::materials::normal_map`]) bends the smooth normal
+//! `n_s` (the interpolated one, or `n_g`) to `n_m`, far more than vertex
+//! normals ever lean, and the lobes are defined about `n_m`
+//! ([`Bsdf::mapped`]). The rules above still hold about `n_g` (no leaks,
+//! Chiang et al.'s term between `n_g` and `n_s`), and two more apply, as
+//! Blender Cycles applies them:
+//!
+//! - **A reflection the viewer can see.** Where `n_m` leans so far from the
+//!   viewer that the mirror reflection `r` of `ω_o` about it points into the
+//!   surface (`r·n_g < t`, `t = min(0.9·cos θ_o, 0.01)`,
+//!   [`crate::math::real::VALID_REFLECTION_MARGIN`]), `n_m` is bent back
+//!   towards `n_g` in their common plane, `n' = cos φ·n_g + sin φ·x` (`x`
+//!   the unit direction of the lean along the surface), to the largest lean
+//!   whose mirror reflection of `ω_o` has cosine `t` with `n_g`: as
+//!   `r'·n_g = 2(n'·ω_o)(n'·n_g) − ω_o·n_g = z·cos 2φ + x_o·sin 2φ` with
+//!   `z = ω_o·n_g`, `x_o = ω_o·x`, that is
+//!   `2φ = atan2(x_o, z) + acos(t/√(z² + x_o²))` (Blender Cycles'
+//!   `ensure_valid_specular_reflection` bends it in the same plane to the
+//!   same cosine; this is its closed form, not its code). The bend is
+//!   exact however far the map leans. `ω_o` is then above the lobes' normal, so no fallback to `n_g`
+//!   is needed. As in Cycles, only the specular lobes turn about the bent
+//!   normal: the diffuse base keeps the map's `n_m` (its value carries the
+//!   ratio `max(0, n_m·ω_i)/(n·ω_i)` of its cosine to the bent normal's,
+//!   which the integrators multiply by).
+//! - **Bumps shadow their own diffuse light.** The diffuse base is
+//!   multiplied by Conty Estevez, Lecocq and Stein's shadowing term ("A
+//!   Microfacet-Based Shadowing Function to Solve the Bump Terminator
+//!   Problem", Ray Tracing Gems, 2019, ch. 12): Smith's GGX masking
+//!   `G₁ = 2/(1 + √(1 + α_b²·tan²θ_i))` of `ω_i` about `n_s`, for a
+//!   roughness that grows with the bend, `α_b² = min(1, tan²θ_d/8)`,
+//!   `cos θ_d = n_s·n_m`. Chiang et al.'s term (above) darkens a gentle
+//!   bump's lit flank too much and a steep one's too little; this one is
+//!   1 for an unbent normal and light from straight above, and fades the
+//!   light smoothly towards the horizon of `n_s` the more the map bends.
+//!   The specular lobes are not softened (Cycles softens the diffuse
+//!   closures only).
 
 use crate::materials::material::Material;
 use crate::materials::principled::{Chosen, Lobes, sample_visible_normal};
 use crate::materials::shading::{fresnel_dielectric, reflect, refract};
 use crate::math::color::Color;
-use crate::math::real::{Real, Vec3, to_f32};
+use crate::math::real::{
+    Real, VALID_REFLECTION_MARGIN, VALID_REFLECTION_SHARE, Vec3, normalize_robust, to_f32,
+};
 use crate::sampling::sampler::cosine_hemisphere;
 
 /// Which lobe a sample came from.
@@ -136,6 +177,14 @@ pub struct Bsdf {
     ng: Vec3,
     /// Whether `n` differs from `ng` (the shading-normal rules apply).
     shaded: bool,
+    /// The smooth normal a normal map bent to `n`, turned to `ω_o`'s side
+    /// (`n` itself without a map).
+    ns: Vec3,
+    /// Whether a normal map bent `ns` to `n` (the rules of "Normal maps").
+    bumped: bool,
+    /// The normal map's normal before it was bent for a visible reflection:
+    /// the diffuse base's normal ("Normal maps"; `n` without a map).
+    nd: Vec3,
     /// Tangents completing `n` to an orthonormal frame.
     frame: (Vec3, Vec3),
     /// `ω_o` arrives from the side the geometric normal points to (outside).
@@ -192,6 +241,25 @@ impl Bsdf {
         Self::with_normals(m, n, ng, outside, wo)
     }
 
+    /// The BSDF of `m` at a hit with unit geometric normal `geometric` where
+    /// a normal map bent the unit smooth normal `smooth` (a mesh's
+    /// interpolated normal, or `geometric`) to the unit `mapped`, seen from
+    /// `wo` (see "Normal maps" above).
+    #[inline]
+    pub fn mapped(m: &Material, geometric: Vec3, smooth: Vec3, mapped: Vec3, wo: Vec3) -> Self {
+        let outside = wo.dot(geometric) >= 0.0;
+        let ng = if outside { geometric } else { -geometric };
+        let ns = if smooth.dot(ng) < 0.0 { -smooth } else { smooth };
+        let n = if mapped.dot(ng) < 0.0 { -mapped } else { mapped };
+        let nd = n;
+        let n = visible_reflection_normal(ng, wo, n);
+        let mut b = Self::with_normals(m, n, ng, outside, wo);
+        b.ns = ns;
+        b.nd = nd;
+        b.bumped = n != ns;
+        b
+    }
+
     #[allow(clippy::unnecessary_cast)] // `Real` is f64 with the `f64` feature.
     #[inline]
     fn with_normals(m: &Material, n: Vec3, ng: Vec3, outside: bool, wo: Vec3) -> Self {
@@ -207,6 +275,9 @@ impl Bsdf {
             n,
             ng,
             shaded: n != ng,
+            ns: n,
+            bumped: false,
+            nd: n,
             frame: n.any_orthonormal_pair(),
             outside,
             diffuse,
@@ -264,6 +335,10 @@ impl Bsdf {
                 return Color::ZERO;
             }
             let f = p.eval(self.local(wo), self.local(wi));
+            if self.bumped && self.n.dot(wi) > 0.0 {
+                let diffuse = p.eval_diffuse(self.local(wo), self.local(wi));
+                return self.bump_shadowed(f, diffuse, wi);
+            }
             return if self.shaded && self.n.dot(wi) > 0.0 { f * self.terminator(wi) } else { f };
         }
         let (cos_o, cos_i) = (self.n.dot(wo), self.n.dot(wi));
@@ -271,8 +346,12 @@ impl Bsdf {
             return Color::ZERO;
         }
         let mut f = self.diffuse * std::f32::consts::FRAC_1_PI;
+        let diffuse = f;
         if self.glossy > 0.0 {
             f += self.specular_color * (self.glossy * to_f32(self.ggx(self.local(wo), self.local(wi))));
+        }
+        if self.bumped {
+            return self.bump_shadowed(f, diffuse, wi);
         }
         if self.shaded { f * self.terminator(wi) } else { f }
     }
@@ -289,6 +368,44 @@ impl Bsdf {
         let g = to_f32(self.ng.dot(wi) / (self.n.dot(wi) * self.ng.dot(self.n)));
         let g = if g.is_finite() { g.clamp(0.0, 1.0) } else { 1.0 };
         -g * g * g + g * g + g
+    }
+
+    /// `f` (all smooth lobes, of which `diffuse` is the diffuse base) for
+    /// light from `wi` above a normal-mapped surface: the diffuse base times
+    /// the bump's shadowing term, all of it times Chiang et al.'s term
+    /// between the facet and the smooth normal (see "Normal maps").
+    fn bump_shadowed(&self, f: Color, diffuse: Color, wi: Vec3) -> Color {
+        let rest = (f - diffuse).max(Color::ZERO);
+        // The diffuse base lies about the unbent normal: its cosine, not
+        // the bent normal's, which the caller multiplies by.
+        let cosines = if self.nd == self.n {
+            1.0
+        } else {
+            to_f32((self.nd.dot(wi).max(0.0) / self.n.dot(wi)).max(0.0))
+        };
+        let f = diffuse * (cosines * self.bump_shadowing(wi)) + rest;
+        if self.ns == self.ng {
+            return f;
+        }
+        let g = to_f32(self.ng.dot(wi) / (self.ns.dot(wi) * self.ng.dot(self.ns)));
+        let g = if g.is_finite() { g.clamp(0.0, 1.0) } else { 1.0 };
+        f * (-g * g * g + g * g + g)
+    }
+
+    /// Conty Estevez, Lecocq and Stein's shadowing term for a normal map
+    /// (see "Normal maps"): Smith's GGX `G₁` of `ω_i` about the smooth
+    /// normal for `α² = min(1, tan²θ_d/8)`, `θ_d` the map's bend.
+    fn bump_shadowing(&self, wi: Vec3) -> f32 {
+        let (cos_d, cos_i) = (self.ns.dot(self.nd), self.ns.dot(wi));
+        if cos_i <= 0.0 {
+            return 0.0;
+        }
+        if cos_d >= 1.0 || cos_i >= 1.0 {
+            return 1.0;
+        }
+        let alpha2 = (0.125 * (1.0 / (cos_d * cos_d) - 1.0)).clamp(0.0, 1.0);
+        let tan2_i = 1.0 / (cos_i * cos_i) - 1.0;
+        to_f32(2.0 / (1.0 + (1.0 + alpha2 * tan2_i).sqrt()))
     }
 
     /// The density over solid angle with which [`Bsdf::sample`] draws `ω_i`
@@ -462,6 +579,27 @@ impl Bsdf {
     fn ggx_sample_normal(&self, wo: Vec3, u: (Real, Real)) -> Vec3 {
         sample_visible_normal(wo, self.alpha, u)
     }
+}
+
+/// The normal `n` (a normal map's, turned to `ω_o`'s side of the geometric
+/// normal `ng`) bent towards `wo` just enough that the mirror reflection of
+/// `wo` about it clears the surface (see "Normal maps"); `n` itself where
+/// it does already.
+fn visible_reflection_normal(ng: Vec3, wo: Vec3, n: Vec3) -> Vec3 {
+    let wz = ng.dot(wo);
+    let t = (VALID_REFLECTION_SHARE * wz).min(VALID_REFLECTION_MARGIN);
+    if (n * (2.0 * n.dot(wo)) - wo).dot(ng) >= t {
+        return n;
+    }
+    // The lean's direction along the surface; n = ng always passes above.
+    let Some(x) = normalize_robust(n - ng * n.dot(ng)) else { return ng };
+    let wx = x.dot(wo);
+    let a = (wz * wz + wx * wx).sqrt();
+    if a.is_nan() || a <= 0.0 {
+        return ng;
+    }
+    let phi = (0.5 * (wx.atan2(wz) + (t / a).clamp(-1.0, 1.0).acos())).max(0.0);
+    ng * phi.cos() + x * phi.sin()
 }
 
 /// The power heuristic with β = 2 for a sample drawn with density `pdf_a`
@@ -762,6 +900,58 @@ mod tests {
         assert_eq!(at(80.0), 1.0);
         let fading: Vec<f32> = [20.0, 10.0, 5.0, 1.0, 0.0].iter().map(|&d| at(d)).collect();
         assert!(fading.windows(2).all(|w| w[1] <= w[0]) && fading[4] == 0.0 && fading[0] > 0.5, "{fading:?}");
+    }
+
+    /// A unit direction in the x-y plane at `degrees` from +y towards +x.
+    fn leaning(degrees: Real) -> Vec3 {
+        let a = degrees.to_radians();
+        Vec3::new(a.sin(), a.cos(), 0.0)
+    }
+
+    #[test]
+    fn a_normal_maps_diffuse_light_fades_by_the_microfacet_bump_shadowing_term() {
+        // A flat facet (+y) whose map leans the normal 30° to +x, lit from
+        // 75° off +y on that side (15° above the horizon), seen from above:
+        // the Lambert value is 1/π times Conty Estevez et al.'s G₁ for
+        // α² = tan²30°/8 at θ_i = 75° (0.886), not Chiang et al.'s
+        // −g³ + g² + g for g = cos 75°/(cos 45°·cos 30°) (0.578), which
+        // darkened the lit flanks of bumps.
+        let m = Material::flat(Color::ONE);
+        let (n, wi, wo) = (leaning(30.0), leaning(75.0), Vec3::Y);
+        let b = Bsdf::mapped(&m, Vec3::Y, Vec3::Y, n, wo);
+        assert_eq!(b.normal(), n, "the viewer sees the reflection: no bend");
+        let alpha2 = to_f64(0.125 * (1.0 / (n.y * n.y) - 1.0));
+        let tan2 = to_f64(1.0 / (wi.y * wi.y) - 1.0);
+        let g1 = 2.0 / (1.0 + (1.0 + alpha2 * tan2).sqrt());
+        let got = f64::from(b.eval(wo, wi).x) * std::f64::consts::PI;
+        assert!((got - g1).abs() < 1e-5 && (g1 - 0.886).abs() < 1e-3, "{got} {g1}");
+        // Without a map nothing fades; below the facet nothing arrives.
+        let flat = Bsdf::mapped(&m, Vec3::Y, Vec3::Y, Vec3::Y, wo).eval(wo, wi).x * std::f32::consts::PI;
+        assert!((flat - 1.0).abs() < 1e-6, "{flat}");
+        assert_eq!(b.eval(wo, leaning(95.0)), Color::ZERO);
+    }
+
+    #[test]
+    fn a_mapped_normal_leaning_away_from_the_viewer_is_bent_for_a_visible_reflection() {
+        // The map leans the normal 60° to +x; the viewer is 60° off +y on
+        // the other side, behind the mapped normal (ω_o·n = cos 120°).
+        let m = Material::flat(Color::ONE);
+        let (n, wo) = (leaning(60.0), leaning(-60.0));
+        let b = Bsdf::mapped(&m, Vec3::Y, Vec3::Y, n, wo);
+        let bent = b.normal();
+        let r = bent * (2.0 * bent.dot(wo)) - wo;
+        let margin = (VALID_REFLECTION_SHARE * wo.y).min(VALID_REFLECTION_MARGIN);
+        assert!(bent.dot(wo) > 0.0 && (r.y - margin).abs() < 1e-5, "{bent}: reflection {r}");
+        // The diffuse base still lies about the map's normal: light along
+        // it arrives with its full cosine, one from the far side of it
+        // (above the facet) with none.
+        let along = leaning(60.0);
+        let value = b.eval(wo, along) * to_f32(b.cosine(along));
+        let term = 2.0 / (1.0 + (1.0 + 0.125 * 3.0 * 3.0_f32).sqrt());
+        assert!((value.x * std::f32::consts::PI - term).abs() < 1e-4, "{value} vs {term}");
+        assert_eq!(b.eval(wo, leaning(-40.0)), Color::ZERO);
+        // The shading-normal rules without a map keep the facet fallback.
+        assert_eq!(Bsdf::shaded(&m, Vec3::Y, n, wo).normal(), Vec3::Y);
     }
 
     #[test]

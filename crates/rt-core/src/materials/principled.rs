@@ -32,6 +32,18 @@
 //!   outer (less dense) side, and F_d = 1 past the critical angle: Schlick's
 //!   approximation is only defined from the less dense side (pbrt-v3
 //!   §8.2.1's "Schlick with cos θ_t"), and light cannot leave there.
+//! - **Exact Fresnel for transmission.** A transmissive material
+//!   (transmission > 0, the rough dielectric of `KHR_materials_transmission`)
+//!   replaces Schlick's weight `(1 − c)⁵` by the exact one,
+//!   `(F(c) − F(1))/(1 − F(1))`, `F` the unpolarised dielectric Fresnel
+//!   reflectance of its `ior` (pbrt-v4 §9.3, `FrDielectric`): with the
+//!   default `specular_color` and `specular` it is `F` itself, as Mitsuba 3's
+//!   `roughdielectric` and Blender Cycles (whose "generalised Schlick"
+//!   Fresnel does the same rescaling) have it, so a glass reflects and
+//!   transmits what a real boundary does; for ior 1.5 Schlick's approximation
+//!   reflects 16 % to 22 % less than a real boundary between 45° and 60°
+//!   from the normal and up to 0.036 more (6 %) between 80° and 85°, and it
+//!   is not defined from the dense side at all. An opaque dielectric keeps glTF's Schlick.
 //! - The conductor's Fresnel term is Schlick's, tinted by the base colour
 //!   (glTF §B.3.3 `conductor_fresnel(f0 = baseColor, bsdf)`).
 //! - Transmission (`KHR_materials_transmission` with `KHR_materials_volume`:
@@ -97,6 +109,7 @@
 //! the surface (`cos θ_o > 0`): [`crate::materials::bsdf::Bsdf`] turns the
 //! frame to the viewer and applies the shading-normal rules.
 
+use crate::materials::shading::fresnel_dielectric;
 use crate::math::color::Color;
 use crate::math::real::{Real, SMOOTH_ALPHA, Vec3, to_f32};
 use crate::sampling::sampler::cosine_hemisphere;
@@ -218,6 +231,10 @@ pub(crate) struct Lobes {
     /// The dielectric Fresnel's f₀ (colour) and weight w.
     f0: Color,
     weight: f32,
+    /// The index of refraction of a transmissive material's inside (then
+    /// its dielectric Fresnel is the exact one, "Exact Fresnel for
+    /// transmission"); 0 for an opaque one (Schlick's, as glTF says).
+    exact_ior: Real,
     /// `c·F_c(cos θ_o)`: what the clearcoat reflects, and 1 minus it what it passes.
     coat: f32,
     /// Probabilities of choosing diffuse, reflection, transmission, coat.
@@ -227,6 +244,33 @@ pub(crate) struct Lobes {
     /// `F̄ = 2∫ w·max F(μ)·μ dμ = w·(f₀ + (1 − f₀)/21)` (f₀ the largest
     /// channel's): the cosine-weighted mean of the dielectric Fresnel.
     fresnel_average: f32,
+}
+
+/// The exact dielectric Fresnel reflectance `F(c)` (for light arriving
+/// from outside at cosine `c` on a boundary of index `ior`) as the weight
+/// that Schlick's `(1 − c)⁵` stands in for: `(F(c) − F(1))/(1 − F(1))`,
+/// 0 head-on and 1 at grazing (see "Exact Fresnel for transmission").
+fn exact_weight(c: Real, ior: Real) -> f32 {
+    let r0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
+    if r0 >= 1.0 {
+        return 1.0;
+    }
+    to_f32(((fresnel_dielectric(c, 1.0, ior) - r0) / (1.0 - r0)).clamp(0.0, 1.0))
+}
+
+/// `2∫ exact_weight(μ)·μ dμ` by the midpoint rule on 64 intervals of `μ`
+/// (error about 2·10⁻⁵ for ior 1.2 to 2.4, against a mean of about 0.05;
+/// Schlick's weight has the closed form 1/21). Computed only for partly
+/// transmissive materials, whose diffuse base needs it.
+fn exact_weight_average(ior: Real) -> f32 {
+    const N: u32 = 64;
+    let sum: f32 = (0..N)
+        .map(|k| {
+            let mu = (k as Real + 0.5) / N as Real;
+            exact_weight(mu, ior) * to_f32(2.0 * mu)
+        })
+        .sum();
+    sum / N as f32
 }
 
 /// `(1 − c)⁵`.
@@ -324,13 +368,19 @@ impl Lobes {
             eta,
             f0,
             weight: p.specular,
+            exact_ior: if p.transmission > 0.0 { ior } else { 0.0 },
             coat,
             choose: [0.0; 4],
             diffuse_albedo: Color::ZERO,
             fresnel_average: 0.0,
         };
         let f0_max = lobes.f0.max_element();
-        lobes.fresnel_average = lobes.weight * (f0_max + (1.0 - f0_max) / 21.0);
+        let f0_max_weighted = if lobes.exact_ior > 0.0 && p.transmission < 1.0 {
+            (1.0 - f0_max) * exact_weight_average(lobes.exact_ior)
+        } else {
+            (1.0 - f0_max) / 21.0
+        };
+        lobes.fresnel_average = lobes.weight * (f0_max + f0_max_weighted);
         let keep = 1.0 - coat;
         let fd = lobes.weight * lobes.dielectric_fresnel(cos_o).max_element();
         let (m, t) = (lobes.metallic, lobes.transmission);
@@ -363,7 +413,8 @@ impl Lobes {
         } else {
             c
         };
-        self.f0 + (Color::ONE - self.f0) * schlick_weight(c)
+        let weight = if self.exact_ior > 0.0 { exact_weight(c, self.exact_ior) } else { schlick_weight(c) };
+        self.f0 + (Color::ONE - self.f0) * weight
     }
 
     fn smooth(&self) -> bool {
@@ -457,6 +508,24 @@ impl Lobes {
         } else {
             Color::ZERO
         }
+    }
+
+    /// The diffuse base's part of [`Lobes::eval`] (a normal map's
+    /// shadowing term softens it alone: [`crate::materials::bsdf`],
+    /// "Normal maps").
+    pub fn eval_diffuse(&self, wo: Vec3, wi: Vec3) -> Color {
+        if wi.z <= 0.0 || self.fresnel_average >= 1.0 {
+            return Color::ZERO;
+        }
+        let fo = self.weight * self.dielectric_fresnel(wo.z).max_element();
+        let fi = self.weight * self.dielectric_fresnel(wi.z).max_element();
+        let fb = (1.0 - fo) * (1.0 - fi) / (1.0 - self.fresnel_average);
+        self.base
+            * (fb
+                * (1.0 - self.transmission)
+                * std::f32::consts::FRAC_1_PI
+                * (1.0 - self.metallic)
+                * (1.0 - self.coat))
     }
 
     /// The density over solid angle with which [`Lobes::sample`] draws a
@@ -639,6 +708,45 @@ mod tests {
             }
         }
         sum * 2.0 * std::f64::consts::PI / (side * side) as f64
+    }
+
+    #[test]
+    fn a_transmissive_boundary_reflects_the_exact_dielectric_fresnel_from_both_sides() {
+        // Smooth glass of ior 1.5: its δ reflection is F(θ) of a real
+        // boundary (Schlick's is 16 % to 22 % low at 45°–60°), and from the
+        // inside the same F at the refracted angle, up to total internal
+        // reflection; what is not reflected is transmitted.
+        let glass = pbr(Color::ONE, |p| (p.transmission, p.roughness) = (1.0, 0.0));
+        assert_eq!(glass.ior, 1.5);
+        for degrees in [0.0 as Real, 30.0, 45.0, 60.0, 70.0, 80.0, 85.0] {
+            let wo = at(degrees);
+            let cos = to_f64(wo.y);
+            let (reflected, transmitted) = Bsdf::new(&glass, Vec3::Y, wo).delta_weights(wo).unwrap();
+            let exact = to_f64(fresnel_dielectric(wo.y, 1.0, 1.5));
+            assert!((f64::from(reflected.x) - exact).abs() < 1e-5, "{degrees}°: {reflected} vs {exact}");
+            assert!((f64::from(transmitted.x) - (1.0 - exact)).abs() < 1e-5, "{degrees}°: {transmitted}");
+            // From inside, at the angle whose refraction leaves at `degrees`.
+            let sin_inside = (1.0 - cos * cos).sqrt() / 1.5;
+            let inside = narrow(DVec3::new(sin_inside, -(1.0 - sin_inside * sin_inside).sqrt(), 0.0));
+            let (reflected, _) = Bsdf::new(&glass, Vec3::Y, inside).delta_weights(inside).unwrap();
+            let exact_inside = to_f64(fresnel_dielectric(-inside.y, 1.5, 1.0));
+            assert!((exact_inside - exact).abs() < 1e-5, "Fresnel is the same both ways");
+            assert!((f64::from(reflected.x) - exact_inside).abs() < 1e-5, "inside {degrees}°: {reflected}");
+        }
+        // Past the critical angle everything is reflected.
+        let beyond = narrow(DVec3::new(0.8, -0.6, 0.0));
+        assert_eq!(Bsdf::new(&glass, Vec3::Y, beyond).delta_weights(beyond).unwrap().0, Color::ONE);
+        // The exact weight's cosine-weighted mean (for a partly transmissive
+        // base) against a fine reference.
+        let reference: f64 = (0..200_000)
+            .map(|k| {
+                let mu = (k as f64 + 0.5) / 200_000.0;
+                let f = to_f64(fresnel_dielectric(mu as Real, 1.0, 1.5));
+                (f - 0.04) / 0.96 * 2.0 * mu
+            })
+            .sum::<f64>()
+            / 200_000.0;
+        assert!((f64::from(exact_weight_average(1.5)) - reference).abs() < 1e-4, "{reference}");
     }
 
     #[test]

@@ -125,6 +125,21 @@ pub const SMOOTH_ALPHA: Real = 1e-3;
 /// texture's mean, or close, which is what a grazing view of it averages to.
 pub const FOOTPRINT_MIN_COS: Real = 1e-3;
 
+/// How far above the geometric surface the mirror reflection of `ω_o`
+/// about a normal-mapped normal must stay, as a cosine with the geometric
+/// normal: `min(VALID_REFLECTION_SHARE·cos θ_o, VALID_REFLECTION_MARGIN)`
+/// ([`crate::materials::bsdf`], "Normal maps"). A map can tilt the normal
+/// so far from the viewer that its mirror direction points into the
+/// surface (or `ω_o` lies below it); the normal is then bent back until
+/// the reflection clears the surface by this margin — the values Blender
+/// Cycles uses (`ensure_valid_specular_reflection`), so both renderers bend
+/// the same normals by the same amount. The share keeps the margin below
+/// `cos θ_o` itself, so a viewer grazing the surface still has a solution.
+pub const VALID_REFLECTION_MARGIN: Real = 0.01;
+
+/// See [`VALID_REFLECTION_MARGIN`].
+pub const VALID_REFLECTION_SHARE: Real = 0.9;
+
 /// `v / |v|`, or `None` for a zero or non-finite `v`, for any finite `v`:
 /// `v` is first divided by its largest absolute component, so `|v|²` can
 /// neither overflow (components near 10³⁸ in f32) nor underflow (near 10⁻²⁰).

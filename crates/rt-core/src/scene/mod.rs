@@ -374,12 +374,14 @@ impl SceneBuilder {
 }
 
 /// `primitive` with MikkTSpace tangents where it is a mesh lacking them
-/// and `material` has a normal map ([`crate::geometry::mesh::Mesh::with_generated_tangents`]).
+/// and `material` has a normal map, from the map's texture-coordinate set
+/// ([`crate::geometry::mesh::Mesh::with_generated_tangents_of_set`]).
 fn with_tangents(primitive: Primitive, material: &Material) -> Primitive {
     match primitive {
-        Primitive::Mesh(mesh) if material.normal_texture.is_some() => {
-            Primitive::Mesh(mesh.with_generated_tangents())
-        }
+        Primitive::Mesh(mesh) => match &material.normal_texture {
+            Some(slot) => Primitive::Mesh(mesh.with_generated_tangents_of_set(slot.tex_coord)),
+            None => Primitive::Mesh(mesh),
+        },
         other => other,
     }
 }
