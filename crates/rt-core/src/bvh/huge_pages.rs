@@ -37,3 +37,27 @@ pub(super) fn with_capacity<T>(len: usize) -> Vec<T> {
     }
     v
 }
+
+/// `items` moved to a vector from [`with_capacity`]; left where they are if
+/// they are too few to fill a huge page.
+pub(super) fn moved<T: Copy>(items: Vec<T>) -> Vec<T> {
+    if items.len() * size_of::<T>() < HUGE_PAGE {
+        return items;
+    }
+    let mut v = with_capacity(items.len());
+    v.extend_from_slice(&items);
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn moved_vectors_keep_their_items_large_and_small() {
+        for len in [0, 1, 1000, 3 * HUGE_PAGE / 8 + 5] {
+            let items: Vec<u64> = (0..len as u64).map(|i| i.wrapping_mul(0x9E37_79B9_7F4A_7C15)).collect();
+            assert_eq!(moved(items.clone()), items);
+        }
+    }
+}

@@ -171,9 +171,11 @@ impl Bvh {
             // A tree of L leaves has at most L − 1 inner nodes (each has two
             // children or more), and a leaf of c items has at most
             // 1 + ⌊c / LANES⌋ blocks: room for both from the start, so
-            // neither list is copied as it grows. The nodes are allocated
-            // for huge pages right away.
-            nodes = huge_pages::with_capacity(binary_leaves.max(2) - 1);
+            // neither list is copied as it grows (the nodes are moved to
+            // huge pages once, below, if they fill one: asking for huge
+            // pages for the whole reservation would give them to trees
+            // too small to need them, at the cost of clearing them).
+            nodes = Vec::with_capacity(binary_leaves.max(2) - 1);
             leaf_items = Vec::with_capacity(binary_leaves + items.len() / leaf::LANES);
             let root_box = tree.bounds();
             bounds = Some(root_box);
@@ -204,10 +206,8 @@ impl Bvh {
         // Filled in place, on all threads, once marked for huge pages.
         let mut leaves: Vec<Leaf> = huge_pages::with_capacity(leaf_items.len());
         leaves.par_extend(leaf_items.into_par_iter().map(|range| Leaf::new(&items[range], objects).0));
-        if nodes.len() < nodes.capacity() / 2 {
-            // Shrinking a large allocation moves no memory (the allocator remaps it).
-            nodes.shrink_to_fit();
-        }
+        let mut nodes = huge_pages::moved(nodes);
+        nodes.shrink_to_fit(); // a tree too small to be moved keeps no spare room
         let stats = BvhStats {
             primitives: items.len(),
             nodes: nodes.len(),
