@@ -14,9 +14,9 @@
 
 use rayon::prelude::*;
 
-use super::item::Item;
+use super::item::{Item, Wide};
 use crate::geometry::aabb::Aabb;
-use crate::math::real::{Real, Vec3};
+use crate::math::real::Real;
 
 /// Leaves hold at most this many primitives.
 pub(super) const MAX_LEAF: usize = super::leaf::LANES * super::leaf::BLOCKS;
@@ -50,8 +50,8 @@ impl BuildNode {
 }
 
 /// Builds the binary tree over `items` (non-empty), reordering them so that
-/// every leaf's items are contiguous.
-pub(super) fn build(items: &mut [Item]) -> BuildNode {
+/// every leaf's items are contiguous; also returns how many leaves it has.
+pub(super) fn build(items: &mut [Item]) -> (BuildNode, usize) {
     let all = Bin::of(items, items.len() > PARALLEL_ITEMS);
     build_node(items, all, 0, 0)
 }
@@ -71,13 +71,6 @@ struct Bin {
     whole: usize,
 }
 
-/// The vector type bins keep their boxes in: with f32 geometry glam's
-/// 16-byte `Vec3A`, whose min and max are one SSE instruction each.
-#[cfg(not(feature = "f64"))]
-type Wide = glam::Vec3A;
-#[cfg(feature = "f64")]
-type Wide = Vec3;
-
 impl Bin {
     const EMPTY: Bin = Bin {
         min: Wide::INFINITY,
@@ -88,17 +81,18 @@ impl Bin {
         whole: 0,
     };
 
+    /// Adds `item`, whose centroid is `centroid`; `WHOLE` false where the
+    /// caller knows that no item is a whole object (the count stays 0).
     #[inline(always)]
-    fn add(&mut self, item: &Item) {
-        let (min, max) = (Wide::from(item.bounds.min()), Wide::from(item.bounds.max()));
-        // The same sum and product as Aabb::center, so the same centroid.
-        let centroid = 0.5 * (min + max);
-        self.min = self.min.min(min);
-        self.max = self.max.max(max);
+    fn add<const WHOLE: bool>(&mut self, item: &Item, centroid: Wide) {
+        self.min = self.min.min(item.min());
+        self.max = self.max.max(item.max());
         self.centroid_min = self.centroid_min.min(centroid);
         self.centroid_max = self.centroid_max.max(centroid);
         self.count += 1;
-        self.whole += usize::from(item.whole);
+        if WHOLE {
+            self.whole += usize::from(item.is_whole());
+        }
     }
 
     fn merge(&mut self, other: &Bin) {
@@ -124,7 +118,7 @@ impl Bin {
     fn of(items: &[Item], parallel: bool) -> Bin {
         let all = |chunk: &[Item]| {
             let mut bin = Bin::EMPTY;
-            chunk.iter().for_each(|item| bin.add(item));
+            chunk.iter().for_each(|item| bin.add::<true>(item, item.centroid()));
             bin
         };
         if parallel {
@@ -164,13 +158,37 @@ fn merge_bins(mut a: [Bin; BINS], b: [Bin; BINS]) -> [Bin; BINS] {
     a
 }
 
+/// The items of `items` in [`BINS`] bins along `axis`: item `i` goes to
+/// bin `⌊(cᵢ − lo)·scale⌋` (clamped) of its centroid `cᵢ`. `WHOLE` as in
+/// [`Bin::add`].
+///
+/// Consecutive items tend to fall into the same bin (a mesh's triangles
+/// come in spatial order), and each update of a bin waits for the one
+/// before it to be written; so even and odd items go to two sets of bins,
+/// merged at the end (exact in any order), which halves that chain.
+fn bin_items<const WHOLE: bool>(items: &[Item], axis: usize, lo: Real, scale: Real) -> [Bin; BINS] {
+    let bin_of = |c: Wide| (((c[axis] - lo) * scale) as usize).min(BINS - 1);
+    let (mut even, mut odd) = ([Bin::EMPTY; BINS], [Bin::EMPTY; BINS]);
+    let mut pairs = items.chunks_exact(2);
+    for pair in &mut pairs {
+        let (a, b) = (pair[0].centroid(), pair[1].centroid());
+        even[bin_of(a)].add::<WHOLE>(&pair[0], a);
+        odd[bin_of(b)].add::<WHOLE>(&pair[1], b);
+    }
+    for item in pairs.remainder() {
+        let c = item.centroid();
+        even[bin_of(c)].add::<WHOLE>(item, c);
+    }
+    merge_bins(even, odd)
+}
+
 /// The node over `items` (`all` is their [`Bin`]), which start at `first`
-/// in the final order.
-fn build_node(items: &mut [Item], all: Bin, first: usize, depth: usize) -> BuildNode {
+/// in the final order, and how many leaves it has.
+fn build_node(items: &mut [Item], all: Bin, first: usize, depth: usize) -> (BuildNode, usize) {
     let n = items.len();
     let parallel = n > PARALLEL_ITEMS;
     let (bounds, centroids) = (all.bounds(), all.centroids());
-    let leaf = BuildNode::Leaf { bounds, first: first as u32, count: n as u32 };
+    let leaf = (BuildNode::Leaf { bounds, first: first as u32, count: n as u32 }, 1);
     if n <= 1 {
         return leaf;
     }
@@ -189,14 +207,14 @@ fn build_node(items: &mut [Item], all: Bin, first: usize, depth: usize) -> Build
         median(items)
     } else {
         let scale = BINS as Real / extent;
-        let bin_of = |c: Vec3| (((c[axis] - lo) * scale) as usize).min(BINS - 1);
+        let bin_of = |c: Wide| (((c[axis] - lo) * scale) as usize).min(BINS - 1);
         // Each thread bins a chunk in place; merging bins is exact in any order.
         let bin_all = |chunk: &[Item]| {
-            let mut bins = [Bin::EMPTY; BINS];
-            for item in chunk {
-                bins[bin_of(item.centroid())].add(item);
+            if all.whole == 0 {
+                bin_items::<false>(chunk, axis, lo, scale)
+            } else {
+                bin_items::<true>(chunk, axis, lo, scale)
             }
-            bins
         };
         let bins = if parallel {
             items.par_chunks(PARALLEL_ITEMS / 2).map(bin_all).reduce(|| [Bin::EMPTY; BINS], merge_bins)
@@ -206,6 +224,7 @@ fn build_node(items: &mut [Item], all: Bin, first: usize, depth: usize) -> Build
         match best_split(&bins, bounds) {
             Some(best) if !(n <= MAX_LEAF && best.1 >= all.leaf_cost()) => {
                 let mid = partition(items, |i| bin_of(i.centroid()) < best.0);
+                debug_assert_eq!(mid, bins[..best.0].iter().map(|b| b.count).sum::<usize>());
                 let side = |range: std::ops::Range<usize>| bins[range].iter().fold(Bin::EMPTY, Bin::merged);
                 (mid, side(0..best.0), side(best.0..BINS))
             }
@@ -214,7 +233,7 @@ fn build_node(items: &mut [Item], all: Bin, first: usize, depth: usize) -> Build
         }
     };
     let (left, right) = items.split_at_mut(mid);
-    let (l, r) = if parallel {
+    let ((l, l_leaves), (r, r_leaves)) = if parallel {
         rayon::join(
             || build_node(left, left_bin, first, depth + 1),
             || build_node(right, right_bin, first + mid, depth + 1),
@@ -222,7 +241,7 @@ fn build_node(items: &mut [Item], all: Bin, first: usize, depth: usize) -> Build
     } else {
         (build_node(left, left_bin, first, depth + 1), build_node(right, right_bin, first + mid, depth + 1))
     };
-    BuildNode::Inner { bounds, children: Box::new([l, r]) }
+    (BuildNode::Inner { bounds, children: Box::new([l, r]) }, l_leaves + r_leaves)
 }
 
 /// The best split between bins `k − 1` and `k`, and its cost relative to
@@ -256,26 +275,39 @@ fn best_split(bins: &[Bin; BINS], bounds: Aabb) -> Option<(usize, Real)> {
 fn sort_by_centroid(items: &mut [Item], axis: usize, parallel: bool) {
     // Ties go by (object, index), so the order is the same whichever sort runs.
     let key = |a: &Item, b: &Item| {
-        a.centroid()[axis].total_cmp(&b.centroid()[axis]).then((a.object, a.index).cmp(&(b.object, b.index)))
+        a.centroid()[axis]
+            .total_cmp(&b.centroid()[axis])
+            .then((a.object(), a.index()).cmp(&(b.object(), b.index())))
     };
     if parallel { items.par_sort_unstable_by(key) } else { items.sort_unstable_by(key) }
 }
 
 /// Moves the items for which `left` holds to the front; returns how many.
+/// Hoare's scheme: items already on their side stay put, and each swap
+/// puts two misplaced ones right (the order within each side is not kept;
+/// the build does not depend on it).
 fn partition(items: &mut [Item], left: impl Fn(&Item) -> bool) -> usize {
-    let mut i = 0;
-    for j in 0..items.len() {
-        if left(&items[j]) {
-            items.swap(i, j);
+    let (mut i, mut j) = (0, items.len());
+    loop {
+        while i < j && left(&items[i]) {
             i += 1;
         }
+        while i < j && !left(&items[j - 1]) {
+            j -= 1;
+        }
+        if i + 1 >= j {
+            return i;
+        }
+        items.swap(i, j - 1);
+        i += 1;
+        j -= 1;
     }
-    i
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::real::Vec3;
 
     /// Items of a noisy grid of `n`×`n` small boxes.
     fn items(n: u32) -> Vec<Item> {
@@ -296,15 +328,122 @@ mod tests {
         let mut b = a.clone();
         let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| build(&mut a));
         let four = rayon::ThreadPoolBuilder::new().num_threads(4).build().unwrap().install(|| build(&mut b));
+        assert!(matches!(one.0, BuildNode::Inner { .. }));
         assert_eq!(one, four);
-        let order = |v: &[Item]| v.iter().map(|i| i.index).collect::<Vec<_>>();
+        let order = |v: &[Item]| v.iter().map(|i| i.index()).collect::<Vec<_>>();
         assert_eq!(order(&a), order(&b));
+    }
+
+    /// Checks that `tree` over `items` (as `build` left them) is a valid
+    /// tree of `leaves` leaves: every item in exactly one leaf of at most
+    /// [`MAX_LEAF`] items, every leaf's box around its items' boxes, every
+    /// inner node's box around its children's. Returns how many leaves it saw.
+    fn check(node: &BuildNode, items: &[Item], seen: &mut [u32]) -> usize {
+        let contains = |outer: Aabb, inner: Aabb| {
+            outer.min().cmple(inner.min()).all() && outer.max().cmpge(inner.max()).all()
+        };
+        match node {
+            BuildNode::Leaf { bounds, first, count } => {
+                assert!(*count >= 1 && *count as usize <= MAX_LEAF, "leaf of {count} items");
+                for i in *first..first + count {
+                    seen[i as usize] += 1;
+                    assert!(contains(*bounds, items[i as usize].bounds()), "a leaf's box misses an item");
+                }
+                1
+            }
+            BuildNode::Inner { bounds, children } => {
+                children.iter().for_each(|c| assert!(contains(*bounds, c.bounds()), "a box misses a child"));
+                children.iter().map(|c| check(c, items, seen)).sum()
+            }
+        }
+    }
+
+    /// Builds over `items` and checks the tree (see [`check`]), and that
+    /// the items are the same ones, reordered.
+    fn build_and_check(mut items: Vec<Item>) {
+        let key = |i: &Item| (i.object(), i.index(), i.is_whole());
+        let mut before: Vec<_> = items.iter().map(key).collect();
+        let (tree, leaves) = build(&mut items);
+        let mut seen = vec![0; items.len()];
+        assert_eq!(check(&tree, &items, &mut seen), leaves);
+        assert!(seen.iter().all(|&s| s == 1), "an item in no leaf or in two");
+        let mut after: Vec<_> = items.iter().map(key).collect();
+        before.sort_unstable();
+        after.sort_unstable();
+        assert_eq!(before, after);
+    }
+
+    /// A small pseudo-random generator (SplitMix64), in [0, 1).
+    fn random(state: &mut u64) -> Real {
+        *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = *state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 40) as Real / (1u64 << 24) as Real
+    }
+
+    #[test]
+    fn trees_are_valid_on_random_and_degenerate_inputs() {
+        let mut state = 7;
+        let mut r = || random(&mut state);
+        let cube = |p: Vec3, s: Real| Aabb::from_corners(p, p + Vec3::splat(s));
+        // Random boxes of all sizes, a few of them whole objects, enough
+        // to go parallel at the top.
+        let random_boxes: Vec<Item> = (0..20_000)
+            .map(|i| {
+                let b = cube(Vec3::new(r(), r(), r()) * 100.0, r() * r() * 20.0);
+                if i % 97 == 0 { Item::whole(b, 1 + i) } else { Item::new(b, 0, i) }
+            })
+            .collect();
+        build_and_check(random_boxes);
+        // Every centroid the same (the median fallback; equal boxes).
+        build_and_check((0..10_000).map(|i| Item::new(cube(Vec3::ONE, 1.0), 0, i)).collect());
+        // Same centroid, different sizes.
+        build_and_check(
+            (0..500).map(|i| Item::new(cube(Vec3::splat(-(i as Real)), 2.0 * i as Real), 0, i)).collect(),
+        );
+        // A flat mesh: all boxes of zero height.
+        build_and_check(
+            (0..30_000)
+                .map(|i| {
+                    let p = Vec3::new(r() * 10.0, 0.0, r() * 10.0);
+                    Item::new(Aabb::from_corners(p, p + Vec3::new(0.1, 0.0, 0.1)), 0, i)
+                })
+                .collect(),
+        );
+        // Huge coordinates, near the largest finite ones.
+        let huge = Real::MAX / 8.0;
+        build_and_check(
+            (0..5_000)
+                .map(|i| {
+                    let p = Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * huge;
+                    Item::new(cube(p, huge / 1e3), 0, i)
+                })
+                .collect(),
+        );
+        // A single item, and two.
+        build_and_check(vec![Item::new(cube(Vec3::ZERO, 1.0), 0, 0)]);
+        build_and_check(vec![Item::new(cube(Vec3::ZERO, 1.0), 0, 0), Item::whole(cube(Vec3::ONE, 1.0), 1)]);
+    }
+
+    #[test]
+    fn partition_puts_the_chosen_items_first() {
+        let mut state = 3;
+        for n in [0, 1, 2, 3, 10, 101] {
+            let mut v: Vec<Item> =
+                (0..n).map(|i| Item::new(Aabb::from_corners(Vec3::ZERO, Vec3::ONE), 0, i)).collect();
+            let left: Vec<bool> = (0..n).map(|_| random(&mut state) < 0.5).collect();
+            let mid = partition(&mut v, |i| left[i.index() as usize]);
+            assert_eq!(mid, left.iter().filter(|&&l| l).count());
+            assert!(v[..mid].iter().all(|i| left[i.index() as usize]));
+            assert!(v[mid..].iter().all(|i| !left[i.index() as usize]));
+        }
     }
 
     #[test]
     fn every_item_lands_in_exactly_one_leaf_of_at_most_the_leaf_size() {
         let mut v = items(40);
-        let tree = build(&mut v);
+        let (tree, _) = build(&mut v);
         let mut seen = vec![0; v.len()];
         fn walk(n: &BuildNode, seen: &mut [u32]) {
             match n {

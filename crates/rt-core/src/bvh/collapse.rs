@@ -32,9 +32,12 @@ pub(super) fn collapse(
         let cost = area(node) * f64::from(child.lanes.tests());
         return Collapsed { child, depth: 0, stack: 0, cost };
     };
-    let mut open: Vec<&BuildNode> = children.iter().collect();
-    while open.len() < WIDTH {
-        let widest = open
+    // The children it opens to, on the stack: `open[..len]`.
+    let mut open: [&BuildNode; WIDTH] = [node; WIDTH];
+    open[..2].copy_from_slice(&[&children[0], &children[1]]);
+    let mut len = 2;
+    while len < WIDTH {
+        let widest = open[..len]
             .iter()
             .enumerate()
             .filter(|(_, c)| matches!(c, BuildNode::Inner { .. }))
@@ -42,9 +45,12 @@ pub(super) fn collapse(
         let Some((slot, BuildNode::Inner { children, .. })) = widest.map(|(slot, c)| (slot, *c)) else {
             break;
         };
+        open.copy_within(slot + 1..len, slot + 2);
         open[slot] = &children[0];
-        open.insert(slot + 1, &children[1]);
+        open[slot + 1] = &children[1];
+        len += 1;
     }
+    let open = &open[..len];
     let index = nodes.len();
     nodes.push(Node::EMPTY);
     // A node visit costs TRAVERSAL_COST per unit of its area.

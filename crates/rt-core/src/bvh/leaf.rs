@@ -104,11 +104,11 @@ impl Leaf {
             Leaf { corners: [[[Real::NAN; LANES]; 3]; 3], object: [u32::MAX; LANES], index: [0; LANES] };
         let mut lanes = 0;
         for (lane, item) in items.iter().enumerate() {
-            leaf.object[lane] = item.object;
-            match &objects[item.object as usize].primitive {
+            leaf.object[lane] = item.object();
+            match &objects[item.object() as usize].primitive {
                 Primitive::Mesh(mesh) => {
-                    leaf.index[lane] = item.index;
-                    for (corner, p) in mesh.triangle(item.index as usize).into_iter().enumerate() {
+                    leaf.index[lane] = item.index();
+                    for (corner, p) in mesh.triangle(item.index() as usize).into_iter().enumerate() {
                         for axis in 0..3 {
                             leaf.corners[corner][axis][lane] = p[axis];
                         }
@@ -125,7 +125,7 @@ impl Leaf {
     pub fn lanes(items: &[Item], objects: &[Object]) -> Lanes {
         Lanes(items.iter().enumerate().fold(0, |lanes, (lane, item)| {
             lanes
-                | match objects[item.object as usize].primitive {
+                | match objects[item.object() as usize].primitive {
                     Primitive::Mesh(_) => 1 << lane,
                     _ => 1 << (LANES + lane),
                 }

@@ -108,40 +108,75 @@ pub struct Bvh {
     stats: BvhStats,
 }
 
+/// One build item per bounded primitive of `objects`, in object order, a
+/// mesh's triangles one by one in index order, degenerate ones (zero normal)
+/// left out. A large mesh's triangle boxes are computed on all threads,
+/// straight into the list (no per-thread lists joined afterwards).
+fn items_of(objects: &[Object]) -> Vec<Item> {
+    use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
+    /// Meshes with fewer triangles than this are done on the calling thread.
+    const PARALLEL_TRIANGLES: usize = 4096;
+    let total = objects
+        .iter()
+        .map(|o| match &o.primitive {
+            Primitive::Mesh(mesh) => mesh.triangle_count(),
+            _ => 1,
+        })
+        .sum();
+    let mut items: Vec<Item> = Vec::with_capacity(total);
+    let degenerate = AtomicBool::new(false);
+    for (o, object) in objects.iter().enumerate() {
+        let o = o as u32;
+        match &object.primitive {
+            Primitive::Mesh(mesh) => {
+                let item = |i: u32| {
+                    if mesh.normal(i as usize) == Vec3::ZERO {
+                        degenerate.store(true, Relaxed);
+                    }
+                    Item::new(Aabb::from_points(mesh.triangle(i as usize)).expect("three corners"), o, i)
+                };
+                let count = mesh.triangle_count() as u32;
+                if count as usize >= PARALLEL_TRIANGLES {
+                    items.par_extend((0..count).into_par_iter().map(item));
+                } else {
+                    items.extend((0..count).map(item));
+                }
+            }
+            p => items.extend(p.bounds().map(|b| Item::whole(b, o))),
+        }
+    }
+    if degenerate.into_inner() {
+        items.retain(|item| match &objects[item.object() as usize].primitive {
+            Primitive::Mesh(mesh) => mesh.normal(item.index() as usize) != Vec3::ZERO,
+            _ => true,
+        });
+    }
+    items
+}
+
 impl Bvh {
     /// Builds the hierarchy over `objects`, on rayon's current pool.
     pub fn build(objects: &[Object]) -> Self {
         let start = Instant::now();
         let unbounded: Vec<u32> =
             (0..objects.len() as u32).filter(|&o| objects[o as usize].primitive.bounds().is_none()).collect();
-        // One item per bounded primitive, a mesh's triangles one by one
-        // (degenerate ones left out); a million triangles' boxes on all threads.
-        let mut candidates: Vec<(u32, u32)> = Vec::new();
-        for (o, object) in objects.iter().enumerate() {
-            match &object.primitive {
-                Primitive::Mesh(mesh) => {
-                    candidates.extend((0..mesh.triangle_count() as u32).map(|i| (o as u32, i)))
-                }
-                p if p.bounds().is_some() => candidates.push((o as u32, 0)),
-                _ => {}
-            }
-        }
-        let mut items: Vec<Item> = candidates
-            .into_par_iter()
-            .filter_map(|(o, i)| match &objects[o as usize].primitive {
-                Primitive::Mesh(mesh) => (mesh.normal(i as usize) != Vec3::ZERO).then(|| {
-                    Item::new(Aabb::from_points(mesh.triangle(i as usize)).expect("three corners"), o, i)
-                }),
-                p => p.bounds().map(|b| Item::whole(b, o)),
-            })
-            .collect();
+        let mut items = items_of(objects);
         let mut nodes = Vec::new();
         let mut leaf_items = Vec::new();
         let mut leaf_count = 0;
         let (mut depth, mut stack_bound, mut sah_cost) = (0, 0, 0.0);
         let mut bounds = None;
         if !items.is_empty() {
-            let tree = build::build(&mut items);
+            let (tree, binary_leaves) = build::build(&mut items);
+            // A tree of L leaves has at most L − 1 inner nodes (each has two
+            // children or more), and a leaf of c items has at most
+            // 1 + ⌊c / LANES⌋ blocks: room for both from the start, so
+            // neither list is copied as it grows (the nodes are moved to
+            // huge pages once, below, if they fill one: asking for huge
+            // pages for the whole reservation would give them to trees
+            // too small to need them, at the cost of clearing them).
+            nodes = Vec::with_capacity(binary_leaves.max(2) - 1);
+            leaf_items = Vec::with_capacity(binary_leaves + items.len() / leaf::LANES);
             let root_box = tree.bounds();
             bounds = Some(root_box);
             // Leaves get their blocks' slots in tree order; the blocks are
@@ -171,7 +206,8 @@ impl Bvh {
         // Filled in place, on all threads, once marked for huge pages.
         let mut leaves: Vec<Leaf> = huge_pages::with_capacity(leaf_items.len());
         leaves.par_extend(leaf_items.into_par_iter().map(|range| Leaf::new(&items[range], objects).0));
-        let nodes = huge_pages::moved(nodes);
+        let mut nodes = huge_pages::moved(nodes);
+        nodes.shrink_to_fit(); // a tree too small to be moved keeps no spare room
         let stats = BvhStats {
             primitives: items.len(),
             nodes: nodes.len(),

@@ -42,6 +42,10 @@ pub struct BenchArgs {
     /// Only the 10k and 100k meshes (a quick run).
     #[arg(long)]
     pub quick: bool,
+    /// Only the BVH builds and their SAH cost (no rays, no showcase): for
+    /// profiling and comparing builds.
+    #[arg(long)]
+    pub build_only: bool,
     /// Scene whose full render is timed too.
     #[arg(long, default_value = "scenes/showcase.ron")]
     pub showcase: PathBuf,
@@ -96,6 +100,25 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         };
         let scene = scene_of(mesh.clone())?;
         let stats = scene.bvh_stats();
+        if args.build_only {
+            for &threads in &args.threads {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+                let build = median(
+                    (0..runs)
+                        .map(|_| pool.install(|| scene_of(mesh.clone())).map(|s| s.bvh_stats().build_time))
+                        .collect::<Result<_, _>>()?,
+                );
+                println!(
+                    "terrain {label}: {} triangles, {threads} thread(s): build {:.4} s (median of {runs}), SAH {:.2}, {} nodes, {} leaves",
+                    stats.primitives,
+                    build.as_secs_f64(),
+                    stats.sah_cost,
+                    stats.nodes,
+                    stats.leaves
+                );
+            }
+            continue;
+        }
         let settings = RenderSettings { image: ImageSize::new(WIDTH, HEIGHT)?, ..RenderSettings::default() };
         let renderer = Renderer::new(&scene, camera, &settings)?;
         let view = renderer.view_plane();
@@ -155,6 +178,9 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                 peak_rss_mib: peak_rss_mib(),
             });
         }
+    }
+    if args.build_only {
+        return Ok(());
     }
     let showcase = time_scene(&args.showcase, runs)?;
     report(args, &rows, showcase)
