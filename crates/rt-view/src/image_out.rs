@@ -32,7 +32,6 @@ use std::time::Duration;
 
 use anyhow::{Context, bail};
 use image::ImageEncoder;
-use image::codecs::openexr::OpenExrEncoder;
 use image::codecs::png::PngEncoder;
 use rt_core::Frame;
 use rt_core::render::Rgb8;
@@ -229,9 +228,12 @@ impl PendingImage {
         if self.format != Format::Exr {
             bail!("{}: linear images are written as .exr only", self.file.target.display());
         }
-        let image = image::Rgb32FImage::from_raw(width, height, pixels.as_flattened().to_vec())
-            .context("image size does not match its pixels")?;
-        self.write_bytes(|out| image.write_with_encoder(OpenExrEncoder::new(out)))
+        if pixels.len() != width as usize * height as usize {
+            bail!("image size does not match its pixels");
+        }
+        let channel = |c: usize| pixels.iter().map(|p| p[c]).collect();
+        let channels = vec![("R".into(), channel(0)), ("G".into(), channel(1)), ("B".into(), channel(2))];
+        self.write_channels(width, height, channels)
     }
 
     /// Writes named channels of 32-bit floats, each `width × height`
@@ -239,7 +241,9 @@ impl PendingImage {
     /// compressed; the channels sorted by name, as the format wants). The
     /// colour is the channels `R`, `G`, `B`; a layer's channels are
     /// `layer.X` (OpenEXR's naming convention for multi-part images in one
-    /// part, which Blender and Nuke read as layers).
+    /// part, which Blender and Nuke read as layers). Blocks are compressed
+    /// one after the other, so the same pixels give the same bytes (in
+    /// parallel, the blocks go into the file in the order they finish).
     pub fn write_channels(
         self,
         width: u32,
@@ -267,7 +271,8 @@ impl PendingImage {
             AnyChannels::sort(list.into()),
         );
         let image = Image::from_layer(layer);
-        self.file.write_with(|out| image.write().to_buffered(out).context("cannot encode image"))
+        self.file
+            .write_with(|out| image.write().non_parallel().to_buffered(out).context("cannot encode image"))
     }
 
     /// Writes 8-bit pixels (row-major, top row first) as PNG.
@@ -308,6 +313,24 @@ mod tests {
             .unwrap();
         child.wait().unwrap();
         child
+    }
+
+    #[test]
+    fn the_same_pixels_make_the_same_exr_bytes() {
+        // Enough rows for many compressed blocks (16 rows each): written in
+        // parallel, they went into the file in the order they finished.
+        let dir = tempfile::tempdir().unwrap();
+        let (w, h) = (300u32, 400u32);
+        let pixels: Vec<[f32; 3]> =
+            (0..w * h).map(|i| [(i % 977) as f32 * 0.37, (i % 13) as f32, (i as f32).sqrt()]).collect();
+        let bytes: Vec<Vec<u8>> = (0..4)
+            .map(|k| {
+                let target = dir.path().join(format!("{k}.exr"));
+                PendingImage::create(&target).unwrap().write_linear(w, h, &pixels).unwrap();
+                std::fs::read(&target).unwrap()
+            })
+            .collect();
+        assert!(bytes.iter().all(|b| *b == bytes[0]));
     }
 
     #[test]

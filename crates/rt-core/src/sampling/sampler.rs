@@ -792,7 +792,10 @@ mod tests {
             for prefix in [n / 4, n / 2].into_iter().filter(|&m| m >= 2) {
                 let below = (0..prefix).filter(|&k| strata.point(k, (0.5, 0.5)).1 >= 0.5).count();
                 let half = prefix as f64 / 2.0;
-                assert!((below as f64 - half).abs() <= 1.0 + half * 0.3, "n = {n}: {below} of {prefix} below");
+                assert!(
+                    (below as f64 - half).abs() <= 1.0 + half * 0.3,
+                    "n = {n}: {below} of {prefix} below"
+                );
             }
             cells.sort_unstable();
             assert_eq!(cells, (0..n).collect::<Vec<_>>(), "n = {n}");
