@@ -258,3 +258,104 @@ fn is_empty_slot(node: &Node, slot: usize) -> bool {
         node.bounds[0][axis][slot] == Real::INFINITY && node.bounds[1][axis][slot] == Real::NEG_INFINITY
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::sphere::Sphere;
+    use crate::math::ray::{Interval, Ray};
+    use crate::math::real::Vec3;
+    use crate::testing::test_support::grid_mesh;
+
+    /// A 40×40 grid mesh (3200 triangles, a tree several levels deep) and a sphere.
+    fn objects() -> Vec<Object> {
+        let mesh = grid_mesh(40, |i, j| Vec3::new(i as Real, ((i * j) % 7) as Real * 0.1, j as Real));
+        let sphere = Sphere::new(Vec3::new(5.0, 3.0, 5.0), 1.0).unwrap();
+        vec![
+            Object { primitive: Primitive::Mesh(mesh), material: 0 },
+            Object { primitive: Primitive::Sphere(sphere), material: 0 },
+        ]
+    }
+
+    #[test]
+    fn a_tree_from_its_arrays_answers_as_the_built_one_with_the_same_stack_bound() {
+        let objects = objects();
+        let built = Bvh::build(&objects);
+        let arrays = built.arrays();
+        let back = Bvh::from_arrays(arrays.as_ref(), &objects).unwrap();
+        assert_eq!(back.stack_bound, built.stack_bound);
+        let (a, b) = (back.stats(), built.stats());
+        assert_eq!(
+            (a.nodes, a.leaves, a.leaf_blocks, a.depth, a.primitives),
+            (b.nodes, b.leaves, b.leaf_blocks, b.depth, b.primitives)
+        );
+        for k in 0..50 {
+            let o = Vec3::new(k as Real * 0.8, 10.0, 20.0 - k as Real * 0.3);
+            let ray = Ray::new(o, Vec3::new(0.1, -1.0, 0.05 * k as Real - 1.0));
+            let range = Interval::new(0.0, Real::INFINITY);
+            let methods = Default::default();
+            assert_eq!(
+                back.closest_hit(&objects, &ray, range, methods),
+                built.closest_hit(&objects, &ray, range, methods)
+            );
+        }
+    }
+
+    /// `arrays` with `change` applied, taken back over `objects`.
+    fn changed(change: impl Fn(&mut BvhArrays)) -> Result<Bvh, BvhArraysError> {
+        let objects = objects();
+        let mut arrays = Bvh::build(&objects).arrays();
+        change(&mut arrays);
+        Bvh::from_arrays(arrays.as_ref(), &objects)
+    }
+
+    #[test]
+    fn a_child_pointing_back_up_the_tree_is_refused() {
+        // Slot 0 of the last node made an inner child pointing at the root: a cycle.
+        let e = changed(|a| {
+            let last = a.node_children.len() - NODE_IDS;
+            a.node_children[last] = 0;
+            a.node_children[last + 1] = 0;
+            let reals = a.node_bounds.len() - NODE_REALS;
+            a.node_bounds[reals] = 0.0;
+        })
+        .unwrap_err();
+        assert!(matches!(e, BvhArraysError::Child { .. }), "{e}");
+    }
+
+    #[test]
+    fn indices_out_of_range_are_refused() {
+        let leaf_child = |a: &BvhArrays| {
+            (0..a.node_children.len()).step_by(2).find(|&i| a.node_children[i + 1] != 0).unwrap()
+        };
+        // A leaf beyond the leaf list.
+        let e = changed(|a| {
+            let i = leaf_child(a);
+            a.node_children[i] = (a.leaf_ids.len() / Leaf::FLAT_IDS) as u32;
+        });
+        assert!(matches!(e, Err(BvhArraysError::Child { .. })), "{e:?}");
+        // A lane naming an object that is not there, and a triangle that is not.
+        let e = changed(|a| a.leaf_ids[0] = 7);
+        assert!(matches!(e, Err(BvhArraysError::Child { .. })), "{e:?}");
+        let e = changed(|a| a.leaf_ids[LANES_IN_IDS] = 1_000_000);
+        assert!(matches!(e, Err(BvhArraysError::Child { .. })), "{e:?}");
+        // An inner child beyond the node list, arrays cut short, an unbounded object that is not there.
+        let e = changed(|a| {
+            let i = (0..a.node_children.len())
+                .step_by(2)
+                .find(|&i| a.node_children[i + 1] == 0 && a.node_children[i] != 0)
+                .unwrap();
+            a.node_children[i] = u32::MAX;
+        });
+        assert!(matches!(e, Err(BvhArraysError::Child { .. })), "{e:?}");
+        let e = changed(|a| {
+            a.leaf_ids.pop();
+        });
+        assert!(matches!(e, Err(BvhArraysError::Lengths(_))), "{e:?}");
+        let e = changed(|a| a.unbounded.push(9));
+        assert_eq!(e.unwrap_err(), BvhArraysError::Unbounded(9));
+    }
+
+    /// Where a leaf's triangle indices start in its ids.
+    const LANES_IN_IDS: usize = Leaf::FLAT_IDS / 2;
+}

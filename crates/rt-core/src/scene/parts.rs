@@ -14,7 +14,7 @@ use std::sync::Arc;
 use thiserror::Error;
 
 use super::Scene;
-use crate::bvh::{Bvh, BvhArraysError, BvhArraysRef};
+use crate::bvh::{Bvh, BvhArrays, BvhArraysError, BvhArraysRef};
 use crate::geometry::method::Methods;
 use crate::geometry::object::Object;
 use crate::lights::emitter::{Emitter, EmitterError};
@@ -95,8 +95,8 @@ pub enum ScenePartsError {
 }
 
 impl Scene {
-    /// The scene's parts (copies), for a scene cache; with [`Scene::bvh`]
-    /// they are all [`Scene::from_parts`] needs.
+    /// The scene's parts (copies), for a scene cache; with
+    /// [`Scene::bvh_arrays`] they are all [`Scene::from_parts`] needs.
     pub fn parts(&self) -> SceneParts {
         SceneParts {
             environment: self.environment.clone(),
@@ -112,9 +112,9 @@ impl Scene {
         }
     }
 
-    /// The scene's hierarchy.
-    pub fn bvh(&self) -> &Bvh {
-        &self.bvh
+    /// The scene's hierarchy as plain arrays ([`Bvh::arrays`]).
+    pub fn bvh_arrays(&self) -> BvhArrays {
+        self.bvh.arrays()
     }
 
     /// The scene of `parts` with the hierarchy `bvh` (as [`Bvh::arrays`]

@@ -159,5 +159,10 @@ pub fn decode(file: &[u8]) -> Result<(LoadedScene, Meta), CacheError> {
         warnings: small.warnings,
     };
     let scene = Scene::from_parts(parts, bvh).map_err(|e| corrupt(e.to_string()))?;
-    Ok((LoadedScene { scene, camera: small.camera, settings: small.settings }, meta))
+    // The image size and samples checked as the scene file's are.
+    let settings = small
+        .settings
+        .overridden(None, None, Some(small.settings.samples.get()))
+        .map_err(|e| corrupt(format!("settings: {e}")))?;
+    Ok((LoadedScene { scene, camera: small.camera, settings }, meta))
 }

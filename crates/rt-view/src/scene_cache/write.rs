@@ -75,6 +75,15 @@ fn flat<const N: usize, T: Copy>(values: impl Iterator<Item = [T; N]>) -> Vec<T>
 
 /// The cache of `loaded`, read from `scene_file`, as bytes.
 pub fn cache_bytes(scene_file: &Path, loaded: &LoadedScene) -> anyhow::Result<Vec<u8>> {
+    cache_bytes_as(scene_file, loaded, &this_version())
+}
+
+/// [`cache_bytes`] as rt-view `version` would write them.
+pub(super) fn cache_bytes_as(
+    scene_file: &Path,
+    loaded: &LoadedScene,
+    version: &str,
+) -> anyhow::Result<Vec<u8>> {
     let scene = &loaded.scene;
     let files = scene_files(scene_file, scene);
     let mut sources = Vec::new();
@@ -87,13 +96,13 @@ pub fn cache_bytes(scene_file: &Path, loaded: &LoadedScene) -> anyhow::Result<Ve
         sources.push(Source { path, len: bytes.len() as u64, hash: hash.hex() });
     }
     let meta = Meta {
-        rt_view_version: this_version(),
+        rt_view_version: version.to_owned(),
         content_hash: content_hash(&files)?,
         scene_file: scene_file.to_owned(),
         sources,
     };
     let parts = scene.parts();
-    let bvh = scene.bvh().arrays();
+    let bvh = scene.bvh_arrays();
     let mut writer = Writer::default();
     let mut arrays = Writer::default();
     let mut meshes = Vec::new();
