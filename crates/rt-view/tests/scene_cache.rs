@@ -72,7 +72,11 @@ fn a_damaged_or_truncated_cache_is_refused_with_a_message() {
         std::fs::write(&file, damaged).unwrap();
         let o = rt_view(&["render", &file.display().to_string(), "-o", &out], "");
         assert_eq!(o.status.code(), Some(1), "{name}: {}", stderr(&o));
-        assert!(stderr(&o).contains(name) && stderr(&o).contains("damaged or truncated"), "{name}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains(name) && stderr(&o).contains("damaged or truncated"),
+            "{name}: {}",
+            stderr(&o)
+        );
     }
     let o = rt_view(&["prepare", &scene("no_such.ron"), "-o", &path.display().to_string()], "");
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));

@@ -37,7 +37,7 @@ const ALIGN: usize = 64;
 pub enum Kind {
     /// RON text: where the cache came from ([`super::Meta`]).
     Meta = 1,
-    /// RON text: the scene's small parts.
+    /// CBOR: the scene's small parts.
     Small = 2,
     /// Plain numbers (Real, f32 or u32, as the reader expects).
     Array = 3,
@@ -184,6 +184,13 @@ impl<'a> Reader<'a> {
         let text = std::str::from_utf8(bytes)
             .map_err(|_| CacheError::Corrupt(format!("section {index}: not UTF-8 text")))?;
         ron::from_str(text).map_err(|e| CacheError::Corrupt(format!("section {index}: {e}")))
+    }
+
+    /// The next section as CBOR of a `T`.
+    pub fn cbor<T: serde::de::DeserializeOwned>(&mut self, kind: Kind) -> Result<T, CacheError> {
+        let index = self.next;
+        let bytes = self.bytes(kind)?;
+        ciborium::from_reader(bytes).map_err(|e| CacheError::Corrupt(format!("section {index}: {e}")))
     }
 
     /// The next section as numbers, `count` of them (`None`: any number).

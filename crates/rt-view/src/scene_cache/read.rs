@@ -41,11 +41,17 @@ fn check_version(meta: &Meta) -> Result<(), CacheError> {
 }
 
 /// The source files that are still there and differ from what the cache
-/// was made of.
+/// was made of: of another length or content; one of the same length and
+/// modification time is not read.
 fn changed_sources(meta: &Meta) -> Vec<String> {
     meta.sources
         .iter()
         .filter_map(|s| {
+            let metadata = std::fs::metadata(&s.path).ok()?;
+            if metadata.len() == s.len && s.modified.is_some() && super::modified_ns(&metadata) == s.modified
+            {
+                return None;
+            }
             let bytes = std::fs::read(&s.path).ok()?;
             let mut hash = Fnv1a128::default();
             hash.write(&bytes);
@@ -70,7 +76,7 @@ pub fn decode(file: &[u8]) -> Result<(LoadedScene, Meta), CacheError> {
     if !changed.is_empty() {
         return Err(CacheError::Stale(changed));
     }
-    let small: Small = r.ron(Kind::Small)?;
+    let small: Small = r.cbor(Kind::Small)?;
     let corrupt = |what: String| CacheError::Corrupt(what);
     let vec3s = |v: &[Real]| v.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect::<Vec<_>>();
     let mut meshes = Vec::with_capacity(small.meshes.len());

@@ -17,8 +17,8 @@ use super::{Meta, Source, this_version};
 use crate::content_hash::{Fnv1a128, content_hash, scene_files};
 use crate::image_out::PendingFile;
 
-/// The scene's small and irregular parts, stored as RON text (floats are
-/// written in the shortest form that reads back to the same bits).
+/// The scene's small and irregular parts, stored as CBOR (floats in the
+/// smallest width that holds them exactly).
 #[derive(Serialize, Deserialize)]
 pub(super) struct Small {
     pub environment: Environment,
@@ -42,7 +42,7 @@ pub(super) struct Small {
 }
 
 /// An object's shape: a mesh (stored as arrays: its index among the
-/// meshes) or any other primitive (in the RON text).
+/// meshes) or any other primitive (in the CBOR).
 #[derive(Serialize, Deserialize)]
 pub(super) enum Shape {
     Mesh(usize),
@@ -93,7 +93,8 @@ pub(super) fn cache_bytes_as(
         let mut hash = Fnv1a128::default();
         hash.write(&bytes);
         let path = std::path::absolute(file).unwrap_or_else(|_| file.clone());
-        sources.push(Source { path, len: bytes.len() as u64, hash: hash.hex() });
+        let modified = std::fs::metadata(file).ok().as_ref().and_then(super::modified_ns);
+        sources.push(Source { path, len: bytes.len() as u64, hash: hash.hex(), modified });
     }
     let meta = Meta {
         rt_view_version: version.to_owned(),
@@ -169,7 +170,7 @@ pub(super) fn cache_bytes_as(
         settings: loaded.settings,
     };
     writer.bytes(Kind::Meta, to_ron(&meta)?.into_bytes());
-    writer.bytes(Kind::Small, to_ron(&small)?.into_bytes());
+    writer.bytes(Kind::Small, to_cbor(&small)?);
     writer.append(arrays);
     Ok(writer.finish())
 }
@@ -177,6 +178,14 @@ pub(super) fn cache_bytes_as(
 /// RON text of `value`.
 fn to_ron<T: Serialize>(value: &T) -> anyhow::Result<String> {
     ron::to_string(value).map_err(|e| anyhow::anyhow!("cannot write the scene's parts: {e}"))
+}
+
+/// CBOR of `value`.
+fn to_cbor<T: Serialize>(value: &T) -> anyhow::Result<Vec<u8>> {
+    let mut out = Vec::new();
+    ciborium::into_writer(value, &mut out)
+        .map_err(|e| anyhow::anyhow!("cannot write the scene's parts: {e}"))?;
+    Ok(out)
 }
 
 /// `rt-view prepare`: loads and builds the scene at `scene_file` and writes
