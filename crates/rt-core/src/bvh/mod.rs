@@ -32,7 +32,7 @@ mod item;
 mod leaf;
 mod node;
 mod packet;
-mod parts;
+pub mod parts;
 mod query;
 
 use std::mem::MaybeUninit;
@@ -52,8 +52,6 @@ use item::Item;
 use leaf::{Lanes, Leaf, lanes_of};
 use node::{Child, Node, WIDTH};
 use query::{Best, Query, object_primitive};
-
-pub use parts::{BvhArrays, BvhArraysError, BvhArraysRef};
 
 /// Traversal stack entries kept on the machine stack at most: a node visit
 /// leaves at most seven children waiting, so enough for any tree up to 13

@@ -27,10 +27,10 @@ pub const NODE_IDS: usize = 2 * WIDTH;
 /// A hierarchy's storage as plain numbers (see the module documentation).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct BvhArrays {
-    /// [`NODE_REALS`] per node: the children's boxes, minima then maxima,
+    /// 48 per node: the children's boxes, minima then maxima,
     /// axis by axis, slot by slot.
     pub node_bounds: Vec<Real>,
-    /// [`NODE_IDS`] per node: for each slot its child index and lane masks
+    /// 16 per node: for each slot its child index and lane masks
     /// (0 for an inner node).
     pub node_children: Vec<u32>,
     /// 36 per leaf block: the corners, `[corner][axis][lane]`.

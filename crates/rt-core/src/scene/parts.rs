@@ -14,7 +14,8 @@ use std::sync::Arc;
 use thiserror::Error;
 
 use super::Scene;
-use crate::bvh::{Bvh, BvhArrays, BvhArraysError, BvhArraysRef};
+use crate::bvh::Bvh;
+use crate::bvh::parts::{BvhArrays, BvhArraysError, BvhArraysRef};
 use crate::geometry::method::Methods;
 use crate::geometry::object::Object;
 use crate::lights::emitter::{Emitter, EmitterError};

@@ -17,7 +17,7 @@
 //! arrays), which need the 64-byte alignment the writer gives and the
 //! reader checks.
 
-use super::CacheError;
+use super::cache_error::CacheError;
 
 /// The first bytes of every scene cache.
 pub const MAGIC: [u8; 8] = *b"RTSCENE\0";

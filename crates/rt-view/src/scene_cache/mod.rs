@@ -11,103 +11,22 @@
 //! or rt-view version, when a source file still there has changed since
 //! (stale), or when it is truncated or damaged (a checksum per section; every
 //! index checked before use). Commands tell a cache from a scene file by its
-//! first bytes ([`format::MAGIC`]), not by its name.
+//! first bytes (`RTSCENE`), not by its name.
 
+mod cache_error;
 mod format;
+mod meta;
 mod read;
 mod write;
 
 use std::io::Read as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use thiserror::Error;
-
+use crate::image_out::PendingFile;
+pub use cache_error::CacheError;
+pub use meta::{Meta, Source, this_version};
 pub use read::read_cache;
-pub use write::{cache_bytes, prepare};
-
-/// Why a scene cache cannot be used.
-#[derive(Debug, Error)]
-pub enum CacheError {
-    /// The file does not start with the cache's magic bytes.
-    #[error("not a scene cache")]
-    NotACache,
-    /// The file cannot be read.
-    #[error("cannot read: {0}")]
-    Io(#[from] std::io::Error),
-    /// Written in another layout.
-    #[error("scene cache format {found}, this rt-view reads format {expected}: prepare it again")]
-    FormatVersion {
-        /// The file's.
-        found: u32,
-        /// This build's.
-        expected: u32,
-    },
-    /// Written by a build with another number type (f32 or f64 geometry).
-    #[error(
-        "written with {found}-byte geometry numbers, this build uses {expected}-byte ones: prepare it again"
-    )]
-    NumberSize {
-        /// The file's.
-        found: u32,
-        /// This build's.
-        expected: u32,
-    },
-    /// Written by another rt-view version, whose scenes may render otherwise.
-    #[error("written by rt-view {found}, this is rt-view {expected}: prepare it again")]
-    Version {
-        /// The file's.
-        found: String,
-        /// This build's.
-        expected: String,
-    },
-    /// A source file still there has changed since the cache was written.
-    #[error("stale: changed since it was prepared: {}; prepare it again", .0.join(", "))]
-    Stale(Vec<String>),
-    /// Truncated or damaged: a checksum, offset, length or index is wrong.
-    #[error("damaged or truncated: {0}")]
-    Corrupt(String),
-}
-
-/// Where a cache came from.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Meta {
-    /// The rt-view version that wrote it.
-    pub rt_view_version: String,
-    /// The scene's content hash ([`crate::content_hash`]): the same as
-    /// parts rendered from the scene file record.
-    pub content_hash: String,
-    /// The scene file as given to `prepare`.
-    pub scene_file: PathBuf,
-    /// The scene file and each file it loaded (absolute where the path
-    /// could be made so), with the length and FNV-1a hash of each.
-    pub sources: Vec<Source>,
-}
-
-/// A file a cached scene was read from.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Source {
-    /// Its path.
-    pub path: PathBuf,
-    /// Its length in bytes.
-    pub len: u64,
-    /// Its 128-bit FNV-1a hash, hex.
-    pub hash: String,
-    /// Its modification time (nanoseconds since the Unix epoch) when the
-    /// cache was written, if the file system tells: a file of the same
-    /// length and time is taken as unchanged without reading it (as `make`
-    /// and `rsync` do), which spares a task hashing a large mesh.
-    pub modified: Option<u128>,
-}
-
-/// The modification time of `metadata` in nanoseconds since the Unix epoch.
-pub(crate) fn modified_ns(metadata: &std::fs::Metadata) -> Option<u128> {
-    metadata.modified().ok()?.duration_since(std::time::UNIX_EPOCH).ok().map(|d| d.as_nanos())
-}
-
-/// This build's version, as recorded in caches.
-pub fn this_version() -> String {
-    env!("CARGO_PKG_VERSION").to_owned()
-}
+pub use write::cache_bytes;
 
 /// Whether the file at `path` is a scene cache (by its first bytes).
 pub fn is_cache(path: &Path) -> bool {
@@ -137,6 +56,20 @@ pub fn scene_hash(path: &Path, scene: &rt_core::Scene) -> anyhow::Result<String>
         return Ok(meta.content_hash);
     }
     crate::content_hash::content_hash(&crate::content_hash::scene_files(path, scene))
+}
+
+/// `rt-view prepare`: loads and builds the scene at `scene_file` and writes
+/// its cache to `out` atomically. Returns the cache's size in bytes.
+pub fn prepare(scene_file: &Path, out: &Path) -> anyhow::Result<usize> {
+    let pending = PendingFile::create(out)?;
+    if is_cache(scene_file) {
+        anyhow::bail!("{}: is a scene cache already; prepare takes a scene file", scene_file.display());
+    }
+    let loaded = rt_core::load_scene(scene_file)?;
+    let bytes = cache_bytes(scene_file, &loaded)?;
+    let len = bytes.len();
+    pending.write_bytes(&bytes)?;
+    Ok(len)
 }
 
 #[cfg(test)]

@@ -4,15 +4,16 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use rt_core::bvh::BvhArraysRef;
+use rt_core::bvh::parts::BvhArraysRef;
 use rt_core::geometry::mesh::Mesh;
 use rt_core::materials::texture::Texture;
 use rt_core::scene::parts::SceneParts;
 use rt_core::{Color, LoadedScene, Object, Primitive, Real, Scene, Vec3};
 
+use super::cache_error::CacheError;
 use super::format::{Kind, Reader};
+use super::meta::{Meta, modified_ns, this_version};
 use super::write::{Shape, Small};
-use super::{CacheError, Meta, this_version};
 use crate::content_hash::Fnv1a128;
 
 /// The file at `path`, mapped into memory.
@@ -48,8 +49,7 @@ fn changed_sources(meta: &Meta) -> Vec<String> {
         .iter()
         .filter_map(|s| {
             let metadata = std::fs::metadata(&s.path).ok()?;
-            if metadata.len() == s.len && s.modified.is_some() && super::modified_ns(&metadata) == s.modified
-            {
+            if metadata.len() == s.len && s.modified.is_some() && modified_ns(&metadata) == s.modified {
                 return None;
             }
             let bytes = std::fs::read(&s.path).ok()?;

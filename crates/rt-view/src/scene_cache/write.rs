@@ -13,9 +13,8 @@ use rt_core::{Color, Light, LoadedScene, Material, Primitive, Real, RenderSettin
 use serde::{Deserialize, Serialize};
 
 use super::format::{Kind, Writer};
-use super::{Meta, Source, this_version};
+use super::meta::{Meta, Source, modified_ns, this_version};
 use crate::content_hash::{Fnv1a128, content_hash, scene_files};
-use crate::image_out::PendingFile;
 
 /// The scene's small and irregular parts, stored as CBOR (floats in the
 /// smallest width that holds them exactly).
@@ -93,7 +92,7 @@ pub(super) fn cache_bytes_as(
         let mut hash = Fnv1a128::default();
         hash.write(&bytes);
         let path = std::path::absolute(file).unwrap_or_else(|_| file.clone());
-        let modified = std::fs::metadata(file).ok().as_ref().and_then(super::modified_ns);
+        let modified = std::fs::metadata(file).ok().as_ref().and_then(modified_ns);
         sources.push(Source { path, len: bytes.len() as u64, hash: hash.hex(), modified });
     }
     let meta = Meta {
@@ -186,18 +185,4 @@ fn to_cbor<T: Serialize>(value: &T) -> anyhow::Result<Vec<u8>> {
     ciborium::into_writer(value, &mut out)
         .map_err(|e| anyhow::anyhow!("cannot write the scene's parts: {e}"))?;
     Ok(out)
-}
-
-/// `rt-view prepare`: loads and builds the scene at `scene_file` and writes
-/// its cache to `out` atomically. Returns the cache's size in bytes.
-pub fn prepare(scene_file: &Path, out: &Path) -> anyhow::Result<usize> {
-    let pending = PendingFile::create(out)?;
-    let loaded = super::load_scene(scene_file)?;
-    if super::is_cache(scene_file) {
-        anyhow::bail!("{}: is a scene cache already; prepare takes a scene file", scene_file.display());
-    }
-    let bytes = cache_bytes(scene_file, &loaded)?;
-    let len = bytes.len();
-    pending.write_bytes(&bytes)?;
-    Ok(len)
 }
