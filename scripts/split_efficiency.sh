@@ -3,7 +3,11 @@
 # (`rt-view render`), then for each N its N parts one after the other, each
 # with the whole machine as a cluster task has its node, and merges them.
 #
-#   scripts/split_efficiency.sh RT_VIEW SCENE "1 2 4 8 16 64" [render options...]
+#   scripts/split_efficiency.sh [--cache] RT_VIEW SCENE "1 2 4 8 16 64" [render options...]
+#
+# With --cache the tasks read a scene cache (`rt-view prepare`, made once
+# before them; its CPU seconds go to stderr, not into the tasks' total)
+# instead of the scene file; the one render still reads the scene file.
 #
 # Prints CSV on stdout: N, the tasks' total CPU seconds (user + system, from
 # /usr/bin/time) and wall seconds, what the tasks say they spent loading
@@ -13,8 +17,13 @@
 # one render. Every merged image is checked against the one render, byte
 # for byte.
 set -euo pipefail
+cache=0
+if [[ ${1:-} == --cache ]]; then
+  cache=1
+  shift
+fi
 if [[ $# -lt 3 ]]; then
-  sed -n '2,14p' "$0"
+  sed -n '2,19p' "$0"
   exit 2
 fi
 rt_view=$(realpath "$1")
@@ -41,12 +50,18 @@ echo "parts,cpu_s,wall_s,load_s,render_s,write_s,merge_wall_s,efficiency"
 timed render "$scene" -o "$work/whole.exr" "$@"
 read -r one_wall one_cpu <"$work/time"
 echo "0,$one_cpu,$one_wall,,,,,1.000"
+task_scene=$scene
+if ((cache)); then
+  /usr/bin/time -f "%e %U %S" -o "$work/t" "$rt_view" prepare "$scene" -o "$work/scene.rtc" 2>>"$work/err"
+  awk '{ printf "prepare: %s wall s, %.3f CPU s\n", $1, $2 + $3 }' "$work/t" >&2
+  task_scene=$work/scene.rtc
+fi
 for n in $counts; do
   : >"$work/time"
   : >"$work/err"
   parts=()
   for ((k = 0; k < n; k++)); do
-    timed render "$scene" --part "$k/$n" -o "$work/part-$k.rtpart" "$@"
+    timed render "$task_scene" --part "$k/$n" -o "$work/part-$k.rtpart" "$@"
     parts+=("$work/part-$k.rtpart")
   done
   read -r wall cpu < <(awk '{ w += $1; c += $2 } END { printf "%.3f %.3f\n", w, c }' "$work/time")

@@ -7,7 +7,7 @@ use clap::{Parser, Subcommand};
 use crate::commands::explain::ExplainArgs;
 use crate::commands::{
     self, accuracy::AccuracyArgs, bench::BenchArgs, cast::CastArgs, export::ExportArgs, merge::MergeArgs,
-    render::RenderArgs,
+    prepare::PrepareArgs, render::RenderArgs,
 };
 use crate::viewer;
 
@@ -30,6 +30,7 @@ use crate::viewer;
         rt-view render scenes/sphere.ron -o sphere.png --width 1280 --height 960 --spp 16\n  \
         rt-view render scenes/cornell_box.ron --part 0/4 -o part0.rtpart   (one part of four)\n  \
         rt-view merge part*.rtpart -o cornell_box.exr\n  \
+        rt-view prepare scenes/cornell_box.ron -o cornell_box.rtc   (load and build once)\n  \
         echo '0,0,-5,0,0,1' | rt-view cast scenes/sphere.ron\n  \
         rt-view cast scenes/sphere.ron --pixels > pixels.csv"
 )]
@@ -67,6 +68,16 @@ pub enum Command {
     /// --partial merges those that are there. Damaged or truncated part files
     /// are refused.
     Merge(MergeArgs),
+    /// Load and build a scene once and write it as a scene cache (OUT.rtc):
+    /// meshes, BVH, decoded textures, materials, camera and settings.
+    ///
+    /// Every command that takes a SCENE takes the cache instead (told by its
+    /// first bytes, not its name) and starts from it in a fraction of the
+    /// load time; parts rendered from it carry the scene's content hash and
+    /// merge with parts rendered from the scene file. A cache of another
+    /// format or rt-view version, a stale one (a source file still there has
+    /// changed) and a damaged one are refused (docs/cluster.md).
+    Prepare(PrepareArgs),
     /// Cast rays into a scene and print what each hits, as CSV on stdout.
     ///
     /// Input: one ray a line, `ox,oy,oz,dx,dy,dz` (blank lines and lines
@@ -111,6 +122,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Some(Command::Render(args)) => commands::render::run(&args),
         Some(Command::Merge(args)) => commands::merge::run(&args),
+        Some(Command::Prepare(args)) => commands::prepare::run(&args),
         Some(Command::Cast(args)) => commands::cast::run(&args),
         Some(Command::Bench(args)) => commands::bench::run(&args),
         Some(Command::Accuracy(args)) => commands::accuracy::run(&args),

@@ -17,6 +17,7 @@ pub mod denoise;
 pub mod exact_sum;
 pub mod image_out;
 pub mod part_file;
+pub mod scene_cache;
 pub mod sum_render;
 pub mod timing;
 pub mod viewer;

@@ -121,6 +121,30 @@ impl Leaf {
         (leaf, Lanes(lanes))
     }
 
+    /// Reals per leaf in [`Leaf::flatten`]'s layout.
+    pub const FLAT_REALS: usize = 9 * LANES;
+    /// Indices per leaf in [`Leaf::flatten`]'s layout.
+    pub const FLAT_IDS: usize = 2 * LANES;
+
+    /// Appends the leaf as plain numbers: its corners in storage order
+    /// (`corners[corner][axis][lane]`), then the lanes' objects and indices.
+    pub fn flatten(&self, reals: &mut Vec<Real>, ids: &mut Vec<u32>) {
+        reals.extend(self.corners.iter().flatten().flatten());
+        ids.extend(self.object.iter().chain(&self.index));
+    }
+
+    /// The leaf [`Leaf::flatten`] wrote: [`Leaf::FLAT_REALS`] reals and
+    /// [`Leaf::FLAT_IDS`] indices.
+    pub fn from_flat(reals: &[Real], ids: &[u32]) -> Self {
+        let mut leaf = Leaf { corners: [[[0.0; LANES]; 3]; 3], object: [0; LANES], index: [0; LANES] };
+        for (to, from) in leaf.corners.iter_mut().flatten().flatten().zip(reals) {
+            *to = *from;
+        }
+        leaf.object.copy_from_slice(&ids[..LANES]);
+        leaf.index.copy_from_slice(&ids[LANES..2 * LANES]);
+        leaf
+    }
+
     /// The lanes [`Leaf::new`] gives `items`, without making the leaf.
     pub fn lanes(items: &[Item], objects: &[Object]) -> Lanes {
         Lanes(items.iter().enumerate().fold(0, |lanes, (lane, item)| {

@@ -32,6 +32,7 @@ mod item;
 mod leaf;
 mod node;
 mod packet;
+pub mod parts;
 mod query;
 
 use std::mem::MaybeUninit;

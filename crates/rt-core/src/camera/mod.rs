@@ -78,7 +78,7 @@ pub enum CameraError {
 const MIN_UP_SINE: Real = 1e-4;
 
 /// An orthonormal camera frame (left-handed: `cam_y = cam_z × cam_x`).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CameraBasis {
     /// Right.
     pub x: Vec3,
@@ -121,7 +121,7 @@ impl CameraBasis {
 
 /// A validated camera: every field finite, a well-defined basis, and a view
 /// plane that can be represented.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Camera {
     position: Vec3,
     center_of_interest: Vec3,
@@ -143,7 +143,7 @@ pub struct Camera {
 /// focused at f, as a disc on the view plane (at `near`) of diameter
 /// `c = 2A · near · |d − f| / (f · d)`: the thin-lens circle of confusion
 /// with `near` as the image distance ([`Lens::circle_of_confusion`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Lens {
     /// Lens radius A, world units, ≥ 0 (0: a pinhole).
     pub radius: Real,

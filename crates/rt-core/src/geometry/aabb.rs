@@ -9,7 +9,7 @@ use crate::math::real::{Real, Vec3, gamma};
 
 /// A closed axis-aligned box. A side may have zero length (a flat box).
 /// Normals point outward, along the axis of the face that was hit.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Aabb {
     min: Vec3,
     max: Vec3,

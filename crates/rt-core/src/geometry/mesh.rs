@@ -105,6 +105,29 @@ struct VertexAttributes {
     tangents: Vec<[f32; 4]>,
 }
 
+/// A mesh's arrays, borrowed as they are stored: what a scene cache
+/// writes, and [`Mesh::from_arrays`] takes back. Each vertex list is
+/// empty or one entry per position.
+#[derive(Clone, Copy, Debug)]
+pub struct MeshArrays<'a> {
+    /// Vertex positions.
+    pub positions: &'a [Vec3],
+    /// Index triples into `positions`.
+    pub triangles: &'a [[u32; 3]],
+    /// Per-triangle unit normals (zero for a degenerate triangle).
+    pub normals: &'a [Vec3],
+    /// The box around every triangle.
+    pub bounds: Aabb,
+    /// Per-vertex shading normals.
+    pub vertex_normals: &'a [Vec3],
+    /// Texture coordinates, set 0.
+    pub uvs: &'a [[f32; 2]],
+    /// Texture coordinates, set 1.
+    pub uvs1: &'a [[f32; 2]],
+    /// Tangents `(x, y, z, w)`.
+    pub tangents: &'a [[f32; 4]],
+}
+
 impl Mesh {
     /// A mesh from positions and index triples. Returns `None` if there are no
     /// triangles or an index is out of range.
@@ -135,6 +158,53 @@ impl Mesh {
                 },
             )?;
         Some(Self { positions, triangles, normals, bounds, attributes: None })
+    }
+
+    /// The mesh's arrays as stored, for a scene cache.
+    pub fn arrays(&self) -> MeshArrays<'_> {
+        let a = self.attributes.as_deref();
+        MeshArrays {
+            positions: &self.positions,
+            triangles: &self.triangles,
+            normals: &self.normals,
+            bounds: self.bounds,
+            vertex_normals: a.map_or(&[], |a| &a.normals),
+            uvs: a.map_or(&[], |a| &a.uvs),
+            uvs1: a.map_or(&[], |a| &a.uvs1),
+            tangents: a.map_or(&[], |a| &a.tangents),
+        }
+    }
+
+    /// A mesh from the arrays [`Mesh::arrays`] gave, taken as they are
+    /// (nothing recomputed, so the mesh is the one stored bit for bit).
+    /// `None` unless every index is in range and every list has its
+    /// length: one normal per triangle, each vertex list empty or one
+    /// entry per position.
+    #[allow(clippy::too_many_arguments)]
+    pub fn from_arrays(
+        positions: Vec<Vec3>,
+        triangles: Vec<[u32; 3]>,
+        normals: Vec<Vec3>,
+        bounds: Aabb,
+        vertex_normals: Vec<Vec3>,
+        uvs: Vec<[f32; 2]>,
+        uvs1: Vec<[f32; 2]>,
+        tangents: Vec<[f32; 4]>,
+    ) -> Option<Self> {
+        let n = positions.len();
+        let fits = |len: usize| len == 0 || len == n;
+        let in_range = triangles.par_chunks(4096).all(|c| c.iter().flatten().all(|&i| (i as usize) < n));
+        if triangles.is_empty()
+            || !in_range
+            || normals.len() != triangles.len()
+            || ![vertex_normals.len(), uvs.len(), uvs1.len(), tangents.len()].into_iter().all(fits)
+        {
+            return None;
+        }
+        let none = vertex_normals.is_empty() && uvs.is_empty() && uvs1.is_empty() && tangents.is_empty();
+        let attributes =
+            (!none).then(|| Box::new(VertexAttributes { normals: vertex_normals, uvs, uvs1, tangents }));
+        Some(Self { positions, triangles, normals, bounds, attributes })
     }
 
     /// The mesh with per-vertex shading normals and texture coordinates

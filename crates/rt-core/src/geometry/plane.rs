@@ -20,7 +20,7 @@ pub enum Side {
 
 /// The plane of points `p` with `p·n = d`, `n` unit length. Its normal is `n`
 /// whichever side a ray comes from.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Plane {
     normal: Vec3,
     d: Real,

@@ -16,7 +16,7 @@ pub const PLANARITY_TOLERANCE: Real = 1e-4;
 /// A simple or self-intersecting planar polygon with ≥ 3 corners (even–odd
 /// rule for what is inside). Its normal comes from the winding of the corners
 /// by Newell's method, which for a triangle equals `normalize((b−a)×(c−a))`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Polygon {
     points: Vec<Vec3>,
     normal: Vec3,

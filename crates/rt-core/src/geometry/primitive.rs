@@ -14,7 +14,7 @@ use crate::math::ray::{Interval, Ray};
 use crate::math::real::{Real, Vec3};
 
 /// Every kind of geometry a scene object can be.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Primitive {
     /// See [`Sphere`].
     Sphere(Sphere),
@@ -26,7 +26,9 @@ pub enum Primitive {
     Triangle(Triangle),
     /// See [`Polygon`].
     Polygon(Polygon),
-    /// See [`Mesh`].
+    /// See [`Mesh`]. Not in serde's form: a scene cache stores meshes as
+    /// arrays ([`Mesh::arrays`]).
+    #[serde(skip)]
     Mesh(Mesh),
 }
 

@@ -20,7 +20,7 @@ pub enum Containment {
 }
 
 /// The sphere `|p − center| = radius`, world units. Normals point outward.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Sphere {
     center: Vec3,
     radius: Real,

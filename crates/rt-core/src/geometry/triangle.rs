@@ -23,7 +23,7 @@ pub struct TriangleHit {
 /// A triangle with corners a, b, c. Its normal is `normalize((b−a)×(c−a))`:
 /// with the usual cross product in a left-handed world, corners that appear
 /// clockwise to a viewer have the normal pointing towards the viewer.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Triangle {
     corners: [Vec3; 3],
     normal: Vec3,

@@ -12,7 +12,7 @@
 use crate::math::real::{Real, to_f64};
 
 /// A piecewise-constant density over [0,1) in equal cells.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Distribution1D {
     /// The function's values, one per cell (≥ 0).
     func: Vec<f64>,
@@ -89,7 +89,7 @@ impl Distribution1D {
 
 /// A piecewise-constant density over [0,1)² on a grid of `nu × nv` cells:
 /// the marginal over rows v, then the row's conditional over columns u.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Distribution2D {
     rows: Vec<Distribution1D>,
     marginal: Distribution1D,

@@ -16,7 +16,7 @@ use crate::math::real::{Real, Vec3};
 use crate::sampling::sampler::{uniform_sphere, uniform_sphere_pdf};
 
 /// The light arriving from outside the scene.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Environment {
     /// The same radiance from every direction.
     Constant(Color),

@@ -51,7 +51,7 @@ pub const MAX_MAP_SIDE: u32 = 1 << 14;
 pub const MAX_MAP_TEXELS: u64 = 1 << 27;
 
 /// An equirectangular environment map (see the module's documentation).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct EnvironmentMap {
     width: usize,
     height: usize,

@@ -20,7 +20,7 @@ use crate::math::real::{Real, SPOT_CONE_MIN_WIDTH, Vec3, to_f32};
 use crate::sampling::sampler::stratified;
 
 /// One light of a scene.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Light {
     /// What kind and where.
     pub kind: LightKind,
@@ -32,7 +32,7 @@ pub struct Light {
 }
 
 /// The shape of a light.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum LightKind {
     /// All light from one point.
     Point {

@@ -14,7 +14,7 @@ use crate::math::real::{Real, SUN_RIM_SLACK, Vec3, to_f32, to_f64};
 pub const SUN_ANGULAR_RADIUS_DEGREES: Real = 0.2667;
 
 /// A disc light at infinity.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Sun {
     /// Unit direction towards the sun's centre.
     direction: Vec3,

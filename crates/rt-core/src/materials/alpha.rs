@@ -25,7 +25,7 @@ use crate::math::real::{Real, Vec3};
 use crate::sampling::sampler::mix;
 
 /// How a material's alpha decides where its surface is.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum AlphaMode {
     /// Alpha is ignored: the surface is everywhere (glTF's default).
     #[default]

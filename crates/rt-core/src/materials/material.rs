@@ -27,7 +27,7 @@ use crate::math::real::{Real, SMOOTH_ALPHA};
 /// `kd = diffuse`, `s = specular_color`, and it gives off radiance `emission` from the side its
 /// geometric normal points to. Every weight is in [0, 1] and kr + kt ≤ 1,
 /// so no material reflects more light than arrives.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Material {
     /// Base colour, each component in [0, 1]: the flat colour, the diffuse
     /// albedo and the glass tint.

@@ -36,7 +36,7 @@ use crate::math::color::Color;
 use crate::math::real::{Real, Vec3, to_f32, to_f64};
 
 /// A homogeneous medium's coefficients, as the material gives them.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Subsurface {
     /// Single-scattering albedo α = σs/σt per channel, in [0, 1].
     pub albedo: Color,

@@ -117,7 +117,7 @@ use crate::sampling::sampler::cosine_hemisphere;
 /// The physically based parameters of a material (besides its base colour,
 /// index of refraction and emission, which [`crate::materials::material::Material`]
 /// holds for every model). Ranges as glTF's: factors in [0, 1].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Principled {
     /// Metalness in [0, 1]: 0 a dielectric, 1 a conductor tinted by the base colour.
     pub metallic: f32,

@@ -208,7 +208,73 @@ pub struct Texture {
     wrap: [Wrap; 2],
 }
 
+/// One level of a texture's pyramid, borrowed as stored: what a scene
+/// cache writes, and [`Texture::from_levels`] takes back.
+#[derive(Clone, Copy, Debug)]
+pub struct TextureLevel<'a> {
+    /// Texels across.
+    pub width: u32,
+    /// Texels down.
+    pub height: u32,
+    /// `width × height` linear colours, row by row from the top.
+    pub texels: &'a [Color],
+    /// One alpha per texel, or empty (alpha 1 everywhere).
+    pub alpha: &'a [f32],
+}
+
 impl Texture {
+    /// The pyramid's levels as stored (level 0 the image), for a scene cache.
+    pub fn levels(&self) -> impl ExactSizeIterator<Item = TextureLevel<'_>> {
+        self.levels.iter().map(|l| TextureLevel {
+            width: l.width,
+            height: l.height,
+            texels: &l.texels,
+            alpha: &l.alpha,
+        })
+    }
+
+    /// How the texture wraps when read without a sampler.
+    pub fn wrap(&self) -> [Wrap; 2] {
+        self.wrap
+    }
+
+    /// A texture from the levels [`Texture::levels`] gave, `(width, height,
+    /// texels, alpha)` each, taken as they are (the pyramid is not rebuilt,
+    /// so it is the one stored bit for bit). `None` unless level 0 is not
+    /// empty, each next level is the previous one halved (each side
+    /// `max(1, side / 2)`) down to 1×1, and every level has `width × height`
+    /// texels and no alpha or one per texel, all levels alike.
+    pub fn from_levels(levels: Vec<(u32, u32, Vec<Color>, Vec<f32>)>, wrap: [Wrap; 2]) -> Option<Self> {
+        let first = levels.first()?;
+        let has_alpha = !first.3.is_empty();
+        let (mut w, mut h) = (first.0, first.1);
+        for (i, (lw, lh, texels, alpha)) in levels.iter().enumerate() {
+            if i > 0 {
+                if w == 1 && h == 1 {
+                    return None;
+                }
+                (w, h) = ((w / 2).max(1), (h / 2).max(1));
+            }
+            let count = u64::from(*lw) * u64::from(*lh);
+            if (*lw, *lh) != (w, h)
+                || w == 0
+                || h == 0
+                || texels.len() as u64 != count
+                || alpha.len() != if has_alpha { texels.len() } else { 0 }
+            {
+                return None;
+            }
+        }
+        if (w, h) != (1, 1) {
+            return None;
+        }
+        let levels = levels
+            .into_iter()
+            .map(|(width, height, texels, alpha)| Level { width, height, texels, alpha })
+            .collect();
+        Some(Self { levels, wrap })
+    }
+
     /// A texture of `width × height` linear colours given row by row from
     /// the top. `None` if the sizes disagree or either side is 0.
     pub fn new(width: u32, height: u32, texels: Vec<Color>) -> Option<Self> {

@@ -33,7 +33,7 @@ use crate::math::real::Real;
 /// emissive) are sRGB-encoded and decoded by the IEC 61966-2-1 curve;
 /// data (metallic-roughness, occlusion, normals) are linear and used as
 /// stored. One image used both ways is decoded both ways.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum Encoding {
     /// sRGB-encoded colour, decoded to linear at load.
     #[default]
@@ -43,7 +43,7 @@ pub enum Encoding {
 }
 
 /// One of glTF's texture filters (§5.26, `magFilter` / `minFilter`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Filter {
     /// The texel the point falls in.
     Nearest,
@@ -61,7 +61,7 @@ pub enum Filter {
 /// around the footprint blended (trilinear when `X` is `LINEAR`). A sampler
 /// the file leaves undefined is [`Sampler::DEFAULT`]: linear, trilinear,
 /// repeating (glTF leaves the filters to the implementation, §5.26).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Sampler {
     /// Filter when a texel covers more than a pixel's footprint (magnifying).
     pub mag: Filter,
@@ -105,7 +105,7 @@ impl Default for Sampler {
 
 /// `KHR_texture_transform` as the 2×3 affine matrix `T·R·S` (see the module
 /// documentation), rows `[a, b, c]` giving `u' = a·u + b·v + c`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct UvTransform {
     rows: [[f32; 3]; 2],
 }
@@ -153,7 +153,7 @@ impl Default for UvTransform {
 }
 
 /// A material's use of one texture: glTF's `textureInfo`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TextureSlot {
     /// Index into the scene's decoded textures ([`crate::scene::Scene::texture`]),
     /// each an image decoded with the [`Encoding`] this use needs.
@@ -194,7 +194,7 @@ impl TextureSlot {
 
 /// How texel indices outside the image are brought back into it: glTF's
 /// sampler wrap modes (glTF 2.0 §3.8.4.3), for one axis.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Wrap {
     /// Index `i` is `i mod n`: the image tiles the plane.
     #[default]

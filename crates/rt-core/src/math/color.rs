@@ -11,7 +11,7 @@ use serde::Deserialize;
 pub type Color = glam::Vec3;
 
 /// How linear colours are written to 8-bit images.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
 pub enum ColorSpace {
     /// Each component clamped to [0, 1] and scaled to 0..=255 as is: what
     /// flat-colour scenes always did, so a colour (0.5, …) in the file is

@@ -43,7 +43,7 @@ pub enum SettingsError {
 /// Adaptive sampling: each pixel stops taking samples once its noise
 /// estimate falls below `threshold` ([`crate::render::adaptive`]), after at
 /// least `min_samples`. Valid by construction.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct AdaptiveSampling {
     threshold: f32,
     min_samples: u32,
@@ -79,7 +79,7 @@ impl AdaptiveSampling {
 
 /// An image size in pixels: each side 1 to [`MAX_IMAGE_SIDE`], at most
 /// [`MAX_PIXELS`] in all. Valid by construction.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct ImageSize {
     width: u32,
     height: u32,
@@ -112,7 +112,7 @@ impl Default for ImageSize {
 
 /// Samples per pixel, 1 to [`MAX_SAMPLES_PER_PIXEL`]; 1 means one ray
 /// through each pixel centre. Valid by construction.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
 pub struct SamplesPerPixel(u32);
 
 impl SamplesPerPixel {
@@ -141,7 +141,7 @@ impl Default for SamplesPerPixel {
 }
 
 /// Everything about a render that is not the world or the camera.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RenderSettings {
     /// The image size.
     pub image: ImageSize,

@@ -34,7 +34,7 @@ use serde::Deserialize;
 use crate::math::color::{Color, ColorSpace, srgb_encode};
 
 /// How linear colours become display colours.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
 pub enum ViewTransform {
     /// Clamp to [0, 1] and encode in the scene's colour space: what images
     /// always were.
@@ -66,7 +66,7 @@ impl std::str::FromStr for ViewTransform {
 }
 
 /// The exposure and view transform an image is shown or saved with.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Display {
     /// Stops: each +1 doubles the light (finite).
     pub exposure: f32,

@@ -284,7 +284,7 @@ pub fn uniform_sphere_pdf() -> Real {
 
 /// Which points a [`Sampler`] hands out: the scene file's `sampler` and the
 /// command line's `--sampler`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
 pub enum SamplerKind {
     /// Stratified jitter for the film position, independent random numbers
     /// ([`SampleRng`]) for the path: what images always were.

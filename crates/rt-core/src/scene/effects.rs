@@ -19,7 +19,7 @@ pub const MAX_EFFECT_SAMPLES: u32 = 4096;
 /// recursion depth, ambient occlusion, and global illumination, which
 /// chooses the path tracer over the direct-lighting tracer. The default
 /// (no recursion, neither of the others) with no lights is pure ray casting.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Effects {
     /// How many reflection/refraction bounces follow a primary ray, 0 to
     /// [`MAX_DEPTH`]; 0 turns both off.
@@ -45,7 +45,7 @@ pub const MAX_WALK_STEPS: u32 = 1_000_000;
 pub const DEFAULT_WALK_STEPS: u32 = 4096;
 
 /// Global-illumination settings.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct GlobalIllumination {
     /// How many surfaces a path may scatter from, 0 to [`MAX_BOUNCES`]: 0
     /// shows only what glows, 1 is direct lighting, each more adds one
@@ -62,7 +62,7 @@ pub struct GlobalIllumination {
 }
 
 /// Ambient-occlusion settings.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct AmbientOcclusion {
     /// Rays per shaded point, ≥ 1.
     pub samples: u32,
@@ -99,7 +99,7 @@ pub struct EffectPlan {
 
 /// Effects a user can switch off in the viewer; a plan never turns on what
 /// the scene does not ask for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct EffectToggles {
     /// Keep shadow rays.
     pub shadows: bool,

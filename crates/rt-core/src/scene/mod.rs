@@ -10,6 +10,7 @@
 //! the geometry with the old one.
 
 pub mod effects;
+pub mod parts;
 
 use std::borrow::Cow;
 use std::path::PathBuf;

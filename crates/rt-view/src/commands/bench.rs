@@ -249,7 +249,7 @@ fn time_scene(path: &Path, runs: usize) -> anyhow::Result<Option<(Duration, u32,
     if !path.exists() {
         return Ok(None);
     }
-    let loaded = rt_core::load_scene(path)?;
+    let loaded = crate::scene_cache::load_scene(path)?;
     let renderer = Renderer::new(&loaded.scene, loaded.camera, &loaded.settings)?;
     let time = median_of(runs, || {
         renderer.render(|_| {});

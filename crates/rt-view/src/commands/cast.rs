@@ -44,7 +44,7 @@ const BATCH: usize = 1 << 14;
 /// Runs `cast`, writing the CSV to standard output. All input is read and
 /// validated first; after that nothing can fail but the write itself.
 pub fn run(args: &CastArgs) -> anyhow::Result<()> {
-    let loaded = rt_core::load_scene(&args.scene)?;
+    let loaded = crate::scene_cache::load_scene(&args.scene)?;
     let scene = &loaded.scene;
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     if args.pixels {

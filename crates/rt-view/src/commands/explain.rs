@@ -55,7 +55,7 @@ fn parse_pixel(text: &str) -> Result<(u32, u32), String> {
 /// if the scene, the pixel or the sample is not valid.
 pub fn run(args: &ExplainArgs) -> anyhow::Result<()> {
     let name = args.scene.display();
-    let loaded = rt_core::load_scene(&args.scene)?;
+    let loaded = crate::scene_cache::load_scene(&args.scene)?;
     let settings = loaded
         .settings
         .overridden(args.width, args.height, args.spp)

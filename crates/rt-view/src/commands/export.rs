@@ -212,7 +212,7 @@ fn c3(c: Color) -> [f32; 3] {
 
 /// Writes the scene's JSON and its OBJ files.
 pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
-    let loaded = rt_core::load_scene(&args.scene)?;
+    let loaded = crate::scene_cache::load_scene(&args.scene)?;
     let (scene, settings) = (&loaded.scene, &loaded.settings);
     let json = PendingFile::create(&args.output)?;
     let stem = args.output.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();

@@ -7,6 +7,7 @@ pub mod cast;
 pub mod explain;
 pub mod export;
 pub mod merge;
+pub mod prepare;
 pub mod render;
 pub mod render_outputs;
 pub mod render_part;

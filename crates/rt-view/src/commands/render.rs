@@ -171,7 +171,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         );
     }
     let load_start = Instant::now();
-    let loaded = rt_core::load_scene(&args.scene)?;
+    let loaded = crate::scene_cache::load_scene(&args.scene)?;
     let load_time = load_start.elapsed();
     let scene = &loaded.scene;
     for warning in scene.warnings() {

@@ -13,7 +13,6 @@ use rt_core::render::settings::RenderSettings;
 use rt_core::render::view_transform::Display;
 use rt_core::{Renderer, math::color::ColorSpace};
 
-use crate::content_hash::{content_hash, scene_files};
 use crate::image_out::PendingFile;
 use crate::part_file::{self, PartHeader, PartSettings, Split, SplitKind};
 use crate::sum_render::render_sums;
@@ -93,7 +92,7 @@ impl PendingPart {
                 if split.kind == SplitKind::Samples { " (or --tiles)" } else { "" }
             );
         }
-        let scene_hash = content_hash(&scene_files(scene_file, scene))?;
+        let scene_hash = crate::scene_cache::scene_hash(scene_file, scene)?;
         let load_seconds = load_start.elapsed().as_secs_f64();
         let (rows, samples) = split.ranges(height, spp);
 

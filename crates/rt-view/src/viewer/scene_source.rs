@@ -34,7 +34,7 @@ pub const DEFAULT_SCENE_NAME: &str = "<built-in default scene>";
 /// Loads the scene (the built-in one for `None`).
 pub fn load(path: Option<&Path>) -> Result<LoadedScene, rt_core::SceneError> {
     match path {
-        Some(p) => rt_core::load_scene(p),
+        Some(p) => crate::scene_cache::load_scene(p),
         None => rt_core::parse_scene(DEFAULT_SCENE, DEFAULT_SCENE_NAME, Path::new(".")),
     }
 }
