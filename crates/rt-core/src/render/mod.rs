@@ -40,6 +40,10 @@ use crate::scene::effects::{EffectPlan, RayCounts};
 /// than eight samples per pixel, one at 64 or more).
 pub const BAND_ROWS: u32 = 8;
 
+/// A sample's colour with its pixel's index in the region rendered
+/// (row-major), as [`Renderer::accumulate_region_packets`] hands them out.
+pub type RegionColour = (usize, Color);
+
 /// An 8-bit RGB pixel.
 pub type Rgb8 = [u8; 3];
 
@@ -274,7 +278,7 @@ impl<'s> Renderer<'s> {
         rows: Range<u32>,
         columns: Range<u32>,
         samples: Range<u32>,
-        add: &mut dyn FnMut(&[(usize, Color)]),
+        add: &mut dyn FnMut(&[RegionColour]),
     ) -> RayCounts {
         let mut colours = [(0, Color::ZERO); PACKET_RAYS];
         let mut n = 0;
