@@ -136,7 +136,8 @@ fn render_bands<T: Send>(
 fn add_packet(sums: &mut [ExactColorSum], colours: &[(usize, Color)]) {
     let mut rest = colours;
     while let Some(&(at, c)) = rest.first() {
-        let run = rest.iter().take_while(|&&(a, b)| a == at && b == c).count();
+        // At least the first: a NaN colour equals nothing, itself included.
+        let run = 1 + rest[1..].iter().take_while(|&&(a, b)| a == at && b == c).count();
         sums[at].add_times(c, run as u32);
         rest = &rest[run..];
     }
