@@ -74,6 +74,16 @@ impl ExactColorSum {
         }
     }
 
+    /// Adds `n` samples of colour `c`: exactly `n` calls of
+    /// [`ExactColorSum::add`], converting `c` once (a flat render's pixel
+    /// sees one colour in most of its samples).
+    #[inline]
+    pub fn add_times(&mut self, c: Color, n: u32) {
+        for (sum, v) in self.0.iter_mut().zip(c.to_array()) {
+            *sum += fixed(v) * n as i128;
+        }
+    }
+
     /// Adds another sum (of other samples of the same pixel): exact.
     pub fn merge(&mut self, other: &Self) {
         for (sum, v) in self.0.iter_mut().zip(other.0) {
@@ -166,6 +176,17 @@ mod tests {
         // The f32 sum of the same halves is not the f32 sum of the whole.
         let f32_sum = |s: &[Color]| s.iter().fold(Color::ZERO, |a, &c| a + c);
         assert_ne!(f32_sum(&samples[..333]) + f32_sum(&samples[333..]), f32_sum(&samples));
+    }
+
+    #[test]
+    fn adding_a_colour_n_times_at_once_is_adding_it_n_times() {
+        for (c, n) in [(Color::new(0.1, 3.75, 1e-12), 7), (Color::splat(f32::INFINITY), 64), (Color::ZERO, 0)]
+        {
+            let (mut once, mut each) = (ExactColorSum::default(), ExactColorSum::default());
+            once.add_times(c, n);
+            (0..n).for_each(|_| each.add(c));
+            assert_eq!(once, each, "{c} times {n}");
+        }
     }
 
     #[test]

@@ -25,7 +25,7 @@ use crate::exact_sum::ExactColorSum;
 ///
 /// Rows go in parallel bands, as [`Renderer::render`] makes them (up to
 /// [`BAND_ROWS`], fewer the more samples: a band's rays fill a packet), cast
-/// in the same packets ([`Renderer::accumulate_region_with`]), each
+/// in the same packets ([`Renderer::accumulate_region_packets`]), each
 /// sample's colour added to its pixel's exact sum. `row_done` is called once
 /// per finished row, from a worker thread; `stop` is looked at before each
 /// band.
@@ -39,34 +39,108 @@ pub fn render_sums(
     row_done: impl Fn(u32) + Sync,
     stop: &AtomicBool,
 ) -> Option<(Vec<ExactColorSum>, RayCounts)> {
+    let width = renderer.view_plane().width() as usize;
+    let mut sums = vec![ExactColorSum::default(); width * rows.len()];
+    let rays = render_bands(
+        renderer,
+        rows,
+        samples,
+        &mut sums,
+        |band, out| out.copy_from_slice(band),
+        row_done,
+        stop,
+    )?;
+    Some((sums, rays))
+}
+
+/// The image of samples `0..spp` of every pixel of every row, as
+/// [`means`] of [`render_sums`] gives it, bit for bit, and the rays cast;
+/// `None` if `stop` was set before the end (Ctrl-C).
+///
+/// Each band's exact sums are turned into its pixels' means as soon as the
+/// band is done, in a buffer each worker reuses: the image's sums (48 bytes
+/// a pixel, four times its colours) are never held at once, written and
+/// read back.
+pub fn render_means(
+    renderer: &Renderer,
+    row_done: impl Fn(u32) + Sync,
+    stop: &AtomicBool,
+) -> Option<(Vec<Color>, RayCounts)> {
+    let view = renderer.view_plane();
+    let (spp, height) = (renderer.samples_per_pixel(), view.height());
+    let mut pixels = vec![Color::ZERO; view.width() as usize * height as usize];
+    let finish = |band: &[ExactColorSum], out: &mut [Color]| {
+        out.iter_mut().zip(band).for_each(|(out, sum)| *out = sum.mean(spp))
+    };
+    let rays = render_bands(renderer, 0..height, 0..spp, &mut pixels, finish, row_done, stop)?;
+    Some((pixels, rays))
+}
+
+/// Renders rows `rows` (samples `samples`) into `out` (one `T` per pixel,
+/// row-major), band by band: each band's exact sums are made in a buffer
+/// the worker reuses, then handed to `finish` with the band's part of
+/// `out`. The rays cast; `None` if `stop` was set before the end.
+///
+/// # Panics
+/// If `rows` reach past the image, `samples` past its samples per pixel,
+/// or `out` is not one per pixel of the rows.
+fn render_bands<T: Send>(
+    renderer: &Renderer,
+    rows: Range<u32>,
+    samples: Range<u32>,
+    out: &mut [T],
+    finish: impl Fn(&[ExactColorSum], &mut [T]) + Sync,
+    row_done: impl Fn(u32) + Sync,
+    stop: &AtomicBool,
+) -> Option<RayCounts> {
     let view = renderer.view_plane();
     let (width, height) = (view.width() as usize, view.height());
     assert!(rows.end <= height, "rows {rows:?} past the image's {height}");
     assert!(samples.end <= renderer.samples_per_pixel(), "samples {samples:?} past the samples per pixel");
-    let mut sums = vec![ExactColorSum::default(); width * rows.len()];
+    assert_eq!(out.len(), width * rows.len(), "one output per pixel of the rows");
     // Bands as tall as a packet's worth of samples per pixel fills, as
     // `Renderer::render`'s: with 64 samples or more a pixel fills packets
     // on its own (its rays are the most alike: on a million-triangle mesh,
     // 2.5 times faster than 8 × 8 pixels at one sample each).
     let band_rows = (PACKET_RAYS as u32 / samples.len().max(1) as u32).clamp(1, BAND_ROWS);
-    let rays = sums
+    let rays = out
         .par_chunks_mut(width * band_rows as usize)
         .enumerate()
-        .map(|(band, sums)| {
+        .map_init(Vec::new, |sums, (band, out)| {
             if stop.load(Ordering::Relaxed) {
                 return RayCounts::default();
             }
+            sums.clear();
+            sums.resize(out.len(), ExactColorSum::default());
             let first = rows.start + band as u32 * band_rows;
-            let rows = first..first + (sums.len() / width) as u32;
-            let counts =
-                renderer.accumulate_region_with(rows.clone(), 0..width as u32, samples.clone(), |at, c| {
-                    sums[at].add(c)
-                });
+            let rows = first..first + (out.len() / width) as u32;
+            let counts = renderer.accumulate_region_packets(
+                rows.clone(),
+                0..width as u32,
+                samples.clone(),
+                &mut |colours| add_packet(sums, colours),
+            );
+            finish(sums, out);
             rows.for_each(&row_done);
             counts
         })
         .sum();
-    (!stop.load(Ordering::Relaxed)).then_some((sums, rays))
+    (!stop.load(Ordering::Relaxed)).then_some(rays)
+}
+
+/// Adds each sample colour of a packet (its pixel's index, its colour) to
+/// its pixel's sum, a run of equal colours of one pixel at once
+/// ([`ExactColorSum::add_times`]): the sums are those of adding one by one,
+/// and a flat render, whose pixels mostly see one colour in all their
+/// samples, converts each colour to fixed point once, not once per sample.
+fn add_packet(sums: &mut [ExactColorSum], colours: &[(usize, Color)]) {
+    let mut rest = colours;
+    while let Some(&(at, c)) = rest.first() {
+        // At least the first: a NaN colour equals nothing, itself included.
+        let run = 1 + rest[1..].iter().take_while(|&&(a, b)| a == at && b == c).count();
+        sums[at].add_times(c, run as u32);
+        rest = &rest[run..];
+    }
 }
 
 /// The image of exact sums `sums` of `count` samples each: each pixel's mean
@@ -124,6 +198,31 @@ mod tests {
             let tolerance = 4.0 * f32::EPSILON * want.max_element().max(1e-30);
             assert!((*got - *want).abs().max_element() <= tolerance, "{got} against {want}");
         }
+    }
+
+    #[test]
+    fn the_means_render_is_the_means_of_the_sums_render_bit_for_bit() {
+        let loaded = scene();
+        for spp in [1, 9, 70] {
+            let r = renderer(&loaded, spp);
+            let go = AtomicBool::new(false);
+            let (sums, rays) = render_sums(&r, 0..19, 0..spp, |_| {}, &go).unwrap();
+            let (pixels, means_rays) = render_means(&r, |_| {}, &go).unwrap();
+            assert_eq!(pixels, means(&sums, spp), "spp {spp}");
+            assert_eq!(means_rays, rays);
+        }
+        assert!(render_means(&renderer(&loaded, 2), |_| {}, &AtomicBool::new(true)).is_none());
+    }
+
+    #[test]
+    fn a_packet_of_runs_adds_what_its_samples_add_one_by_one() {
+        let (a, b) = (Color::new(0.1, 0.2, 0.3), Color::new(0.1, 0.2, 0.30001));
+        let packet = [(0, a), (0, a), (0, b), (0, a), (1, a), (1, a), (2, f32::NAN * a), (2, b)];
+        let mut runs = vec![ExactColorSum::default(); 3];
+        add_packet(&mut runs, &packet);
+        let mut one_by_one = vec![ExactColorSum::default(); 3];
+        packet.iter().for_each(|&(at, c)| one_by_one[at].add(c));
+        assert_eq!(runs, one_by_one);
     }
 
     #[test]

@@ -223,10 +223,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             (frame, None, features.flatten())
         }
         None => {
-            let sums = sum_render::render_sums(&renderer, 0..height, 0..spp, |_| bar.inc(1), &stop);
-            let frame = sums.map(|(sums, rays)| {
-                let pixels = sum_render::means(&sums, spp);
-                rt_core::Frame { width, height, pixels, color_space: settings.color_space, rays }
+            let means = sum_render::render_means(&renderer, |_| bar.inc(1), &stop);
+            let frame = means.map(|(pixels, rays)| rt_core::Frame {
+                width,
+                height,
+                pixels,
+                color_space: settings.color_space,
+                rays,
             });
             (frame, None, None)
         }
