@@ -89,7 +89,7 @@ pub fn stratified(k: u32, n: u32, jitter: (Real, Real)) -> (Real, Real) {
 /// keeps its pixels'), so the square root and divisions that lay out the
 /// rows are not paid per sample.
 ///
-/// Point k goes to cell `order(k)`, a permutation of 0..n ([`CellOrder`]):
+/// Point k goes to cell `order(k)`, a permutation of 0..n:
 /// where the grid is 2ᶜ × 2ᶜ or 2ᶜ⁺¹ × 2ᶜ (n = 2, 4, 8, 16, 64, 256, 1024,
 /// …) the bit-reversed Morton order, so that the first 4ʲ points fall one
 /// in each cell of the 2ʲ × 2ʲ grid (the first 4 one per quadrant, as the
