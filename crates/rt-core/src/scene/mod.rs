@@ -339,17 +339,9 @@ impl SceneBuilder {
                 ));
             }
         }
-        let mut emitters = Vec::new();
-        let mut emitter_of = vec![None; objects.len()];
-        for (index, o) in objects.iter().enumerate() {
-            let m = &materials[o.material];
-            if m.is_emissive() {
-                let e = Emitter::new(index, &o.primitive, m.emission)
-                    .map_err(|reason| SceneBuildError::Emitter { index, kind: o.primitive.kind(), reason })?;
-                emitter_of[index] = Some(emitters.len() as u32);
-                emitters.push(e);
-            }
-        }
+        let (emitters, emitter_of) = emitters_of(&objects, &materials).map_err(|(index, reason)| {
+            SceneBuildError::Emitter { index, kind: objects[index].primitive.kind(), reason }
+        })?;
         let bvh = Bvh::build(&objects);
         let cuts = objects.iter().any(|o| materials[o.material].alpha_mode.cuts());
         let radius = bvh.bounds().map_or(1.0, |b| (0.5 * b.size().length()).max(1.0));
@@ -817,6 +809,29 @@ impl Scene {
 fn rescaled_query(ray: &Ray, range: Interval) -> Option<(Ray, Interval, i32)> {
     let (unit, k) = ray.rescaled()?;
     Some((unit, Interval::new(scale_pow2(range.min, -k), scale_pow2(range.max, -k)), k))
+}
+
+/// A scene's emitters and, for each object, the index of its emitter.
+pub(crate) type Emitters = (Vec<Emitter>, Vec<Option<u32>>);
+
+/// The emitters of the objects whose material emits, in object order, and
+/// for each object the index of its emitter (`None` where it emits
+/// nothing); on an object that cannot emit, its index and why.
+pub(crate) fn emitters_of(
+    objects: &[Object],
+    materials: &[Material],
+) -> Result<Emitters, (usize, EmitterError)> {
+    let mut emitters = Vec::new();
+    let mut emitter_of = vec![None; objects.len()];
+    for (index, o) in objects.iter().enumerate() {
+        let m = &materials[o.material];
+        if m.is_emissive() {
+            let e = Emitter::new(index, &o.primitive, m.emission).map_err(|reason| (index, reason))?;
+            emitter_of[index] = Some(emitters.len() as u32);
+            emitters.push(e);
+        }
+    }
+    Ok((emitters, emitter_of))
 }
 
 #[cfg(test)]

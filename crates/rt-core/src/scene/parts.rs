@@ -18,7 +18,7 @@ use crate::bvh::Bvh;
 use crate::bvh::parts::{BvhArrays, BvhArraysError, BvhArraysRef};
 use crate::geometry::method::Methods;
 use crate::geometry::object::Object;
-use crate::lights::emitter::{Emitter, EmitterError};
+use crate::lights::emitter::EmitterError;
 use crate::lights::environment::Environment;
 use crate::lights::light::Light;
 use crate::lights::light_sampler::LightSampler;
@@ -148,17 +148,8 @@ impl Scene {
             return Err(ScenePartsError::Material { object, material, count });
         }
         // As `super::SceneBuilder::build` makes them.
-        let mut emitters = Vec::new();
-        let mut emitter_of = vec![None; objects.len()];
-        for (index, o) in objects.iter().enumerate() {
-            let m = &materials[o.material];
-            if m.is_emissive() {
-                let e = Emitter::new(index, &o.primitive, m.emission)
-                    .map_err(|reason| ScenePartsError::Emitter { index, reason })?;
-                emitter_of[index] = Some(emitters.len() as u32);
-                emitters.push(e);
-            }
-        }
+        let (emitters, emitter_of) = super::emitters_of(&objects, &materials)
+            .map_err(|(index, reason)| ScenePartsError::Emitter { index, reason })?;
         let bvh = Bvh::from_arrays(bvh, &objects)?;
         let cuts = objects.iter().any(|o| materials[o.material].alpha_mode.cuts());
         let radius = bvh.bounds().map_or(1.0, |b| (0.5 * b.size().length()).max(1.0));
