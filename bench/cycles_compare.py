@@ -2,9 +2,9 @@
 """rt-view beside Blender Cycles on the same glTF scene: are the two images
 the same, up to noise?
 
-    python3.11 -m venv /work/venv-bpy && /work/venv-bpy/bin/pip install bpy==5.0.1 numpy
+    python3.11 -m venv venv-bpy && venv-bpy/bin/pip install bpy==5.0.1 numpy
     cargo build --release -p rt-view
-    /work/venv-bpy/bin/python bench/cycles_compare.py scenes/cycles_spheres.ron --spp 256 --batches 8
+    venv-bpy/bin/python bench/cycles_compare.py scenes/cycles_spheres.ron --spp 256 --batches 8
 
 The scene must be of the form of `scenes/cycles_*.ron` (written for
 `scripts/make_blender_scenes.py`'s models): one `Mesh` of a `.glb` with

@@ -2,9 +2,9 @@
 """rt-view beside Blender Cycles (and Mitsuba 3) under the same HDR
 environment map, with or without a thin lens; and the skies of the three.
 
-    python3.11 -m venv /work/venv-bpy && /work/venv-bpy/bin/pip install bpy==5.0.1 numpy mitsuba
+    python3.11 -m venv venv-bpy && venv-bpy/bin/pip install bpy==5.0.1 numpy mitsuba
     cargo build --release -p rt-view
-    B=/work/venv-bpy/bin/python
+    B=venv-bpy/bin/python
     $B bench/cycles_env_compare.py convention               # where a marked texel lands in each
     $B bench/cycles_env_compare.py compare bench/scenes/envmap_spheres.ron --mitsuba
     $B bench/cycles_env_compare.py compare scenes/depth_of_field.ron --mitsuba

@@ -3,10 +3,10 @@
 each take to reach the same error against one high-sample reference, side
 by side in one run.
 
-    /work/venv-bpy/bin/python -m pip install bpy==5.0.1 numpy mitsuba   (Python 3.11)
+    venv-bpy/bin/python -m pip install bpy==5.0.1 numpy mitsuba   (Python 3.11)
     scripts/get_oidn.sh
     cargo build --release -p rt-view
-    /work/venv-bpy/bin/python bench/time_to_clean.py --threads 2
+    venv-bpy/bin/python bench/time_to_clean.py --threads 2
 
 Scenes: every scene in `scenes/` with global illumination, or those named;
 the conversions are bench/mitsuba_compare.py's (Mitsuba) and

@@ -5,7 +5,7 @@ full-resolution image and an image without visible grain.
     apt-get install xvfb xdotool x11-apps
     scripts/get_oidn.sh
     cargo build --release -p rt-view
-    /work/venv-bpy/bin/python bench/viewer_timing.py scenes/cornell_box.ron \\
+    venv-bpy/bin/python bench/viewer_timing.py scenes/cornell_box.ron \\
         --denoise-at 150,400 --threads 2
 
 The viewer runs under its own Xvfb with its trace on (`RT_VIEW_TRACE`,

@@ -4,9 +4,9 @@ glTF 2.0 exporter, as an artist's files come: the models that
 `scenes/cycles_*.ron` load and `bench/cycles_compare.py` renders with both
 Blender Cycles and rt-view.
 
-    python3.11 -m venv /work/venv-bpy
-    /work/venv-bpy/bin/pip install bpy==5.0.1 numpy
-    /work/venv-bpy/bin/python scripts/make_blender_scenes.py [OUT_DIR]
+    python3.11 -m venv venv-bpy
+    venv-bpy/bin/pip install bpy==5.0.1 numpy
+    venv-bpy/bin/python scripts/make_blender_scenes.py [OUT_DIR]
 
 OUT_DIR defaults to scenes/models. Each scene is made in a fresh, empty
 Blender file (no start-up cube, light or camera), so the output depends on

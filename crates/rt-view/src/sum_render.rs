@@ -15,6 +15,7 @@ use rt_core::Renderer;
 use rt_core::bvh::PACKET_RAYS;
 use rt_core::math::color::Color;
 use rt_core::render::BAND_ROWS;
+use rt_core::render::passes::{FeatureFrame, FeatureSums};
 use rt_core::scene::effects::RayCounts;
 
 use crate::exact_sum::ExactColorSum;
@@ -45,7 +46,7 @@ pub fn render_sums(
         renderer,
         rows,
         samples,
-        &mut sums,
+        (&mut sums, None),
         |band, out| out.copy_from_slice(band),
         row_done,
         stop,
@@ -72,23 +73,45 @@ pub fn render_means(
     let finish = |band: &[ExactColorSum], out: &mut [Color]| {
         out.iter_mut().zip(band).for_each(|(out, sum)| *out = sum.mean(spp))
     };
-    let rays = render_bands(renderer, 0..height, 0..spp, &mut pixels, finish, row_done, stop)?;
+    let rays = render_bands(renderer, 0..height, 0..spp, (&mut pixels, None), finish, row_done, stop)?;
     Some((pixels, rays))
 }
 
-/// Renders rows `rows` (samples `samples`) into `out` (one `T` per pixel,
+/// [`render_means`] that also records the feature passes of every sample
+/// ([`Renderer::accumulate_region_packets_with_features`]): the image is
+/// the same, bit for bit (its sums are exact), and the passes are those of
+/// [`Renderer::render_with_features_until`].
+pub fn render_means_with_features(
+    renderer: &Renderer,
+    row_done: impl Fn(u32) + Sync,
+    stop: &AtomicBool,
+) -> Option<(Vec<Color>, FeatureFrame, RayCounts)> {
+    let view = renderer.view_plane();
+    let (spp, width, height) = (renderer.samples_per_pixel(), view.width(), view.height());
+    let mut pixels = vec![Color::ZERO; width as usize * height as usize];
+    let mut features = vec![FeatureSums::default(); pixels.len()];
+    let finish = |band: &[ExactColorSum], out: &mut [Color]| {
+        out.iter_mut().zip(band).for_each(|(out, sum)| *out = sum.mean(spp))
+    };
+    let out = (&mut pixels[..], Some(&mut features[..]));
+    let rays = render_bands(renderer, 0..height, 0..spp, out, finish, row_done, stop)?;
+    Some((pixels, FeatureFrame { width, height, samples: spp, pixels: features }, rays))
+}
+
+/// Renders rows `rows` (samples `samples`) into `out.0` (one `T` per pixel,
 /// row-major), band by band: each band's exact sums are made in a buffer
 /// the worker reuses, then handed to `finish` with the band's part of
-/// `out`. The rays cast; `None` if `stop` was set before the end.
+/// `out.0`; with `out.1`, each sample's features are added to it (laid out
+/// as `out.0`). The rays cast; `None` if `stop` was set before the end.
 ///
 /// # Panics
 /// If `rows` reach past the image, `samples` past its samples per pixel,
-/// or `out` is not one per pixel of the rows.
+/// or `out.0` (or `out.1`) is not one per pixel of the rows.
 fn render_bands<T: Send>(
     renderer: &Renderer,
     rows: Range<u32>,
     samples: Range<u32>,
-    out: &mut [T],
+    out: (&mut [T], Option<&mut [FeatureSums]>),
     finish: impl Fn(&[ExactColorSum], &mut [T]) + Sync,
     row_done: impl Fn(u32) + Sync,
     stop: &AtomicBool,
@@ -97,16 +120,27 @@ fn render_bands<T: Send>(
     let (width, height) = (view.width() as usize, view.height());
     assert!(rows.end <= height, "rows {rows:?} past the image's {height}");
     assert!(samples.end <= renderer.samples_per_pixel(), "samples {samples:?} past the samples per pixel");
+    let (out, features) = out;
     assert_eq!(out.len(), width * rows.len(), "one output per pixel of the rows");
     // Bands as tall as a packet's worth of samples per pixel fills, as
     // `Renderer::render`'s: with 64 samples or more a pixel fills packets
     // on its own (its rays are the most alike: on a million-triangle mesh,
     // 2.5 times faster than 8 × 8 pixels at one sample each).
     let band_rows = (PACKET_RAYS as u32 / samples.len().max(1) as u32).clamp(1, BAND_ROWS);
+    let band_len = width * band_rows as usize;
+    // Each band's part of the features, or none.
+    let feature_bands: Vec<Option<&mut [FeatureSums]>> = match features {
+        Some(f) => {
+            assert_eq!(f.len(), out.len(), "one feature sum per pixel of the rows");
+            f.chunks_mut(band_len).map(Some).collect()
+        }
+        None => out.chunks(band_len).map(|_| None).collect(),
+    };
     let rays = out
-        .par_chunks_mut(width * band_rows as usize)
+        .par_chunks_mut(band_len)
+        .zip(feature_bands)
         .enumerate()
-        .map_init(Vec::new, |sums, (band, out)| {
+        .map_init(Vec::new, |sums, (band, (out, features))| {
             if stop.load(Ordering::Relaxed) {
                 return RayCounts::default();
             }
@@ -114,12 +148,14 @@ fn render_bands<T: Send>(
             sums.resize(out.len(), ExactColorSum::default());
             let first = rows.start + band as u32 * band_rows;
             let rows = first..first + (out.len() / width) as u32;
-            let counts = renderer.accumulate_region_packets(
-                rows.clone(),
-                0..width as u32,
-                samples.clone(),
-                &mut |colours| add_packet(sums, colours),
-            );
+            let add = &mut |colours: &[(usize, Color)]| add_packet(sums, colours);
+            let (columns, samples) = (0..width as u32, samples.clone());
+            let counts = match features {
+                Some(f) => {
+                    renderer.accumulate_region_packets_with_features(rows.clone(), columns, samples, add, f)
+                }
+                None => renderer.accumulate_region_packets(rows.clone(), columns, samples, add),
+            };
             finish(sums, out);
             rows.for_each(&row_done);
             counts
@@ -162,6 +198,23 @@ mod tests {
     fn renderer(loaded: &rt_core::LoadedScene, spp: u32) -> Renderer<'_> {
         let settings = loaded.settings.overridden(Some(20), Some(19), Some(spp)).unwrap();
         Renderer::new(&loaded.scene, loaded.camera, &settings).unwrap()
+    }
+
+    #[test]
+    fn recording_the_feature_passes_leaves_the_image_as_it_is_bit_for_bit() {
+        // The passes are those of rt-core's one-loop render, the colours
+        // those of the exact sums, not its f32 ones.
+        let loaded = scene();
+        let r = renderer(&loaded, 5);
+        let go = AtomicBool::new(false);
+        let (plain, rays) = render_means(&r, |_| {}, &go).unwrap();
+        let (pixels, features, feature_rays) = render_means_with_features(&r, |_| {}, &go).unwrap();
+        let bits = |p: &[Color]| p.iter().map(|c| c.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+        assert_eq!(bits(&pixels), bits(&plain));
+        assert_eq!(feature_rays, rays);
+        let (_, expected) = r.render_with_features_until(|_| {}, &go).unwrap();
+        assert_eq!(features.pixels, expected.pixels);
+        assert_eq!((features.width, features.height, features.samples), (20, 19, 5));
     }
 
     #[test]

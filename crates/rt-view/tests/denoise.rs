@@ -100,11 +100,9 @@ fn denoising_brings_a_noisy_render_closer_to_the_converged_one_or_says_oidn_is_a
     let (noisy, denoised) = (rmse(&image, "noisy.", &reference), rmse(&image, "", &reference));
     eprintln!("RMSE against 256 spp: noisy {noisy:.4}, denoised {denoised:.4}");
     assert!(denoised < noisy * 0.7, "noisy {noisy}, denoised {denoised}");
-    // The noisy layer is the plain render, to the rounding of its sums: a
-    // render with feature passes adds its samples in f32, a plain one
-    // exactly (docs/denoising.md).
-    let off = rmse(&image, "noisy.", &exr_channels(&plain));
-    assert!(off < 1e-6, "the noisy layer is {off} (RMSE) off the plain render");
+    // The noisy layer is the plain render, bit for bit.
+    assert_eq!(image["noisy.R"], exr_channels(&plain)["R"]);
+    assert_eq!(rmse(&image, "noisy.", &exr_channels(&plain)), 0.0);
 }
 
 #[test]

@@ -280,6 +280,40 @@ impl<'s> Renderer<'s> {
         samples: Range<u32>,
         add: &mut dyn FnMut(&[RegionColour]),
     ) -> RayCounts {
+        self.region_packets(rows, columns, samples, add, &mut NoFeatures)
+    }
+
+    /// [`Renderer::accumulate_region_packets`] that also adds each sample's
+    /// [`SampleFeatures`] to `features` (one per pixel of the region, row by
+    /// row), as [`Renderer::accumulate_region_with_features`] does: the
+    /// colours handed out are the same, bit for bit and in the same order.
+    ///
+    /// # Panics
+    /// If the columns reach past the image's width, or `features` is not one
+    /// per pixel of the region.
+    pub fn accumulate_region_packets_with_features(
+        &self,
+        rows: Range<u32>,
+        columns: Range<u32>,
+        samples: Range<u32>,
+        add: &mut dyn FnMut(&[RegionColour]),
+        features: &mut [FeatureSums],
+    ) -> RayCounts {
+        assert_eq!(features.len(), rows.len() * columns.len(), "one feature sum per pixel of the region");
+        self.region_packets(rows, columns, samples, add, &mut Features(features))
+    }
+
+    /// The packet loop of [`Renderer::accumulate_region_packets`], with
+    /// features or without (compiled away).
+    #[inline(always)]
+    fn region_packets(
+        &self,
+        rows: Range<u32>,
+        columns: Range<u32>,
+        samples: Range<u32>,
+        add: &mut dyn FnMut(&[RegionColour]),
+        features: &mut impl FeatureSink,
+    ) -> RayCounts {
         let mut colours = [(0, Color::ZERO); PACKET_RAYS];
         let mut n = 0;
         let counts = self.sample_region(
@@ -295,7 +329,7 @@ impl<'s> Renderer<'s> {
                     n = 0;
                 }
             },
-            &mut NoFeatures,
+            features,
         );
         if n > 0 {
             add(&colours[..n]);

@@ -218,8 +218,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let (frame, adaptive, features) = match settings.adaptive {
         None if with_features => {
-            let (frame, features) =
-                renderer.render_with_features_until(|_| bar.inc(1), &stop).map(|(f, p)| (f, Some(p))).unzip();
+            let rendered = sum_render::render_means_with_features(&renderer, |_| bar.inc(1), &stop);
+            let (frame, features) = rendered
+                .map(|(pixels, features, rays)| {
+                    let frame =
+                        rt_core::Frame { width, height, pixels, color_space: settings.color_space, rays };
+                    (frame, Some(features))
+                })
+                .unzip();
             (frame, None, features.flatten())
         }
         None => {
