@@ -44,7 +44,7 @@ use crate::materials::texture_lod::RayCone;
 use crate::math::color::Color;
 use crate::math::ray::{Interval, Ray};
 use crate::math::real::{Real, Vec3, normalize_robust, to_f32};
-use crate::sampling::sampler::{Sampler, cosine_hemisphere, stratified};
+use crate::sampling::sampler::{Sampler, Strata, cosine_hemisphere};
 use crate::scene::Scene;
 use crate::scene::effects::{EffectPlan, RayCounts};
 
@@ -266,8 +266,10 @@ impl<'s> Tracer<'s> {
             return 1.0;
         };
         let mut open = 0u32;
+        // Laid out once for all of the point's rays (its square root and cell order).
+        let strata = Strata::new(ao.samples);
         for k in 0..ao.samples {
-            let dir = cosine_hemisphere(n, stratified(k, ao.samples, sampler.get_2d()));
+            let dir = cosine_hemisphere(n, strata.point(k, sampler.get_2d()));
             let ray = Ray::new(sp.spawn_origin(dir), dir);
             counts.ambient_occlusion += 1;
             let blocked = self.scene.any_hit(&ray, Interval::new(0.0, ao.radius));
