@@ -70,11 +70,14 @@ pub fn render_means(
     let view = renderer.view_plane();
     let (spp, height) = (renderer.samples_per_pixel(), view.height());
     let mut pixels = vec![Color::ZERO; view.width() as usize * height as usize];
-    let finish = |band: &[ExactColorSum], out: &mut [Color]| {
-        out.iter_mut().zip(band).for_each(|(out, sum)| *out = sum.mean(spp))
-    };
-    let rays = render_bands(renderer, 0..height, 0..spp, (&mut pixels, None), finish, row_done, stop)?;
+    let rays = render_bands(renderer, 0..height, 0..spp, (&mut pixels, None), means_of(spp), row_done, stop)?;
     Some((pixels, rays))
+}
+
+/// What [`render_bands`] does with a finished band's sums for
+/// [`render_means`]: each pixel's mean of its `spp` samples.
+fn means_of(spp: u32) -> impl Fn(&[ExactColorSum], &mut [Color]) + Sync {
+    move |band, out| out.iter_mut().zip(band).for_each(|(out, sum)| *out = sum.mean(spp))
 }
 
 /// [`render_means`] that also records the feature passes of every sample
@@ -90,11 +93,8 @@ pub fn render_means_with_features(
     let (spp, width, height) = (renderer.samples_per_pixel(), view.width(), view.height());
     let mut pixels = vec![Color::ZERO; width as usize * height as usize];
     let mut features = vec![FeatureSums::default(); pixels.len()];
-    let finish = |band: &[ExactColorSum], out: &mut [Color]| {
-        out.iter_mut().zip(band).for_each(|(out, sum)| *out = sum.mean(spp))
-    };
     let out = (&mut pixels[..], Some(&mut features[..]));
-    let rays = render_bands(renderer, 0..height, 0..spp, out, finish, row_done, stop)?;
+    let rays = render_bands(renderer, 0..height, 0..spp, out, means_of(spp), row_done, stop)?;
     Some((pixels, FeatureFrame { width, height, samples: spp, pixels: features }, rays))
 }
 

@@ -11,6 +11,7 @@
 
 pub mod effects;
 pub mod parts;
+mod reassemble;
 
 use std::borrow::Cow;
 use std::path::PathBuf;
@@ -36,6 +37,7 @@ use crate::math::color::Color;
 use crate::math::ray::{Interval, Ray, rescale_t};
 use crate::math::real::{Real, Vec3, cast_min_t, normalize_robust, scale_pow2};
 use crate::scene::effects::{EffectPlan, Effects};
+use crate::scene::parts::SceneParts;
 
 /// A world ready to render, validated and read-only: every part is read
 /// through a method.
@@ -339,14 +341,11 @@ impl SceneBuilder {
                 ));
             }
         }
-        let (emitters, emitter_of) = emitters_of(&objects, &materials).map_err(|(index, reason)| {
+        let emitters = emitters_of(&objects, &materials).map_err(|(index, reason)| {
             SceneBuildError::Emitter { index, kind: objects[index].primitive.kind(), reason }
         })?;
         let bvh = Bvh::build(&objects);
-        let cuts = objects.iter().any(|o| materials[o.material].alpha_mode.cuts());
-        let radius = bvh.bounds().map_or(1.0, |b| (0.5 * b.size().length()).max(1.0));
-        let light_sampler = LightSampler::new(&self.lights, &emitters, &self.environment, radius);
-        Ok(Scene {
+        let parts = SceneParts {
             environment: self.environment,
             lights: self.lights,
             ambient: self.ambient,
@@ -354,15 +353,53 @@ impl SceneBuilder {
             materials,
             material_names,
             textures: self.textures,
+            objects,
+            source_files: self.source_files,
+            warnings,
+        };
+        Ok(Scene::assemble(parts, bvh, emitters))
+    }
+}
+
+impl Scene {
+    /// The scene of checked `parts`, the hierarchy over their objects and
+    /// their emitters ([`emitters_of`]): what is derived from the parts
+    /// (whether any material cuts holes, the light sampler, sized by the
+    /// radius of the scene's bounds, at least 1) is made here, for a build
+    /// and a scene cache alike.
+    fn assemble(parts: SceneParts, bvh: Bvh, (emitters, emitter_of): Emitters) -> Scene {
+        let SceneParts {
+            environment,
+            lights,
+            ambient,
+            methods,
+            materials,
+            material_names,
+            textures,
+            objects,
+            source_files,
+            warnings,
+        } = parts;
+        let cuts = objects.iter().any(|o| materials[o.material].alpha_mode.cuts());
+        let radius = bvh.bounds().map_or(1.0, |b| (0.5 * b.size().length()).max(1.0));
+        let light_sampler = LightSampler::new(&lights, &emitters, &environment, radius);
+        Scene {
+            environment,
+            lights,
+            ambient,
+            methods,
+            materials,
+            material_names,
+            textures,
             objects: Arc::new(objects),
             bvh: Arc::new(bvh),
             emitters: Arc::new(emitters),
             emitter_of,
             light_sampler,
-            source_files: self.source_files,
+            source_files,
             warnings,
             cuts,
-        })
+        }
     }
 }
 

@@ -14,7 +14,7 @@
 //! first bytes (`RTSCENE`), not by its name.
 
 mod cache_error;
-mod format;
+pub(crate) mod format;
 mod meta;
 mod read;
 mod write;

@@ -63,6 +63,12 @@ fn field_list(camera: &CameraSettings) -> String {
 /// file's is not written at all.
 pub fn save_camera(path: &Path, camera: &CameraSettings) -> Result<bool, CameraFileError> {
     let shown = path.display();
+    if crate::scene_cache::is_cache(path) {
+        return Err(error(format!(
+            "{shown} is a scene cache (made by `rt-view prepare`), which holds no camera text to edit: save the \
+             camera in the scene file the cache was made from, then run `rt-view prepare` on it again"
+        )));
+    }
     let text = std::fs::read_to_string(path).map_err(|e| error(format!("{shown}: cannot read: {e}")))?;
     let edited = with_camera(&text, camera).map_err(|e| error(format!("{shown}: {e}")))?;
     if edited == text {
@@ -678,6 +684,18 @@ Scene(
         assert_eq!(names, ["scene.ron"], "no temporary file is left");
         let missing = dir.path().join("nope.ron");
         assert!(save_camera(&missing, &moved).unwrap_err().to_string().contains("nope.ron"));
+    }
+
+    #[test]
+    fn saving_into_a_scene_cache_is_refused_naming_what_to_do_and_leaves_it_alone() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("scene.rtc");
+        let mut bytes = crate::scene_cache::format::MAGIC.to_vec();
+        bytes.extend([0xff, 0xfe, 0, 1, 2, 3]);
+        std::fs::write(&path, &bytes).unwrap();
+        let e = save_camera(&path, &settings(Projection::Perspective)).unwrap_err().to_string();
+        assert!(e.contains("scene.rtc is a scene cache") && e.contains("rt-view prepare"), "{e}");
+        assert_eq!(std::fs::read(&path).unwrap(), bytes, "the cache is untouched");
     }
 
     #[test]
