@@ -54,7 +54,8 @@ fn sequence(pixel: u64, slot: u32, k: u32) -> (u32, u32) {
 #[inline]
 pub fn value_1d(pixel: u64, slot: u32, k: u32) -> Real {
     let (index, seed) = sequence(pixel, slot, k);
-    sobol_burley::sample(index, 0, seed) as Real
+    let [u, _] = sobol_rev_pair(shuffled_rev(index, seed));
+    dimension_value(u, seed, 0)
 }
 
 /// Slot `slot`'s 2D value for sample `k` of the pixel of seed `pixel`, in
@@ -63,10 +64,61 @@ pub fn value_1d(pixel: u64, slot: u32, k: u32) -> Real {
 #[inline]
 pub fn value_2d(pixel: u64, slot: u32, k: u32) -> (Real, Real) {
     let (index, seed) = sequence(pixel, slot, k);
-    // Dimensions 0 and 1 of `sample_4d`, bit for bit those of `sample`,
-    // with the index shuffled once for both.
-    let [u, v, _, _] = sobol_burley::sample_4d(index, 0, seed);
-    (u as Real, v as Real)
+    let [u, v] = sobol_rev_pair(shuffled_rev(index, seed));
+    (dimension_value(u, seed, 0), dimension_value(v, seed, 1))
+}
+
+/// Sample `index` of the sequence of seed `seed` shuffled (Burley §4: a
+/// nested uniform scramble of the index's reversed bits), still reversed:
+/// `sobol_burley::sample`'s first step.
+#[inline]
+fn shuffled_rev(index: u32, seed: u32) -> u32 {
+    use sobol_burley::parts::{hash, owen_scramble_rev};
+    owen_scramble_rev(index.reverse_bits(), hash(seed ^ 0x79c6_8e4a))
+}
+
+/// Dimension `d` (0 or 1) of the sequence of seed `seed` from its unscrambled
+/// reversed Sobol value `sobol_rev`: Owen-scrambled by a hash of seed and
+/// dimension (Burley §3), its bits put back in order and made a float in
+/// [0, 1) from the top 23 — `sobol_burley::sample`'s last steps, with its
+/// constants for dimension set 0.
+#[inline]
+fn dimension_value(sobol_rev: u32, seed: u32, d: usize) -> Real {
+    use sobol_burley::parts::{hash, owen_scramble_rev, u32_to_f32_norm};
+    const DIMENSION_SALT: [u32; 2] = [0x912f_69ba, 0x174f_18ab];
+    let scramble = seed.wrapping_mul(0x9c8f_2d3b) ^ DIMENSION_SALT[d];
+    u32_to_f32_norm(owen_scramble_rev(sobol_rev, hash(scramble)).reverse_bits()) as Real
+}
+
+/// The first two dimensions' reversed Sobol values of the (reversed,
+/// shuffled) index `rev`, whose top 16 bits are the index
+/// (`sobol_burley::parts::sobol_rev`). A Sobol value is the XOR of the
+/// direction vectors of the index's set bits, so it is the XOR of the
+/// values of the index's two bytes: two look-ups in tables of 256 entries a
+/// byte (4 KiB), made once from `sobol_rev`, in place of a loop over the
+/// set bits (whose trip count the processor cannot predict).
+#[inline]
+fn sobol_rev_pair(rev: u32) -> [u32; 2] {
+    let tables = byte_tables();
+    let (hi, lo) = (tables[0][(rev >> 24) as usize], tables[1][((rev >> 16) & 0xff) as usize]);
+    [hi[0] ^ lo[0], hi[1] ^ lo[1]]
+}
+
+/// For the index's high and low byte, each byte value's reversed Sobol
+/// values in dimensions 0 and 1.
+type ByteTables = [[[u32; 2]; 256]; 2];
+
+fn byte_tables() -> &'static ByteTables {
+    static TABLES: std::sync::LazyLock<Box<ByteTables>> = std::sync::LazyLock::new(|| {
+        let mut t = Box::new([[[0; 2]; 256]; 2]);
+        for byte in 0..256u32 {
+            for (half, shift) in [(0, 24), (1, 16)] {
+                t[half][byte as usize] = [0, 1].map(|d| sobol_burley::parts::sobol_rev(byte << shift, d));
+            }
+        }
+        t
+    });
+    &TABLES
 }
 
 /// What sets pixel seeds apart from the stratified sampler's hashes (any
@@ -147,6 +199,22 @@ mod tests {
                 (sobol_burley::sample(index, 0, seed) as Real, sobol_burley::sample(index, 1, seed) as Real);
             assert_eq!(value_2d(pixel, 4, k), pair);
             assert_eq!(value_1d(pixel, 4, k), pair.0);
+        }
+    }
+
+    #[test]
+    fn table_lookups_give_the_crates_values_bit_for_bit_at_every_index() {
+        // Every index of the table, for seeds that set and clear each bit
+        // the scrambles use: the pair is `sample_4d`'s first two dimensions,
+        // the 1D value `sample`'s dimension 0.
+        for seed in [0, 1, 0x8000_0000, 0xdead_beef, u32::MAX, 0x79c6_8e4a] {
+            for index in 0..SEQUENCE_LENGTH {
+                let [a, b] = sobol_rev_pair(shuffled_rev(index, seed));
+                let [u, v, _, _] = sobol_burley::sample_4d(index, 0, seed);
+                let got = (dimension_value(a, seed, 0), dimension_value(b, seed, 1));
+                assert_eq!(got, (u as Real, v as Real), "index {index}, seed {seed:#x}");
+                assert_eq!(got.0, sobol_burley::sample(index, 0, seed) as Real);
+            }
         }
     }
 
