@@ -1092,11 +1092,17 @@ mod tests {
 
     #[test]
     fn a_pass_in_flight_leaves_the_sums_readable_and_stop_abandons_it_between_chunks() {
-        // One band of rows, each call of the band function 20 ms: the pass
-        // 256..1024 is 12 chunks (240 ms). Before, the band stayed locked
-        // for a whole pass (inspection waited for it) and Stop waited for it.
+        // One band of rows; the pass 256..1024 is 12 chunks, and its first
+        // chunk is held inside the band function until the test lets it go.
+        // Before, the band stayed locked for a whole pass (inspection waited
+        // for it) and Stop waited for the pass to end. No timing decides
+        // the outcome: a watchdog frees the held chunk after 5 s, so an
+        // inspection that waits for the chunk returns only then.
         let calls = Arc::new(AtomicU32::new(0));
         let counted = calls.clone();
+        let (entered_tx, entered) = mpsc::channel::<()>();
+        let (release, release_rx) = mpsc::channel::<()>();
+        let release_rx = Mutex::new(release_rx);
         let mut s = spec(8, 8);
         s.spp = 1024;
         let job = RenderJob::spawn(
@@ -1105,25 +1111,40 @@ mod tests {
             || {},
             Box::new(move |r, rows, columns, samples, sums| {
                 counted.fetch_add(1, Ordering::Relaxed);
-                std::thread::sleep(Duration::from_millis(20));
+                if samples.start >= 256 {
+                    entered_tx.send(()).ok();
+                    // Held until released, or every sender is gone.
+                    release_rx.lock().unwrap().recv().ok();
+                }
                 r.accumulate_region(rows, columns, samples, sums)
             }),
         )
         .unwrap();
         while job.next_row_blocking().unwrap().samples < 256 {}
-        std::thread::sleep(Duration::from_millis(50));
+        entered.recv_timeout(Duration::from_secs(60)).expect("the pass from 256 samples began");
+        let (done, watched) = mpsc::channel::<()>();
+        let watchdog_release = release.clone();
+        let watchdog = std::thread::spawn(move || {
+            if watched.recv_timeout(Duration::from_secs(5)).is_err() {
+                watchdog_release.send(()).ok();
+            }
+        });
         let asked = Instant::now();
         assert_eq!(job.linear(3, 3).map(|(_, n)| n), Some(256));
-        assert!(asked.elapsed() < Duration::from_millis(15), "inspection waited for the pass");
+        let inspection = asked.elapsed();
+        done.send(()).unwrap();
+        watchdog.join().unwrap();
+        assert!(inspection < Duration::from_secs(5), "inspection waited for the chunk in flight");
         job.stop();
-        let stopped = Instant::now();
+        let at_stop = calls.load(Ordering::Relaxed);
+        drop(release);
         let mut last = Vec::new();
         while let Some(row) = job.next_row_blocking() {
             last.push(row.samples);
         }
-        assert!(stopped.elapsed() < Duration::from_millis(100), "stop waited for the pass");
+        assert_eq!(calls.load(Ordering::Relaxed), at_stop, "a chunk began after Stop");
         assert!(last.iter().all(|&n| n == 256), "{last:?}");
-        assert!(job.elapsed().is_some() && calls.load(Ordering::Relaxed) < 1 + 1 + 1 + 1 + 3 + 12);
+        assert!(job.elapsed().is_some());
         assert_eq!(job.linear(3, 3).map(|(_, n)| n), Some(256));
     }
 
