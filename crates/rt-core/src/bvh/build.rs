@@ -581,6 +581,40 @@ mod tests {
     }
 
     #[test]
+    fn binning_during_the_partition_gives_the_bins_of_each_side_binned_afterwards() {
+        let key = |b: &Bin| {
+            let v = |w: Wide| [w[0], w[1], w[2]].map(Real::to_bits);
+            (v(b.min), v(b.max), v(b.centroid_min), v(b.centroid_max), b.count, b.whole)
+        };
+        let mut state = 11;
+        for n in [2, 3, 9, 100, 1001] {
+            let mut v: Vec<Item> = (0..n)
+                .map(|i| {
+                    let p = Vec3::new(random(&mut state), random(&mut state), random(&mut state)) * 10.0;
+                    let b = Aabb::from_corners(p, p + Vec3::splat(random(&mut state)));
+                    if i % 7 == 0 { Item::whole(b, i) } else { Item::new(b, 0, i) }
+                })
+                .collect();
+            let all = Bin::of(&v, false);
+            let split = Binning::of(&all, v.len(), 0).unwrap();
+            let sides = {
+                let mut w = v.clone();
+                let mid = partition(&mut w, |i| split.below(i.centroid(), 7));
+                [Bin::of(&w[..mid], false), Bin::of(&w[mid..], false)]
+            };
+            let plans = sides.map(|s| Binning::of(&s, s.count, 1));
+            let mut bins = [[Bin::EMPTY; BINS]; 2];
+            let mid = partition_and_bin::<true>(&mut v, |c| split.below(c, 7), plans, &mut bins);
+            assert_eq!(mid, sides[0].count);
+            for (side, range) in [(0, 0..mid), (1, mid..v.len())] {
+                let Some(plan) = plans[side] else { continue };
+                let expected = bin_items::<true>(&v[range], plan);
+                assert_eq!(bins[side].map(|b| key(&b)), expected.map(|b| key(&b)), "n = {n}, side {side}");
+            }
+        }
+    }
+
+    #[test]
     fn every_item_lands_in_exactly_one_leaf_of_at_most_the_leaf_size() {
         let mut v = items(40);
         let (tree, _) = build(&mut v);
