@@ -109,6 +109,13 @@ pub struct Bvh {
     stats: BvhStats,
 }
 
+/// Bytes of node room from which the build writes its nodes on huge pages
+/// directly: room for 4 MiB of nodes (a bound: a tree uses a quarter of it
+/// or so) is filled to at least one huge page on meshes of some
+/// 100 000 triangles, whose build time the first huge page's clearing
+/// costs more than its traversal gains (docs/performance.md).
+const LARGE_NODES: usize = 16 << 20;
+
 /// One build item per bounded primitive of `objects`, in object order, a
 /// mesh's triangles one by one in index order, degenerate ones (zero normal)
 /// left out. A large mesh's triangle boxes are computed on all threads,
@@ -176,7 +183,14 @@ impl Bvh {
             // huge pages once, below, if they fill one: asking for huge
             // pages for the whole reservation would give them to trees
             // too small to need them, at the cost of clearing them).
-            nodes = Vec::with_capacity(binary_leaves.max(2) - 1);
+            // A large tree's nodes go on huge pages at once (only the
+            // pages it touches are taken), rather than being copied there.
+            let node_bound = binary_leaves.max(2) - 1;
+            nodes = if node_bound * size_of::<Node>() >= LARGE_NODES {
+                huge_pages::with_capacity(node_bound)
+            } else {
+                Vec::with_capacity(node_bound)
+            };
             leaf_items = Vec::with_capacity(binary_leaves + items.len() / leaf::LANES);
             let root_box = tree.bounds();
             bounds = Some(root_box);
@@ -207,8 +221,12 @@ impl Bvh {
         // Filled in place, on all threads, once marked for huge pages.
         let mut leaves: Vec<Leaf> = huge_pages::with_capacity(leaf_items.len());
         leaves.par_extend(leaf_items.into_par_iter().map(|range| Leaf::new(&items[range], objects).0));
-        let mut nodes = huge_pages::moved(nodes);
-        nodes.shrink_to_fit(); // a tree too small to be moved keeps no spare room
+        let mut nodes = if nodes.capacity() * size_of::<Node>() >= LARGE_NODES {
+            nodes
+        } else {
+            huge_pages::moved(nodes)
+        };
+        nodes.shrink_to_fit(); // no spare room kept
         let stats = BvhStats {
             primitives: items.len(),
             nodes: nodes.len(),
