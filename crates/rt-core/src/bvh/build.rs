@@ -7,10 +7,12 @@
 //! `n_left·A_left + n_right·A_right` wins, unless making a leaf costs less.
 //! Large nodes bin their items on every thread (each thread bins a share,
 //! then the bins are merged), and the two halves of a split are built at
-//! the same time (`rayon::join`). Every decision depends only on the node's
-//! items, and merging bins (box unions, counts) is exact whatever the order,
-//! so the tree is the same, node for node, on any number of threads
-//! (tested).
+//! the same time (`rayon::join`). A child built on one thread is binned by
+//! its parent's partition, as the items move to their sides, so each level
+//! of the tree reads its items once. Every decision depends only on the
+//! node's items, and merging bins (box unions, counts) is exact whatever
+//! the order, so the tree is the same, node for node, on any number of
+//! threads (tested).
 
 use rayon::prelude::*;
 
@@ -92,6 +94,7 @@ impl Binning {
     /// `x ≥ 0`, `⌊x⌋ < k` exactly when `x < k`; a NaN, bin 0, and a
     /// negative `x` go below too).
     #[inline(always)]
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // a NaN goes below, as bin 0 does
     fn below(&self, c: Wide, k: usize) -> bool {
         !((c[self.axis] - self.lo) * self.scale >= k as Real)
     }
@@ -286,7 +289,7 @@ fn build_node(
                     &own
                 }
             };
-            match best_split(&bins, bounds) {
+            match best_split(bins, bounds) {
                 Some(best) if !(n <= MAX_LEAF && best.1 >= all.leaf_cost()) => {
                     let side =
                         |range: std::ops::Range<usize>| bins[range].iter().fold(Bin::EMPTY, Bin::merged);

@@ -109,11 +109,13 @@ pub struct Bvh {
     stats: BvhStats,
 }
 
-/// Bytes of node room from which the build writes its nodes on huge pages
-/// directly: room for 4 MiB of nodes (a bound: a tree uses a quarter of it
-/// or so) is filled to at least one huge page on meshes of some
-/// 100 000 triangles, whose build time the first huge page's clearing
-/// costs more than its traversal gains (docs/performance.md).
+/// Room for nodes (bytes) from which the build writes them on huge pages
+/// from the start instead of copying them there once built. The room is a
+/// bound (a tree fills about a quarter of it) and only the huge pages
+/// touched are taken, so a large tree saves the copy and the small pages
+/// it was first written to; a tree near one huge page of nodes (the
+/// 100 000-triangle terrain's: 1.4 MB in 5.4 MB of room) would pay for
+/// clearing a whole huge page it does not fill (docs/performance.md).
 const LARGE_NODES: usize = 16 << 20;
 
 /// One build item per bounded primitive of `objects`, in object order, a
@@ -179,12 +181,9 @@ impl Bvh {
             // A tree of L leaves has at most L − 1 inner nodes (each has two
             // children or more), and a leaf of c items has at most
             // 1 + ⌊c / LANES⌋ blocks: room for both from the start, so
-            // neither list is copied as it grows (the nodes are moved to
-            // huge pages once, below, if they fill one: asking for huge
-            // pages for the whole reservation would give them to trees
-            // too small to need them, at the cost of clearing them).
-            // A large tree's nodes go on huge pages at once (only the
-            // pages it touches are taken), rather than being copied there.
+            // neither list is copied as it grows. A large tree's nodes go
+            // on huge pages at once ([`LARGE_NODES`]); a smaller tree's
+            // are moved there once built, below, if they fill one.
             let node_bound = binary_leaves.max(2) - 1;
             nodes = if node_bound * size_of::<Node>() >= LARGE_NODES {
                 huge_pages::with_capacity(node_bound)
