@@ -7,10 +7,12 @@
 //! `n_left·A_left + n_right·A_right` wins, unless making a leaf costs less.
 //! Large nodes bin their items on every thread (each thread bins a share,
 //! then the bins are merged), and the two halves of a split are built at
-//! the same time (`rayon::join`). Every decision depends only on the node's
-//! items, and merging bins (box unions, counts) is exact whatever the order,
-//! so the tree is the same, node for node, on any number of threads
-//! (tested).
+//! the same time (`rayon::join`). A child built on one thread is binned by
+//! its parent's partition, as the items move to their sides, so each level
+//! of the tree reads its items once. Every decision depends only on the
+//! node's items, and merging bins (box unions, counts) is exact whatever
+//! the order, so the tree is the same, node for node, on any number of
+//! threads (tested).
 
 use rayon::prelude::*;
 
@@ -53,7 +55,49 @@ impl BuildNode {
 /// every leaf's items are contiguous; also returns how many leaves it has.
 pub(super) fn build(items: &mut [Item]) -> (BuildNode, usize) {
     let all = Bin::of(items, items.len() > PARALLEL_ITEMS);
-    build_node(items, all, 0, 0)
+    build_node(items, all, None, 0, 0)
+}
+
+/// How a node's items are binned: along `axis`, item `i` into bin
+/// `⌊(cᵢ − lo)·scale⌋` (clamped to the bins) of its centroid `cᵢ`.
+#[derive(Clone, Copy)]
+struct Binning {
+    axis: usize,
+    lo: Real,
+    scale: Real,
+}
+
+impl Binning {
+    /// How the node of `n` items at `depth` whose [`Bin`] is `all` bins
+    /// them, or `None` where it does not (a leaf of one item, coincident
+    /// centroids, or deeper than [`SAH_DEPTH`]: the median split).
+    fn of(all: &Bin, n: usize, depth: usize) -> Option<Binning> {
+        let centroids = all.centroids();
+        let axis = centroids.size().max_position();
+        let (lo, extent) = (centroids.min()[axis], centroids.size()[axis]);
+        (n > 1 && extent > 0.0 && depth < SAH_DEPTH).then(|| Binning {
+            axis,
+            lo,
+            scale: BINS as Real / extent,
+        })
+    }
+
+    /// The bin of the centroid `c` (through `i32`, whose conversion takes
+    /// fewer instructions than `usize`'s; a NaN gives 0 either way).
+    #[inline(always)]
+    fn bin(&self, c: Wide) -> usize {
+        (((c[self.axis] - self.lo) * self.scale) as i32).clamp(0, BINS as i32 - 1) as usize
+    }
+
+    /// Whether the centroid `c` falls into a bin below `k` (`1 ≤ k < BINS`):
+    /// [`Binning::bin`]`(c) < k` without the conversion to an integer (for
+    /// `x ≥ 0`, `⌊x⌋ < k` exactly when `x < k`; a NaN, bin 0, and a
+    /// negative `x` go below too).
+    #[inline(always)]
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // a NaN goes below, as bin 0 does
+    fn below(&self, c: Wide, k: usize) -> bool {
+        !((c[self.axis] - self.lo) * self.scale >= k as Real)
+    }
 }
 
 /// The boxes of a set of items: around the items, and around their
@@ -145,9 +189,15 @@ impl Bin {
         Aabb::from_corners(self.centroid_min.into(), self.centroid_max.into())
     }
 
-    /// The surface area of the box, 0 when empty.
+    /// The surface area of the box, 0 when empty: [`Aabb::surface_area`]'s
+    /// operations in its order (so the same bits), on the corners as they
+    /// are (a bin's minimum is never above its maximum).
     fn area(&self) -> Real {
-        if self.count == 0 { 0.0 } else { self.bounds().surface_area() }
+        if self.count == 0 {
+            return 0.0;
+        }
+        let s = self.max - self.min;
+        2.0 * (s.x * s.y + s.y * s.z + s.z * s.x)
     }
 }
 
@@ -166,82 +216,182 @@ fn merge_bins(mut a: [Bin; BINS], b: [Bin; BINS]) -> [Bin; BINS] {
 /// come in spatial order), and each update of a bin waits for the one
 /// before it to be written; so even and odd items go to two sets of bins,
 /// merged at the end (exact in any order), which halves that chain.
-fn bin_items<const WHOLE: bool>(items: &[Item], axis: usize, lo: Real, scale: Real) -> [Bin; BINS] {
-    let bin_of = |c: Wide| (((c[axis] - lo) * scale) as usize).min(BINS - 1);
+fn bin_items<const WHOLE: bool>(items: &[Item], binning: Binning) -> [Bin; BINS] {
     let (mut even, mut odd) = ([Bin::EMPTY; BINS], [Bin::EMPTY; BINS]);
     let mut pairs = items.chunks_exact(2);
     for pair in &mut pairs {
         let (a, b) = (pair[0].centroid(), pair[1].centroid());
-        even[bin_of(a)].add::<WHOLE>(&pair[0], a);
-        odd[bin_of(b)].add::<WHOLE>(&pair[1], b);
+        even[binning.bin(a)].add::<WHOLE>(&pair[0], a);
+        odd[binning.bin(b)].add::<WHOLE>(&pair[1], b);
     }
     for item in pairs.remainder() {
         let c = item.centroid();
-        even[bin_of(c)].add::<WHOLE>(item, c);
+        even[binning.bin(c)].add::<WHOLE>(item, c);
     }
     merge_bins(even, odd)
 }
 
-/// The node over `items` (`all` is their [`Bin`]), which start at `first`
-/// in the final order, and how many leaves it has.
-fn build_node(items: &mut [Item], all: Bin, first: usize, depth: usize) -> (BuildNode, usize) {
+/// The node over `items` (`all` is their [`Bin`]; `binned`, if given,
+/// their bins by [`Binning::of`]), which start at `first` in the final
+/// order, and how many leaves it has.
+fn build_node(
+    items: &mut [Item],
+    all: Bin,
+    binned: Option<&[Bin; BINS]>,
+    first: usize,
+    depth: usize,
+) -> (BuildNode, usize) {
     let n = items.len();
     let parallel = n > PARALLEL_ITEMS;
-    let (bounds, centroids) = (all.bounds(), all.centroids());
+    let bounds = all.bounds();
     let leaf = (BuildNode::Leaf { bounds, first: first as u32, count: n as u32 }, 1);
     if n <= 1 {
         return leaf;
     }
-    let axis = centroids.size().max_position();
-    let (lo, extent) = (centroids.min()[axis], centroids.size()[axis]);
+    // The node's own bins where it bins its items, and its children's
+    // where they are binned here; referred to, not copied (1.3 kB each).
+    let own;
+    let mut children_bins;
     let median = |items: &mut [Item]| {
-        sort_by_centroid(items, axis, parallel);
+        let centroids = all.centroids();
+        sort_by_centroid(items, centroids.size().max_position(), parallel);
         let (left, right) = items.split_at(n / 2);
-        (n / 2, Bin::of(left, parallel), Bin::of(right, parallel))
+        (n / 2, Bin::of(left, parallel), Bin::of(right, parallel), None, None)
     };
-    let (mid, left_bin, right_bin) = if extent <= 0.0 || depth >= SAH_DEPTH {
-        // Coincident centroids, or deep enough: a leaf if small, else the median.
-        if n <= MAX_LEAF && extent <= 0.0 {
-            return leaf;
+    let (mid, left_bin, right_bin, left_bins, right_bins) = match Binning::of(&all, n, depth) {
+        None => {
+            // Coincident centroids, or deep enough: a leaf if small, else the median.
+            if n <= MAX_LEAF && all.centroids().size().max_element() <= 0.0 {
+                return leaf;
+            }
+            median(items)
         }
-        median(items)
-    } else {
-        let scale = BINS as Real / extent;
-        let bin_of = |c: Wide| (((c[axis] - lo) * scale) as usize).min(BINS - 1);
-        // Each thread bins a chunk in place; merging bins is exact in any order.
-        let bin_all = |chunk: &[Item]| {
-            if all.whole == 0 {
-                bin_items::<false>(chunk, axis, lo, scale)
-            } else {
-                bin_items::<true>(chunk, axis, lo, scale)
+        Some(binning) => {
+            // Each thread bins a chunk in place; merging bins is exact in any order.
+            let bin_all = |chunk: &[Item]| {
+                if all.whole == 0 {
+                    bin_items::<false>(chunk, binning)
+                } else {
+                    bin_items::<true>(chunk, binning)
+                }
+            };
+            let bins = match binned {
+                Some(bins) => bins,
+                None => {
+                    own = if parallel {
+                        items
+                            .par_chunks(PARALLEL_ITEMS / 2)
+                            .map(bin_all)
+                            .reduce(|| [Bin::EMPTY; BINS], merge_bins)
+                    } else {
+                        bin_all(items)
+                    };
+                    &own
+                }
+            };
+            match best_split(bins, bounds) {
+                Some(best) if !(n <= MAX_LEAF && best.1 >= all.leaf_cost()) => {
+                    let side =
+                        |range: std::ops::Range<usize>| bins[range].iter().fold(Bin::EMPTY, Bin::merged);
+                    let (left, right) = (side(0..best.0), side(best.0..BINS));
+                    // A child that will bin its items on one thread gets
+                    // them binned here, as the partition moves them: one
+                    // pass over the items per level instead of two.
+                    let plan = |side: &Bin| {
+                        (side.count <= PARALLEL_ITEMS || rayon::current_num_threads() == 1)
+                            .then(|| Binning::of(side, side.count, depth + 1))
+                            .flatten()
+                    };
+                    let plans = [plan(&left), plan(&right)];
+                    children_bins = [[Bin::EMPTY; BINS]; 2];
+                    let mid = if all.whole == 0 {
+                        partition_and_bin::<false>(
+                            items,
+                            |c| binning.below(c, best.0),
+                            plans,
+                            &mut children_bins,
+                        )
+                    } else {
+                        partition_and_bin::<true>(
+                            items,
+                            |c| binning.below(c, best.0),
+                            plans,
+                            &mut children_bins,
+                        )
+                    };
+                    debug_assert_eq!(mid, left.count);
+                    let [l, r] = &children_bins;
+                    (mid, left, right, plans[0].map(|_| l), plans[1].map(|_| r))
+                }
+                _ if n <= MAX_LEAF => return leaf,
+                _ => median(items),
             }
-        };
-        let bins = if parallel {
-            items.par_chunks(PARALLEL_ITEMS / 2).map(bin_all).reduce(|| [Bin::EMPTY; BINS], merge_bins)
-        } else {
-            bin_all(items)
-        };
-        match best_split(&bins, bounds) {
-            Some(best) if !(n <= MAX_LEAF && best.1 >= all.leaf_cost()) => {
-                let mid = partition(items, |i| bin_of(i.centroid()) < best.0);
-                debug_assert_eq!(mid, bins[..best.0].iter().map(|b| b.count).sum::<usize>());
-                let side = |range: std::ops::Range<usize>| bins[range].iter().fold(Bin::EMPTY, Bin::merged);
-                (mid, side(0..best.0), side(best.0..BINS))
-            }
-            _ if n <= MAX_LEAF => return leaf,
-            _ => median(items),
         }
     };
     let (left, right) = items.split_at_mut(mid);
     let ((l, l_leaves), (r, r_leaves)) = if parallel {
         rayon::join(
-            || build_node(left, left_bin, first, depth + 1),
-            || build_node(right, right_bin, first + mid, depth + 1),
+            || build_node(left, left_bin, left_bins, first, depth + 1),
+            || build_node(right, right_bin, right_bins, first + mid, depth + 1),
         )
     } else {
-        (build_node(left, left_bin, first, depth + 1), build_node(right, right_bin, first + mid, depth + 1))
+        (
+            build_node(left, left_bin, left_bins, first, depth + 1),
+            build_node(right, right_bin, right_bins, first + mid, depth + 1),
+        )
     };
     (BuildNode::Inner { bounds, children: Box::new([l, r]) }, l_leaves + r_leaves)
+}
+
+/// Moves the items whose centroid `left` holds for to the front, as
+/// [`partition`] does, and bins each side by its [`Binning`] (where given)
+/// on the way into `bins` (left, right; empty to begin with); returns how
+/// many went left.
+fn partition_and_bin<const WHOLE: bool>(
+    items: &mut [Item],
+    left: impl Fn(Wide) -> bool,
+    [left_binning, right_binning]: [Option<Binning>; 2],
+    bins: &mut [[Bin; BINS]; 2],
+) -> usize {
+    if left_binning.is_none() && right_binning.is_none() {
+        return partition(items, |i| left(i.centroid()));
+    }
+    let [left_bins, right_bins] = bins;
+    let add = |bins: &mut [Bin; BINS], binning: Option<Binning>, item: &Item, c: Wide| {
+        if let Some(b) = binning {
+            bins[b.bin(c)].add::<WHOLE>(item, c);
+        }
+    };
+    // Hoare's scheme as in `partition`; each item is binned once, when its
+    // side is settled.
+    let (mut i, mut j) = (0, items.len());
+    loop {
+        while i < j {
+            let c = items[i].centroid();
+            if !left(c) {
+                break;
+            }
+            add(left_bins, left_binning, &items[i], c);
+            i += 1;
+        }
+        while i < j {
+            let c = items[j - 1].centroid();
+            if left(c) {
+                break;
+            }
+            add(right_bins, right_binning, &items[j - 1], c);
+            j -= 1;
+        }
+        if i + 1 >= j {
+            break;
+        }
+        items.swap(i, j - 1);
+        add(left_bins, left_binning, &items[i], items[i].centroid());
+        add(right_bins, right_binning, &items[j - 1], items[j - 1].centroid());
+        i += 1;
+        j -= 1;
+    }
+    i
 }
 
 /// The best split between bins `k − 1` and `k`, and its cost relative to
@@ -437,6 +587,40 @@ mod tests {
             assert_eq!(mid, left.iter().filter(|&&l| l).count());
             assert!(v[..mid].iter().all(|i| left[i.index() as usize]));
             assert!(v[mid..].iter().all(|i| !left[i.index() as usize]));
+        }
+    }
+
+    #[test]
+    fn binning_during_the_partition_gives_the_bins_of_each_side_binned_afterwards() {
+        let key = |b: &Bin| {
+            let v = |w: Wide| [w[0], w[1], w[2]].map(Real::to_bits);
+            (v(b.min), v(b.max), v(b.centroid_min), v(b.centroid_max), b.count, b.whole)
+        };
+        let mut state = 11;
+        for n in [2, 3, 9, 100, 1001] {
+            let mut v: Vec<Item> = (0..n)
+                .map(|i| {
+                    let p = Vec3::new(random(&mut state), random(&mut state), random(&mut state)) * 10.0;
+                    let b = Aabb::from_corners(p, p + Vec3::splat(random(&mut state)));
+                    if i % 7 == 0 { Item::whole(b, i) } else { Item::new(b, 0, i) }
+                })
+                .collect();
+            let all = Bin::of(&v, false);
+            let split = Binning::of(&all, v.len(), 0).unwrap();
+            let sides = {
+                let mut w = v.clone();
+                let mid = partition(&mut w, |i| split.below(i.centroid(), 7));
+                [Bin::of(&w[..mid], false), Bin::of(&w[mid..], false)]
+            };
+            let plans = sides.map(|s| Binning::of(&s, s.count, 1));
+            let mut bins = [[Bin::EMPTY; BINS]; 2];
+            let mid = partition_and_bin::<true>(&mut v, |c| split.below(c, 7), plans, &mut bins);
+            assert_eq!(mid, sides[0].count);
+            for (side, range) in [(0, 0..mid), (1, mid..v.len())] {
+                let Some(plan) = plans[side] else { continue };
+                let expected = bin_items::<true>(&v[range], plan);
+                assert_eq!(bins[side].map(|b| key(&b)), expected.map(|b| key(&b)), "n = {n}, side {side}");
+            }
         }
     }
 

@@ -109,6 +109,15 @@ pub struct Bvh {
     stats: BvhStats,
 }
 
+/// Room for nodes (bytes) from which the build writes them on huge pages
+/// from the start instead of copying them there once built. The room is a
+/// bound (a tree fills about a quarter of it) and only the huge pages
+/// touched are taken, so a large tree saves the copy and the small pages
+/// it was first written to; a tree near one huge page of nodes (the
+/// 100 000-triangle terrain's: 1.4 MB in 5.4 MB of room) would pay for
+/// clearing a whole huge page it does not fill (docs/performance.md).
+const LARGE_NODES: usize = 16 << 20;
+
 /// One build item per bounded primitive of `objects`, in object order, a
 /// mesh's triangles one by one in index order, degenerate ones (zero normal)
 /// left out. A large mesh's triangle boxes are computed on all threads,
@@ -172,11 +181,15 @@ impl Bvh {
             // A tree of L leaves has at most L − 1 inner nodes (each has two
             // children or more), and a leaf of c items has at most
             // 1 + ⌊c / LANES⌋ blocks: room for both from the start, so
-            // neither list is copied as it grows (the nodes are moved to
-            // huge pages once, below, if they fill one: asking for huge
-            // pages for the whole reservation would give them to trees
-            // too small to need them, at the cost of clearing them).
-            nodes = Vec::with_capacity(binary_leaves.max(2) - 1);
+            // neither list is copied as it grows. A large tree's nodes go
+            // on huge pages at once ([`LARGE_NODES`]); a smaller tree's
+            // are moved there once built, below, if they fill one.
+            let node_bound = binary_leaves.max(2) - 1;
+            nodes = if node_bound * size_of::<Node>() >= LARGE_NODES {
+                huge_pages::with_capacity(node_bound)
+            } else {
+                Vec::with_capacity(node_bound)
+            };
             leaf_items = Vec::with_capacity(binary_leaves + items.len() / leaf::LANES);
             let root_box = tree.bounds();
             bounds = Some(root_box);
@@ -207,8 +220,12 @@ impl Bvh {
         // Filled in place, on all threads, once marked for huge pages.
         let mut leaves: Vec<Leaf> = huge_pages::with_capacity(leaf_items.len());
         leaves.par_extend(leaf_items.into_par_iter().map(|range| Leaf::new(&items[range], objects).0));
-        let mut nodes = huge_pages::moved(nodes);
-        nodes.shrink_to_fit(); // a tree too small to be moved keeps no spare room
+        let mut nodes = if nodes.capacity() * size_of::<Node>() >= LARGE_NODES {
+            nodes
+        } else {
+            huge_pages::moved(nodes)
+        };
+        nodes.shrink_to_fit(); // no spare room kept
         let stats = BvhStats {
             primitives: items.len(),
             nodes: nodes.len(),
