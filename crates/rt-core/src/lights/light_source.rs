@@ -57,7 +57,7 @@ impl LightSource<'_> {
     /// A direction towards the light from `p` for `u` ∈ [0,1)², or `None`
     /// if no light arrives at `p` from it this way (the back of an emitter,
     /// `p` inside a sphere emitter or at a point light).
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, p: Vec3, u: (Real, Real)) -> Option<LightSample> {
         match self {
             Self::Light(light) => {

@@ -333,7 +333,7 @@ impl Bsdf {
     }
 
     /// The smooth lobes' `f(ω_o, ω_i)` (δ lobes have no value to evaluate).
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Color {
         if let Some(p) = &self.principled {
             if !self.on_the_right_side(wo, wi) {
@@ -416,7 +416,7 @@ impl Bsdf {
 
     /// The density over solid angle with which [`Bsdf::sample`] draws `ω_i`
     /// from the smooth lobes (their selection probabilities included).
-    #[inline]
+    #[inline(always)]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> Real {
         if let Some(p) = &self.principled {
             if !self.on_the_right_side(wo, wi) {
