@@ -145,8 +145,8 @@ mod tests {
         for _ in 0..4096 {
             let (a, b) = rng.next_pair();
             let (c, d) = rng.next_pair();
-            let colour = Color::new(a * 1e3, b * 1e-3, c) * 7.0;
-            let d = to_f32(d * d * 1e4 + 1e-30);
+            let colour = Color::new(to_f32(a) * 1e3, to_f32(b) * 1e-3, to_f32(c)) * 7.0;
+            let d = to_f32(d) * to_f32(d) * 1e4 + 1e-30;
             let (simd, scalar) = (over(colour, d), colour / d);
             assert_eq!(
                 simd.to_array().map(f32::to_bits),
