@@ -44,7 +44,7 @@ use crate::materials::texture_lod::RayCone;
 use crate::math::color::Color;
 use crate::math::ray::{Interval, Ray};
 use crate::math::real::{Real, Vec3, normalize_robust, to_f32};
-use crate::sampling::sampler::{Sampler, Strata, cosine_hemisphere};
+use crate::sampling::sampler::{Sampler, Strata, cosine_hemisphere_in};
 use crate::scene::Scene;
 use crate::scene::effects::{EffectPlan, RayCounts};
 
@@ -172,9 +172,11 @@ impl<'s> Tracer<'s> {
             }
             for (index, light) in self.scene.lights().iter().enumerate() {
                 let samples = light.sample_count();
+                // Laid out once for all of the light's samples at this point.
+                let strata = light.strata();
                 for k in 0..samples {
                     let jitter = if samples > 1 { sampler.get_2d() } else { (0.5, 0.5) };
-                    let Some(s) = light.sample(sp.p, k, jitter) else { continue };
+                    let Some(s) = light.sample_in(&strata, sp.p, k, jitter) else { continue };
                     let f = bsdf.eval(wo, s.to_light);
                     if f == Color::ZERO {
                         continue;
@@ -266,10 +268,12 @@ impl<'s> Tracer<'s> {
             return 1.0;
         };
         let mut open = 0u32;
-        // Laid out once for all of the point's rays (its square root and cell order).
+        // Laid out once for all of the point's rays (its square root and
+        // cell order), and so is the frame about `n` (a division).
         let strata = Strata::new(ao.samples);
+        let frame = n.any_orthonormal_pair();
         for k in 0..ao.samples {
-            let dir = cosine_hemisphere(n, strata.point(k, sampler.get_2d()));
+            let dir = cosine_hemisphere_in(n, frame, strata.point(k, sampler.get_2d()));
             let ray = Ray::new(sp.spawn_origin(dir), dir);
             counts.ambient_occlusion += 1;
             let blocked = self.scene.any_hit(&ray, Interval::new(0.0, ao.radius));

@@ -118,6 +118,7 @@ impl Emitter {
     }
 
     /// A direction from `p` towards the emitter for (u, v) ∈ [0,1)².
+    #[inline]
     pub fn sample(&self, p: Vec3, (u, v): (Real, Real)) -> Option<EmitterSample> {
         match &self.shape {
             Shape::Sphere { center, radius } => {
@@ -160,6 +161,7 @@ impl Emitter {
     /// The density over solid angle with which [`Emitter::sample`] picks the
     /// direction `wi` from `p`, where a ray along it meets the emitter at
     /// `distance` with unit geometric normal `normal`.
+    #[inline]
     pub fn pdf(&self, p: Vec3, wi: Vec3, distance: Real, normal: Vec3) -> Real {
         match &self.shape {
             Shape::Sphere { center, radius } => {

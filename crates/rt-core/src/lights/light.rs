@@ -17,7 +17,7 @@
 
 use crate::math::color::Color;
 use crate::math::real::{Real, SPOT_CONE_MIN_WIDTH, Vec3, to_f32};
-use crate::sampling::sampler::stratified;
+use crate::sampling::sampler::Strata;
 
 /// One light of a scene.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -116,16 +116,41 @@ impl Light {
     /// Sample `k` of [`Light::sample_count`] seen from `p`; `jitter` ∈ [0,1)²
     /// places it inside its stratum. `None` if `p` is at the light itself.
     pub fn sample(&self, p: Vec3, k: u32, jitter: (Real, Real)) -> Option<LightSample> {
-        self.sample_stratum(p, k, self.sample_count(), jitter)
+        self.sample_in(&self.strata(), p, k, jitter)
+    }
+
+    /// The strata of its [`Light::sample_count`] samples ([`Strata`]): laid
+    /// out once per shaded point for [`Light::sample_in`], not once per
+    /// sample (the layout takes a square root, divisions and, for some
+    /// counts, a search for the cell order's stride).
+    pub fn strata(&self) -> Strata {
+        match self.sample_count() {
+            1 => Strata::ONE,
+            n => Strata::new(n),
+        }
+    }
+
+    /// [`Light::sample`] in `strata`, which must be [`Light::strata`].
+    #[inline]
+    pub fn sample_in(&self, strata: &Strata, p: Vec3, k: u32, jitter: (Real, Real)) -> Option<LightSample> {
+        self.sample_stratum(p, k, self.sample_count(), strata, jitter)
     }
 
     /// One sample on its own, at `u` ∈ [0,1)² (a path's next-event estimate).
     pub fn sample_one(&self, p: Vec3, u: (Real, Real)) -> Option<LightSample> {
-        self.sample_stratum(p, 0, 1, u)
+        self.sample_stratum(p, 0, 1, &Strata::ONE, u)
     }
 
-    /// Sample `k` of `samples` stratified ones, at `jitter` in its stratum.
-    fn sample_stratum(&self, p: Vec3, k: u32, samples: u32, jitter: (Real, Real)) -> Option<LightSample> {
+    /// Sample `k` of `samples` stratified ones (laid out as `strata`), at
+    /// `jitter` in its stratum.
+    fn sample_stratum(
+        &self,
+        p: Vec3,
+        k: u32,
+        samples: u32,
+        strata: &Strata,
+        jitter: (Real, Real),
+    ) -> Option<LightSample> {
         let towards = |target: Vec3, share: f32| {
             let v = target - p;
             let distance = v.length();
@@ -155,7 +180,7 @@ impl Light {
                 }
                 let w = axis * distance.recip(); // As `normalize` computes it.
                 let cone = SphereCone::new(distance, radius);
-                let (u, v) = stratified(k, samples, jitter);
+                let (u, v) = strata.point(k, jitter);
                 let (to_light, along) = cone.sample(w, u, v);
                 let radiance = self.power / to_f32(std::f64::consts::PI as Real * radius * radius);
                 Some(LightSample {

@@ -88,6 +88,7 @@ impl LightSampler {
     }
 
     /// Chooses a source for `u` ∈ [0, 1): the source and its probability.
+    #[inline]
     pub fn choose(&self, u: Real) -> Option<(Source, Real)> {
         let total = *self.cumulative.last()?;
         let target = u * total;

@@ -123,7 +123,7 @@ use crate::math::color::Color;
 use crate::math::real::{
     Real, VALID_REFLECTION_MARGIN, VALID_REFLECTION_SHARE, Vec3, normalize_robust, to_f32,
 };
-use crate::sampling::sampler::cosine_hemisphere;
+use crate::sampling::sampler::cosine_hemisphere_in;
 
 /// Which lobe a sample came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -270,7 +270,10 @@ impl Bsdf {
         // lobe's by its mean albedo over the three channels).
         let weights = [diffuse.element_sum() / 3.0, glossy, m.reflectivity, m.transparency];
         let total: f32 = weights.iter().sum();
-        let choose = if total > 0.0 { weights.map(|w| w / total) } else { [0.0; 4] };
+        // The four quotients as one 4-lane division: each correctly rounded,
+        // the bits of four scalar divisions.
+        let choose =
+            if total > 0.0 { (glam::Vec4::from_array(weights) / total).to_array() } else { [0.0; 4] };
         Self {
             n,
             ng,
@@ -321,6 +324,7 @@ impl Bsdf {
     }
 
     /// Whether the BSDF has a smooth (non-δ) part, which light sampling can reach.
+    #[inline]
     pub fn has_smooth_lobes(&self) -> bool {
         if let Some(p) = &self.principled {
             return p.has_smooth_lobes();
@@ -329,6 +333,7 @@ impl Bsdf {
     }
 
     /// The smooth lobes' `f(ω_o, ω_i)` (δ lobes have no value to evaluate).
+    #[inline(always)]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Color {
         if let Some(p) = &self.principled {
             if !self.on_the_right_side(wo, wi) {
@@ -358,6 +363,7 @@ impl Bsdf {
 
     /// `|n_s·ω_i|`: the cosine that weighs light arriving along `wi` (the
     /// shading normal's, as the lobes are defined about it).
+    #[inline]
     pub fn cosine(&self, wi: Vec3) -> Real {
         self.n.dot(wi).abs()
     }
@@ -410,6 +416,7 @@ impl Bsdf {
 
     /// The density over solid angle with which [`Bsdf::sample`] draws `ω_i`
     /// from the smooth lobes (their selection probabilities included).
+    #[inline(always)]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> Real {
         if let Some(p) = &self.principled {
             if !self.on_the_right_side(wo, wi) {
@@ -431,6 +438,7 @@ impl Bsdf {
     /// Draws `ω_i` for `wo`: `u` chooses the lobe, `u2` the direction in it.
     /// `None` when the material reflects nothing or the drawn direction
     /// carries nothing (a microfacet reflection below the surface).
+    #[inline]
     pub fn sample(&self, wo: Vec3, u: Real, u2: (Real, Real)) -> Option<BsdfSample> {
         let s = self.sample_lobes(wo, u, u2)?;
         if self.shaded {
@@ -489,7 +497,8 @@ impl Bsdf {
         let mut u = u;
         if u < p_diffuse + p_glossy {
             let wi = if u < p_diffuse {
-                cosine_hemisphere(self.n, u2)
+                // `frame` is `n`'s own tangent pair: the bits of `cosine_hemisphere(n, u2)`.
+                cosine_hemisphere_in(self.n, self.frame, u2)
             } else {
                 let h = self.world(self.ggx_sample_normal(self.local(wo), u2));
                 reflect(-wo, h)
@@ -607,6 +616,7 @@ fn visible_reflection_normal(ng: Vec3, wo: Vec3, n: Vec3) -> Vec3 {
 /// `pdf_a²/(pdf_a² + pdf_b²)` (Veach and Guibas, "Optimally Combining
 /// Sampling Techniques for Monte Carlo Rendering", 1995). The weights of the
 /// two strategies for the same direction sum to 1.
+#[inline]
 pub fn power_heuristic(pdf_a: Real, pdf_b: Real) -> Real {
     let (a, b) = (pdf_a * pdf_a, pdf_b * pdf_b);
     if a + b > 0.0 && (a + b).is_finite() {

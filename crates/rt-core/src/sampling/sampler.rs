@@ -185,6 +185,18 @@ fn compact_even_bits(mut x: u32) -> u32 {
 }
 
 impl Strata {
+    /// The one cell of a single point, [`Strata::new`]`(1)` laid out by
+    /// hand: a light sampled once per point (a path's next-event estimate)
+    /// pays for no square root or division to lay out its strata.
+    pub const ONE: Strata = Strata {
+        n: 1,
+        base: 1,
+        extra: 0,
+        wide: 0,
+        powers_of_two: Some((0, 1.0, 1.0)),
+        order: CellOrder::Morton { bits: 0, wide: false },
+    };
+
     /// The cells of `n` points (`n` = 0 counts as 1).
     pub fn new(n: u32) -> Self {
         let n = n.max(1);
@@ -248,6 +260,7 @@ fn pixel_jitter(x: u32, y: u32, sample: u32, seed: u64) -> (Real, Real) {
 /// Shirley and Chiu's concentric map ("A Low Distortion Map Between Disk and
 /// Square", 1997) from [0,1)² to the unit disk: strata stay compact, so
 /// stratified square samples are stratified on the disk.
+#[inline]
 pub fn concentric_disk((u, v): (Real, Real)) -> (Real, Real) {
     let (a, b) = (2.0 * u - 1.0, 2.0 * v - 1.0);
     if a == 0.0 && b == 0.0 {
@@ -261,10 +274,20 @@ pub fn concentric_disk((u, v): (Real, Real)) -> (Real, Real) {
 
 /// A direction about the unit normal `n` with density cos θ / π (Malley's
 /// method: a concentric disk point lifted onto the hemisphere).
+#[inline]
 pub fn cosine_hemisphere(n: Vec3, square: (Real, Real)) -> Vec3 {
+    cosine_hemisphere_in(n, n.any_orthonormal_pair(), square)
+}
+
+/// [`cosine_hemisphere`] about `n` for a caller that has its tangents
+/// already: `tangents` must be `n.any_orthonormal_pair()`, so the
+/// direction has the very bits [`cosine_hemisphere`] gives. A BSDF keeps
+/// them for its local frame, and ambient occlusion casts many rays about
+/// one normal: neither pays for the frame (a division) again per direction.
+#[inline]
+pub fn cosine_hemisphere_in(n: Vec3, (u, v): (Vec3, Vec3), square: (Real, Real)) -> Vec3 {
     let (x, y) = concentric_disk(square);
     let z = (1.0 - x * x - y * y).max(0.0).sqrt();
-    let (u, v) = n.any_orthonormal_pair();
     (x * u + y * v + z * n).normalize_or(n)
 }
 
@@ -805,6 +828,30 @@ mod tests {
     #[test]
     fn one_sample_is_the_pixel_centre() {
         assert_eq!(subpixel_offset(7, 3, 0, 1, 0), (0.5, 0.5));
+    }
+
+    #[test]
+    fn the_one_cell_constant_is_the_layout_of_one_point() {
+        assert_eq!(Strata::ONE, Strata::new(1));
+        let mut rng = SampleRng::new(2, 9, 4);
+        for _ in 0..64 {
+            let u = rng.next_pair();
+            let (a, b) = (Strata::ONE.point(0, u), Strata::new(1).point(0, u));
+            assert_eq!((a.0.to_bits(), a.1.to_bits()), (b.0.to_bits(), b.1.to_bits()));
+        }
+    }
+
+    #[test]
+    fn cosine_directions_in_a_given_frame_have_the_bits_of_the_frame_made_per_direction() {
+        let mut rng = SampleRng::new(5, 1, 8);
+        for n in [Vec3::new(0.0, 0.6, 0.8), Vec3::new(0.0, 0.0, -1.0), Vec3::new(-0.48, 0.6, -0.64)] {
+            let frame = n.any_orthonormal_pair();
+            for _ in 0..256 {
+                let u = rng.next_pair();
+                let (a, b) = (cosine_hemisphere_in(n, frame, u), cosine_hemisphere(n, u));
+                assert_eq!(a.to_array().map(Real::to_bits), b.to_array().map(Real::to_bits), "{n} {u:?}");
+            }
+        }
     }
 
     #[test]
