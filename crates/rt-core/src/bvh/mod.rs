@@ -242,13 +242,49 @@ impl Bvh {
         range: Interval,
         methods: Methods,
     ) -> Option<Hit> {
+        #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            return unsafe { self.closest_hit_avx2(objects, ray, range, methods) };
+        }
+        self.closest_hit_with::<false>(objects, ray, range, methods)
+    }
+
+    /// [`Bvh::closest_hit`] compiled for AVX2 as a whole: the set-up, the
+    /// traversal, the leaf tests and the finish in one function, so that the
+    /// query stays in registers.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+    #[target_feature(enable = "avx2")]
+    unsafe fn closest_hit_avx2(
+        &self,
+        objects: &[Object],
+        ray: &Ray,
+        range: Interval,
+        methods: Methods,
+    ) -> Option<Hit> {
+        self.closest_hit_with::<true>(objects, ray, range, methods)
+    }
+
+    /// [`Bvh::closest_hit`] with the AVX2 traversal if `AVX2` (which the
+    /// caller has checked the CPU for).
+    #[inline(always)]
+    fn closest_hit_with<const AVX2: bool>(
+        &self,
+        objects: &[Object],
+        ray: &Ray,
+        range: Interval,
+        methods: Methods,
+    ) -> Option<Hit> {
         let mut query = Query::new(ray, range);
         query.test_unbounded(&self.unbounded, objects, methods);
         // Boxes entering beyond the best hit so far cannot improve on it (one
         // entering exactly there can still win a tie, and is visited).
         let range = Interval::new(range.min, query.t_max());
         let mut closest = Closest { query, objects, methods, best_lane: None };
-        self.traverse_by(ray, range, &mut closest);
+        self.traverse_by::<AVX2, _>(ray, range, &mut closest);
         let (query, best_lane) = (closest.query, closest.best_lane);
         match best_lane {
             // The normal from the corners in the leaf, which is still in the
@@ -290,12 +326,12 @@ impl Bvh {
         range: Interval,
         mut leaf: impl FnMut(&'a [Leaf], Lanes) -> Option<Real>,
     ) {
-        self.traverse_by(ray, range, &mut leaf)
+        self.traverse_by_any(ray, range, &mut leaf)
     }
 
     /// [`Bvh::traverse`] with any [`LeafTest`].
     #[inline(always)]
-    fn traverse_by<'a, L: LeafTest<'a>>(&'a self, ray: &Ray, range: Interval, leaf: &mut L) {
+    fn traverse_by_any<'a, L: LeafTest<'a>>(&'a self, ray: &Ray, range: Interval, leaf: &mut L) {
         if self.nodes.is_empty() {
             return;
         }
@@ -306,6 +342,26 @@ impl Bvh {
             self.traverse_on(&mut [uninit; INLINE_STACK], ray, range, leaf)
         } else {
             self.traverse_on(&mut vec![uninit; self.stack_bound], ray, range, leaf)
+        }
+    }
+
+    /// [`Bvh::traverse_by_any`] with the AVX2 node test if `AVX2` (which the
+    /// caller has checked the CPU for), inlined into the caller.
+    #[inline(always)]
+    fn traverse_by<'a, const AVX2: bool, L: LeafTest<'a>>(
+        &'a self,
+        ray: &Ray,
+        range: Interval,
+        leaf: &mut L,
+    ) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let uninit = const { MaybeUninit::uninit() };
+        if self.stack_bound <= INLINE_STACK {
+            self.traverse_with::<AVX2, L>(&mut [uninit; INLINE_STACK], ray, range, leaf)
+        } else {
+            self.traverse_with::<AVX2, L>(&mut vec![uninit; self.stack_bound], ray, range, leaf)
         }
     }
 
