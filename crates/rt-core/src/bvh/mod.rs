@@ -283,9 +283,12 @@ impl Bvh {
         // Boxes entering beyond the best hit so far cannot improve on it (one
         // entering exactly there can still win a tie, and is visited).
         let range = Interval::new(range.min, query.t_max());
-        let mut closest = Closest { query, objects, methods, best_lane: None };
+        // The query is borrowed, not moved in: a move copies it with wide
+        // loads from the narrower stores that just wrote it, which stalls
+        // on the store-to-load forwarding.
+        let mut closest = Closest { query: &mut query, objects, methods, best_lane: None };
         self.traverse_by::<AVX2, _>(ray, range, &mut closest);
-        let (query, best_lane) = (closest.query, closest.best_lane);
+        let best_lane = closest.best_lane;
         match best_lane {
             // The normal from the corners in the leaf, which is still in the
             // cache: the mesh's normal list is a cache miss for incoherent
@@ -529,14 +532,14 @@ impl<'a, F: FnMut(&'a [Leaf], Lanes) -> Option<Real>> LeafTest<'a> for F {
 
 /// [`Bvh::closest_hit`]'s leaf test: the query, and the leaf and lane of
 /// its best hit while that is a mesh triangle.
-struct Closest<'a> {
-    query: Query,
+struct Closest<'a, 'q> {
+    query: &'q mut Query,
     objects: &'a [Object],
     methods: Methods,
     best_lane: Option<(&'a Leaf, usize)>,
 }
 
-impl<'a> LeafTest<'a> for Closest<'a> {
+impl<'a> LeafTest<'a> for Closest<'a, '_> {
     #[inline(always)]
     fn test(&mut self, blocks: &'a [Leaf], lanes: Lanes) -> Option<Real> {
         match self.query.test_leaf(self.objects, blocks, lanes, self.methods) {
