@@ -286,7 +286,7 @@ impl Bvh {
         // The query is borrowed, not moved in: a move copies it with wide
         // loads from the narrower stores that just wrote it, which stalls
         // on the store-to-load forwarding.
-        let mut closest = Closest { query: &mut query, objects, methods, best_lane: None };
+        let mut closest = Closest::<AVX2> { query: &mut query, objects, methods, best_lane: None };
         self.traverse_by::<AVX2, _>(ray, range, &mut closest);
         let best_lane = closest.best_lane;
         match best_lane {
@@ -532,17 +532,17 @@ impl<'a, F: FnMut(&'a [Leaf], Lanes) -> Option<Real>> LeafTest<'a> for F {
 
 /// [`Bvh::closest_hit`]'s leaf test: the query, and the leaf and lane of
 /// its best hit while that is a mesh triangle.
-struct Closest<'a, 'q> {
+struct Closest<'a, 'q, const AVX2: bool> {
     query: &'q mut Query,
     objects: &'a [Object],
     methods: Methods,
     best_lane: Option<(&'a Leaf, usize)>,
 }
 
-impl<'a> LeafTest<'a> for Closest<'a, '_> {
+impl<'a, const AVX2: bool> LeafTest<'a> for Closest<'a, '_, AVX2> {
     #[inline(always)]
     fn test(&mut self, blocks: &'a [Leaf], lanes: Lanes) -> Option<Real> {
-        match self.query.test_leaf(self.objects, blocks, lanes, self.methods) {
+        match self.query.test_leaf_with::<AVX2>(self.objects, blocks, lanes, self.methods) {
             Best::Kept => {}
             Best::Triangle(block, lane) => self.best_lane = Some((&blocks[block], lane)),
             Best::Object => self.best_lane = None,
