@@ -214,14 +214,34 @@ impl Leaf {
         range: Interval,
         method: TriangleMethod,
     ) -> ([Real; BLOCKS * LANES], u32) {
+        Self::intersect_leaf_with::<false>(blocks, lanes, ray, range, method)
+    }
+
+    /// [`Leaf::intersect_leaf`]; with `AVX2` the caller is compiled for
+    /// AVX2 (it has checked the CPU), and the two-block test is inlined into
+    /// it instead of called.
+    #[inline(always)]
+    pub fn intersect_leaf_with<const AVX2: bool>(
+        blocks: &[Leaf],
+        lanes: Lanes,
+        ray: &TriangleRay,
+        range: Interval,
+        method: TriangleMethod,
+    ) -> ([Real; BLOCKS * LANES], u32) {
         let mask = (0..blocks.len()).fold(0, |m, b| m | lanes.block(b).triangles() << (b * LANES));
         #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
         if let Ok(pair) = <&[Leaf; 2]>::try_from(blocks)
             && method == TriangleMethod::Watertight
-            && std::arch::is_x86_feature_detected!("avx2")
         {
-            // SAFETY: the CPU has AVX2.
-            return unsafe { Self::watertight_pair_avx2(pair, mask, ray, range) };
+            if AVX2 {
+                // SAFETY: `AVX2` is true only in code compiled for AVX2 on a
+                // CPU that has it.
+                return unsafe { Self::watertight_pair_avx2_body(pair, mask, ray, range) };
+            }
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU has AVX2.
+                return unsafe { Self::watertight_pair_avx2(pair, mask, ray, range) };
+            }
         }
         let mut t = [0.0; BLOCKS * LANES];
         let mut hit = 0;
@@ -249,89 +269,132 @@ impl Leaf {
         ray: &TriangleRay,
         range: Interval,
     ) -> ([Real; BLOCKS * LANES], u32) {
-        use std::arch::x86_64::*;
-        if mask == 0 {
-            return ([0.0; BLOCKS * LANES], 0);
-        }
-        let [kx, ky, kz] = ray.axes();
-        let s = ray.shear();
-        let o = ray.ray.origin;
-        let (ox, oy, oz) = (_mm256_set1_ps(o[kx]), _mm256_set1_ps(o[ky]), _mm256_set1_ps(o[kz]));
-        let (sx, sy, sz) = (_mm256_set1_ps(s.x), _mm256_set1_ps(s.y), _mm256_set1_ps(s.z));
-        // The row of four lanes of each block side by side. SAFETY: aligned
-        // loads of 16-byte-aligned rows of four f32 (`repr(C, align(16))`).
-        let load = |corner: usize, axis: usize| unsafe {
-            _mm256_set_m128(
-                _mm_load_ps(pair[1].corners[corner][axis].as_ptr()),
-                _mm_load_ps(pair[0].corners[corner][axis].as_ptr()),
-            )
-        };
-        // p = corner − origin, axes permuted, then sheared: (x + sx·z, y + sy·z, z).
-        let shear = |corner: usize| {
-            let (px, py, pz) = (
-                _mm256_sub_ps(load(corner, kx), ox),
-                _mm256_sub_ps(load(corner, ky), oy),
-                _mm256_sub_ps(load(corner, kz), oz),
-            );
-            (_mm256_add_ps(px, _mm256_mul_ps(sx, pz)), _mm256_add_ps(py, _mm256_mul_ps(sy, pz)), pz)
-        };
-        let ((x0, y0, z0), (x1, y1, z1), (x2, y2, z2)) = (shear(0), shear(1), shear(2));
-        let e0 = _mm256_sub_ps(_mm256_mul_ps(x1, y2), _mm256_mul_ps(y1, x2));
-        let e1 = _mm256_sub_ps(_mm256_mul_ps(x2, y0), _mm256_mul_ps(y2, x0));
-        let e2 = _mm256_sub_ps(_mm256_mul_ps(x0, y1), _mm256_mul_ps(y0, x1));
-        // The SSE test's comparisons: `cmpneq` is unordered (true for NaN),
-        // the others ordered (false for NaN).
-        let zero = _mm256_setzero_ps();
-        let abs = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fff_ffff));
-        let inf = _mm256_set1_ps(Real::INFINITY);
-        let regular = |e: __m256| {
-            _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_NEQ_UQ>(e, zero),
-                _mm256_cmp_ps::<_CMP_LT_OS>(_mm256_and_ps(e, abs), inf),
-            )
-        };
-        let regular = _mm256_and_ps(_mm256_and_ps(regular(e0), regular(e1)), regular(e2));
-        let exact = mask & !(_mm256_movemask_ps(regular) as u32);
+        // SAFETY: this function is compiled for AVX2.
+        unsafe { Self::watertight_pair_avx2_body(pair, mask, ray, range) }
+    }
 
-        let lt = |a: __m256, b: __m256| _mm256_cmp_ps::<_CMP_LT_OS>(a, b);
-        let gt = |a: __m256, b: __m256| _mm256_cmp_ps::<_CMP_GT_OS>(a, b);
-        let negative = _mm256_or_ps(_mm256_or_ps(lt(e0, zero), lt(e1, zero)), lt(e2, zero));
-        let positive = _mm256_or_ps(_mm256_or_ps(gt(e0, zero), gt(e1, zero)), gt(e2, zero));
-        let det = _mm256_add_ps(_mm256_add_ps(e0, e1), e2);
-        let mut reject =
-            _mm256_or_ps(_mm256_and_ps(negative, positive), _mm256_cmp_ps::<_CMP_EQ_OQ>(det, zero));
-        let (z0, z1, z2) = (_mm256_mul_ps(z0, sz), _mm256_mul_ps(z1, sz), _mm256_mul_ps(z2, sz));
-        let t_scaled =
-            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(e0, z0), _mm256_mul_ps(e1, z1)), _mm256_mul_ps(e2, z2));
-        let max_det = _mm256_mul_ps(_mm256_set1_ps(range.max), det);
-        let below = _mm256_and_ps(
-            lt(det, zero),
-            _mm256_or_ps(_mm256_cmp_ps::<_CMP_GE_OS>(t_scaled, zero), lt(t_scaled, max_det)),
-        );
-        let above = _mm256_and_ps(
-            gt(det, zero),
-            _mm256_or_ps(_mm256_cmp_ps::<_CMP_LE_OS>(t_scaled, zero), gt(t_scaled, max_det)),
-        );
-        reject = _mm256_or_ps(reject, _mm256_or_ps(below, above));
-        let t = _mm256_mul_ps(t_scaled, _mm256_div_ps(_mm256_set1_ps(1.0), det));
-        let inside = _mm256_and_ps(gt(t, _mm256_set1_ps(range.min)), lt(t, _mm256_set1_ps(range.max)));
-        let mut hit = _mm256_movemask_ps(_mm256_andnot_ps(reject, inside)) as u32 & mask & !exact;
-        let mut out = [0.0; BLOCKS * LANES];
-        // SAFETY: `out` holds eight f32.
-        unsafe { _mm256_storeu_ps(out.as_mut_ptr(), t) };
-        if exact != 0 {
-            for (b, leaf) in pair.iter().enumerate() {
-                let lanes = (exact >> (b * LANES)) & ((1 << LANES) - 1);
-                if lanes != 0 {
-                    let (t, exact_hit) = leaf.intersect_scalar(lanes, ray, range, TriangleMethod::Watertight);
-                    for lane in lanes_of(exact_hit) {
-                        out[b * LANES + lane] = t[lane];
+    /// The body of [`Leaf::watertight_pair_avx2`], to be inlined into a
+    /// caller compiled for AVX2 (a function with `#[target_feature]` cannot
+    /// be `#[inline(always)]`, and the compiler does not inline it into the
+    /// single-ray traversal on its own).
+    ///
+    /// # Safety
+    /// The CPU must have AVX2, and the caller must be compiled for AVX2:
+    /// elsewhere every intrinsic below would be a call.
+    #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+    #[inline(always)]
+    unsafe fn watertight_pair_avx2_body(
+        pair: &[Leaf; 2],
+        mask: u32,
+        ray: &TriangleRay,
+        range: Interval,
+    ) -> ([Real; BLOCKS * LANES], u32) {
+        use std::arch::x86_64::*;
+        // SAFETY: the caller has AVX2 (above); the loads and stores are argued below.
+        unsafe {
+            if mask == 0 {
+                return ([0.0; BLOCKS * LANES], 0);
+            }
+            let [kx, ky, kz] = ray.axes();
+            let s = ray.shear();
+            let o = ray.ray.origin;
+            let (ox, oy, oz) = (_mm256_set1_ps(o[kx]), _mm256_set1_ps(o[ky]), _mm256_set1_ps(o[kz]));
+            let (sx, sy, sz) = (_mm256_set1_ps(s.x), _mm256_set1_ps(s.y), _mm256_set1_ps(s.z));
+            // Macros, not closures: a closure is a function of its own, not
+            // compiled for AVX2, in which every intrinsic would be a call.
+            // The row of four lanes of each block side by side. SAFETY: aligned
+            // loads of 16-byte-aligned rows of four f32 (`repr(C, align(16))`).
+            macro_rules! load {
+                ($corner:expr, $axis:expr) => {
+                    _mm256_set_m128(
+                        _mm_load_ps(pair[1].corners[$corner][$axis].as_ptr()),
+                        _mm_load_ps(pair[0].corners[$corner][$axis].as_ptr()),
+                    )
+                };
+            }
+            // p = corner − origin, axes permuted, then sheared: (x + sx·z, y + sy·z, z).
+            macro_rules! shear {
+                ($corner:expr) => {{
+                    let (px, py, pz) = (
+                        _mm256_sub_ps(load!($corner, kx), ox),
+                        _mm256_sub_ps(load!($corner, ky), oy),
+                        _mm256_sub_ps(load!($corner, kz), oz),
+                    );
+                    (_mm256_add_ps(px, _mm256_mul_ps(sx, pz)), _mm256_add_ps(py, _mm256_mul_ps(sy, pz)), pz)
+                }};
+            }
+            let ((x0, y0, z0), (x1, y1, z1), (x2, y2, z2)) = (shear!(0), shear!(1), shear!(2));
+            let e0 = _mm256_sub_ps(_mm256_mul_ps(x1, y2), _mm256_mul_ps(y1, x2));
+            let e1 = _mm256_sub_ps(_mm256_mul_ps(x2, y0), _mm256_mul_ps(y2, x0));
+            let e2 = _mm256_sub_ps(_mm256_mul_ps(x0, y1), _mm256_mul_ps(y0, x1));
+            // The SSE test's comparisons: `cmpneq` is unordered (true for NaN),
+            // the others ordered (false for NaN).
+            let zero = _mm256_setzero_ps();
+            let abs = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fff_ffff));
+            let inf = _mm256_set1_ps(Real::INFINITY);
+            macro_rules! regular {
+                ($e:expr) => {{
+                    let e = $e;
+                    _mm256_and_ps(
+                        _mm256_cmp_ps::<_CMP_NEQ_UQ>(e, zero),
+                        _mm256_cmp_ps::<_CMP_LT_OS>(_mm256_and_ps(e, abs), inf),
+                    )
+                }};
+            }
+            let regular = _mm256_and_ps(_mm256_and_ps(regular!(e0), regular!(e1)), regular!(e2));
+            let exact = mask & !(_mm256_movemask_ps(regular) as u32);
+
+            macro_rules! lt {
+                ($a:expr, $b:expr) => {
+                    _mm256_cmp_ps::<_CMP_LT_OS>($a, $b)
+                };
+            }
+            macro_rules! gt {
+                ($a:expr, $b:expr) => {
+                    _mm256_cmp_ps::<_CMP_GT_OS>($a, $b)
+                };
+            }
+            let negative = _mm256_or_ps(_mm256_or_ps(lt!(e0, zero), lt!(e1, zero)), lt!(e2, zero));
+            let positive = _mm256_or_ps(_mm256_or_ps(gt!(e0, zero), gt!(e1, zero)), gt!(e2, zero));
+            let det = _mm256_add_ps(_mm256_add_ps(e0, e1), e2);
+            let mut reject =
+                _mm256_or_ps(_mm256_and_ps(negative, positive), _mm256_cmp_ps::<_CMP_EQ_OQ>(det, zero));
+            let (z0, z1, z2) = (_mm256_mul_ps(z0, sz), _mm256_mul_ps(z1, sz), _mm256_mul_ps(z2, sz));
+            let t_scaled = _mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(e0, z0), _mm256_mul_ps(e1, z1)),
+                _mm256_mul_ps(e2, z2),
+            );
+            let max_det = _mm256_mul_ps(_mm256_set1_ps(range.max), det);
+            let below = _mm256_and_ps(
+                lt!(det, zero),
+                _mm256_or_ps(_mm256_cmp_ps::<_CMP_GE_OS>(t_scaled, zero), lt!(t_scaled, max_det)),
+            );
+            let above = _mm256_and_ps(
+                gt!(det, zero),
+                _mm256_or_ps(_mm256_cmp_ps::<_CMP_LE_OS>(t_scaled, zero), gt!(t_scaled, max_det)),
+            );
+            reject = _mm256_or_ps(reject, _mm256_or_ps(below, above));
+            let t = _mm256_mul_ps(t_scaled, _mm256_div_ps(_mm256_set1_ps(1.0), det));
+            let inside = _mm256_and_ps(gt!(t, _mm256_set1_ps(range.min)), lt!(t, _mm256_set1_ps(range.max)));
+            let mut hit = _mm256_movemask_ps(_mm256_andnot_ps(reject, inside)) as u32 & mask & !exact;
+            let mut out = [0.0; BLOCKS * LANES];
+            // SAFETY: `out` holds eight f32.
+            _mm256_storeu_ps(out.as_mut_ptr(), t);
+            if exact != 0 {
+                for (b, leaf) in pair.iter().enumerate() {
+                    let lanes = (exact >> (b * LANES)) & ((1 << LANES) - 1);
+                    if lanes != 0 {
+                        let (t, exact_hit) =
+                            leaf.intersect_scalar(lanes, ray, range, TriangleMethod::Watertight);
+                        for lane in lanes_of(exact_hit) {
+                            out[b * LANES + lane] = t[lane];
+                        }
+                        hit |= exact_hit << (b * LANES);
                     }
-                    hit |= exact_hit << (b * LANES);
                 }
             }
+            (out, hit)
         }
-        (out, hit)
     }
 
     /// [`Leaf::intersect_triangles`] one lane at a time.

@@ -259,21 +259,53 @@ impl Bvh {
         range: Interval,
         methods: Methods,
     ) -> Option<Hit> {
+        #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            return unsafe { self.closest_hit_avx2(objects, ray, range, methods) };
+        }
+        self.closest_hit_with::<false>(objects, ray, range, methods)
+    }
+
+    /// [`Bvh::closest_hit`] compiled for AVX2 as a whole: the set-up, the
+    /// traversal, the leaf tests and the finish in one function, so that the
+    /// query stays in registers.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+    #[target_feature(enable = "avx2")]
+    unsafe fn closest_hit_avx2(
+        &self,
+        objects: &[Object],
+        ray: &Ray,
+        range: Interval,
+        methods: Methods,
+    ) -> Option<Hit> {
+        self.closest_hit_with::<true>(objects, ray, range, methods)
+    }
+
+    /// [`Bvh::closest_hit`] with the AVX2 traversal if `AVX2` (which the
+    /// caller has checked the CPU for).
+    #[inline(always)]
+    fn closest_hit_with<const AVX2: bool>(
+        &self,
+        objects: &[Object],
+        ray: &Ray,
+        range: Interval,
+        methods: Methods,
+    ) -> Option<Hit> {
         let mut query = Query::new(ray, range);
         query.test_unbounded(&self.unbounded, objects, methods);
         // Boxes entering beyond the best hit so far cannot improve on it (one
         // entering exactly there can still win a tie, and is visited).
         let range = Interval::new(range.min, query.t_max());
-        // The leaf and lane of the best hit while it is a mesh triangle.
-        let mut best_lane = None;
-        self.traverse(ray, range, |blocks, lanes| {
-            match query.test_leaf(objects, blocks, lanes, methods) {
-                Best::Kept => {}
-                Best::Triangle(block, lane) => best_lane = Some((&blocks[block], lane)),
-                Best::Object => best_lane = None,
-            }
-            query.best_t()
-        });
+        // The query is borrowed, not moved in: a move copies it with wide
+        // loads from the narrower stores that just wrote it, which stalls
+        // on the store-to-load forwarding.
+        let mut closest = Closest::<AVX2> { query: &mut query, objects, methods, best_lane: None };
+        self.traverse_by::<AVX2, _>(ray, range, &mut closest);
+        let best_lane = closest.best_lane;
         match best_lane {
             // The normal from the corners in the leaf, which is still in the
             // cache: the mesh's normal list is a cache miss for incoherent
@@ -312,8 +344,14 @@ impl Bvh {
         &'a self,
         ray: &Ray,
         range: Interval,
-        leaf: impl FnMut(&'a [Leaf], Lanes) -> Option<Real>,
+        mut leaf: impl FnMut(&'a [Leaf], Lanes) -> Option<Real>,
     ) {
+        self.traverse_by_any(ray, range, &mut leaf)
+    }
+
+    /// [`Bvh::traverse`] with any [`LeafTest`].
+    #[inline(always)]
+    fn traverse_by_any<'a, L: LeafTest<'a>>(&'a self, ray: &Ray, range: Interval, leaf: &mut L) {
         if self.nodes.is_empty() {
             return;
         }
@@ -327,24 +365,44 @@ impl Bvh {
         }
     }
 
+    /// [`Bvh::traverse_by_any`] with the AVX2 node test if `AVX2` (which the
+    /// caller has checked the CPU for), inlined into the caller.
+    #[inline(always)]
+    fn traverse_by<'a, const AVX2: bool, L: LeafTest<'a>>(
+        &'a self,
+        ray: &Ray,
+        range: Interval,
+        leaf: &mut L,
+    ) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let uninit = const { MaybeUninit::uninit() };
+        if self.stack_bound <= INLINE_STACK {
+            self.traverse_with::<AVX2, L>(&mut [uninit; INLINE_STACK], ray, range, leaf)
+        } else {
+            self.traverse_with::<AVX2, L>(&mut vec![uninit; self.stack_bound], ray, range, leaf)
+        }
+    }
+
     /// [`Bvh::traverse`] with `stack` for the children still to visit, with
     /// the t where the ray enters them: with the AVX2 node test where the CPU
     /// has AVX2 (f32 geometry), else with the SSE one on x86-64 or the
     /// portable one (all three give the same bits, tested).
     #[inline(always)]
-    fn traverse_on<'a>(
+    fn traverse_on<'a, L: LeafTest<'a>>(
         &'a self,
         stack: &mut [MaybeUninit<(Child, Real)>],
         ray: &Ray,
         range: Interval,
-        leaf: impl FnMut(&'a [Leaf], Lanes) -> Option<Real>,
+        leaf: &mut L,
     ) {
         #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2 (checked just above).
             return unsafe { self.traverse_avx2(stack, ray, range, leaf) };
         }
-        self.traverse_with::<false>(stack, ray, range, leaf)
+        self.traverse_with::<false, L>(stack, ray, range, leaf)
     }
 
     /// [`Bvh::traverse_with`] compiled for AVX2, with its node test.
@@ -353,14 +411,14 @@ impl Bvh {
     /// The CPU must have AVX2.
     #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
     #[target_feature(enable = "avx2")]
-    unsafe fn traverse_avx2<'a>(
+    unsafe fn traverse_avx2<'a, L: LeafTest<'a>>(
         &'a self,
         stack: &mut [MaybeUninit<(Child, Real)>],
         ray: &Ray,
         range: Interval,
-        leaf: impl FnMut(&'a [Leaf], Lanes) -> Option<Real>,
+        leaf: &mut L,
     ) {
-        self.traverse_with::<true>(stack, ray, range, leaf)
+        self.traverse_with::<true, L>(stack, ray, range, leaf)
     }
 
     /// The traversal itself, with [`Slabs::entries_avx2`] as its node test
@@ -368,12 +426,12 @@ impl Bvh {
     /// [`Slabs::entries_sse`] on x86-64 with f32 geometry and
     /// [`Slabs::entries`] elsewhere.
     #[inline(always)]
-    fn traverse_with<'a, const AVX2: bool>(
+    fn traverse_with<'a, const AVX2: bool, L: LeafTest<'a>>(
         &'a self,
         stack: &mut [MaybeUninit<(Child, Real)>],
         ray: &Ray,
         range: Interval,
-        mut leaf: impl FnMut(&'a [Leaf], Lanes) -> Option<Real>,
+        leaf: &mut L,
     ) {
         let slabs = Slabs::new(ray);
         let mut t_max = range.max;
@@ -414,7 +472,7 @@ impl Bvh {
                     continue;
                 }
             } else {
-                if let Some(t) = leaf(self.blocks(current), current.lanes) {
+                if let Some(t) = leaf.test(self.blocks(current), current.lanes) {
                     t_max = t_max.min(t);
                 }
             }
@@ -467,6 +525,46 @@ impl Bvh {
                 );
             }
         }
+    }
+}
+
+/// What the traversal does at a leaf: tests its primitives (its blocks,
+/// with their lanes) and returns the `t` of the closest hit so far, which
+/// prunes boxes that start beyond it.
+///
+/// A closure is one; [`Bvh::closest_hit`]'s test is a struct whose method is
+/// `#[inline(always)]`, so that it is compiled into the AVX2 traversal
+/// (where the two-block triangle test can be inlined too) instead of being
+/// called at every leaf, with its results passed through memory.
+trait LeafTest<'a> {
+    fn test(&mut self, blocks: &'a [Leaf], lanes: Lanes) -> Option<Real>;
+}
+
+impl<'a, F: FnMut(&'a [Leaf], Lanes) -> Option<Real>> LeafTest<'a> for F {
+    #[inline(always)]
+    fn test(&mut self, blocks: &'a [Leaf], lanes: Lanes) -> Option<Real> {
+        self(blocks, lanes)
+    }
+}
+
+/// [`Bvh::closest_hit`]'s leaf test: the query, and the leaf and lane of
+/// its best hit while that is a mesh triangle.
+struct Closest<'a, 'q, const AVX2: bool> {
+    query: &'q mut Query,
+    objects: &'a [Object],
+    methods: Methods,
+    best_lane: Option<(&'a Leaf, usize)>,
+}
+
+impl<'a, const AVX2: bool> LeafTest<'a> for Closest<'a, '_, AVX2> {
+    #[inline(always)]
+    fn test(&mut self, blocks: &'a [Leaf], lanes: Lanes) -> Option<Real> {
+        match self.query.test_leaf_with::<AVX2>(self.objects, blocks, lanes, self.methods) {
+            Best::Kept => {}
+            Best::Triangle(block, lane) => self.best_lane = Some((&blocks[block], lane)),
+            Best::Object => self.best_lane = None,
+        }
+        self.query.best_t()
     }
 }
 

@@ -91,10 +91,23 @@ impl Query {
     /// which of them, if any, is the best hit now.
     #[inline(always)]
     pub fn test_leaf(&mut self, objects: &[Object], blocks: &[Leaf], lanes: Lanes, methods: Methods) -> Best {
+        self.test_leaf_with::<false>(objects, blocks, lanes, methods)
+    }
+
+    /// [`Query::test_leaf`]; `AVX2` as in [`Leaf::intersect_leaf_with`].
+    #[inline(always)]
+    pub fn test_leaf_with<const AVX2: bool>(
+        &mut self,
+        objects: &[Object],
+        blocks: &[Leaf],
+        lanes: Lanes,
+        methods: Methods,
+    ) -> Best {
         let mut best = Best::Kept;
         // All the triangles at once, then the whole objects: the best hit is
         // the least (t, object, primitive) whatever the order.
-        let (t, hit) = Leaf::intersect_leaf(blocks, lanes, &self.prepared, self.within(), methods.triangle);
+        let (t, hit) =
+            Leaf::intersect_leaf_with::<AVX2>(blocks, lanes, &self.prepared, self.within(), methods.triangle);
         for i in lanes_of(hit) {
             let (leaf, lane) = (&blocks[i / LANES], i % LANES);
             let (object, primitive) = (leaf.object(lane) as usize, leaf.index(lane) as usize);
