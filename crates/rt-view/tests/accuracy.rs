@@ -61,7 +61,7 @@ fn a_quick_run_measures_every_knob_and_writes_csv_table_and_plot() {
 
     let table = std::fs::read_to_string(dir.path().join("accuracy.md")).unwrap();
     assert!(table.contains("| ray set | method | precision | ns/ray |"));
-    assert_eq!(read_png(&dir.path().join("accuracy.png")).dimensions(), (1400, 560));
+    assert_eq!(read_png(&dir.path().join("accuracy.png")).dimensions(), (1600, 560));
 }
 
 #[test]

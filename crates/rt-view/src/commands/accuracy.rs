@@ -600,18 +600,38 @@ const FLOOR: f64 = 1e-4;
 /// method and precision, over all ray sets of its primitive kind).
 fn plot(path: &Path, rows: &[Row]) -> anyhow::Result<()> {
     rt_font()?;
-    let (width, height) = (1400u32, 560u32);
+    let (width, height) = (PLOT_SIZE.0, PLOT_SIZE.1);
     let mut buffer = vec![0u8; (width * height * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut buffer, (width, height)).into_drawing_area();
         root.fill(&WHITE)?;
         let (left, right) = root.split_horizontally(width * 11 / 20);
-        plot_images(&left, rows)?;
+        // The images' legend has a column of its own, beside their chart,
+        // so that it hides no point or label.
+        let (images, legend) = left.split_horizontally(width * 11 / 20 - LEGEND_WIDTH);
+        let experiments = plot_images(&images, rows)?;
+        draw_legend(&legend, &experiments)?;
         plot_geometry(&right, rows)?;
         root.present()?;
     }
     let pixels: Vec<[u8; 3]> = buffer.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
     crate::image_out::PendingImage::png(path)?.write_rgb8(width, height, &pixels)
+}
+
+/// The plot's size in pixels.
+const PLOT_SIZE: (u32, u32) = (1600, 560);
+/// The width of the images' legend column.
+const LEGEND_WIDTH: u32 = 210;
+
+/// The legend of the images' chart: each experiment's line colour and name,
+/// one under the other, from the height of the chart's top.
+fn draw_legend(area: &Area, experiments: &[(String, RGBAColor)]) -> anyhow::Result<()> {
+    for (i, (name, color)) in experiments.iter().enumerate() {
+        let y = 56 + 22 * i as i32;
+        area.draw(&PathElement::new(vec![(4, y), (26, y)], color.stroke_width(2)))?;
+        area.draw(&Text::new(name.as_str(), (32, y - 8), ("sans-serif", 14).into_font().color(&BLACK)))?;
+    }
+    Ok(())
 }
 
 /// Registers the font the plot's text uses (egui's Ubuntu Light, already
@@ -631,7 +651,9 @@ fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     (lo / 2.0)..(hi * 2.0)
 }
 
-fn plot_images(area: &Area, rows: &[Row]) -> anyhow::Result<()> {
+/// The images' chart; returns each experiment's name and line colour, for
+/// the legend.
+fn plot_images(area: &Area, rows: &[Row]) -> anyhow::Result<Vec<(String, RGBAColor)>> {
     // The method sweep's differences are single pixels: they are in the table.
     let images: Vec<&Row> =
         rows.iter().filter(|r| r.part == "image" && !r.experiment.starts_with("methods")).collect();
@@ -652,7 +674,7 @@ fn plot_images(area: &Area, rows: &[Row]) -> anyhow::Result<()> {
         .draw()?;
     let mut experiments: Vec<&str> = images.iter().map(|r| r.experiment.as_str()).collect();
     experiments.dedup();
-    let mut labels = Vec::new();
+    let (mut labels, mut legend) = (Vec::new(), Vec::new());
     for (i, experiment) in experiments.into_iter().enumerate() {
         let color = Palette99::pick(i).to_rgba();
         let points: Vec<(f64, f64, &str)> = images
@@ -660,10 +682,8 @@ fn plot_images(area: &Area, rows: &[Row]) -> anyhow::Result<()> {
             .filter(|r| r.experiment == experiment)
             .map(|r| (r.time_s, r.rmse.unwrap_or(0.0).max(FLOOR), r.setting.as_str()))
             .collect();
-        chart
-            .draw_series(LineSeries::new(points.iter().map(|p| (p.0, p.1)), color.stroke_width(2)))?
-            .label(experiment)
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+        chart.draw_series(LineSeries::new(points.iter().map(|p| (p.0, p.1)), color.stroke_width(2)))?;
+        legend.push((experiment.to_string(), color));
         chart.draw_series(points.iter().map(|&(x, y, _)| Circle::new((x, y), 3, color.filled())))?;
         labels.extend(
             points
@@ -672,14 +692,7 @@ fn plot_images(area: &Area, rows: &[Row]) -> anyhow::Result<()> {
         );
     }
     draw_labels(&mut chart, &labels, 12)?;
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 14))
-        .draw()?;
-    Ok(())
+    Ok(legend)
 }
 
 fn plot_geometry(area: &Area, rows: &[Row]) -> anyhow::Result<()> {
