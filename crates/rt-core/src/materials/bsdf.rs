@@ -912,12 +912,6 @@ mod tests {
         assert!(fading.windows(2).all(|w| w[1] <= w[0]) && fading[4] == 0.0 && fading[0] > 0.5, "{fading:?}");
     }
 
-    /// A unit direction in the x-y plane at `degrees` from +y towards +x.
-    fn leaning(degrees: Real) -> Vec3 {
-        let a = degrees.to_radians();
-        Vec3::new(a.sin(), a.cos(), 0.0)
-    }
-
     #[test]
     fn a_normal_maps_diffuse_light_fades_by_the_microfacet_bump_shadowing_term() {
         // A flat facet (+y) whose map leans the normal 30° to +x, lit from
@@ -927,7 +921,7 @@ mod tests {
         // −g³ + g² + g for g = cos 75°/(cos 45°·cos 30°) (0.578), which
         // darkened the lit flanks of bumps.
         let m = Material::flat(Color::ONE);
-        let (n, wi, wo) = (leaning(30.0), leaning(75.0), Vec3::Y);
+        let (n, wi, wo) = (at(30.0), at(75.0), Vec3::Y);
         let b = Bsdf::mapped(&m, Vec3::Y, Vec3::Y, n, wo);
         assert_eq!(b.normal(), n, "the viewer sees the reflection: no bend");
         let alpha2 = to_f64(0.125 * (1.0 / (n.y * n.y) - 1.0));
@@ -938,7 +932,7 @@ mod tests {
         // Without a map nothing fades; below the facet nothing arrives.
         let flat = Bsdf::mapped(&m, Vec3::Y, Vec3::Y, Vec3::Y, wo).eval(wo, wi).x * std::f32::consts::PI;
         assert!((flat - 1.0).abs() < 1e-6, "{flat}");
-        assert_eq!(b.eval(wo, leaning(95.0)), Color::ZERO);
+        assert_eq!(b.eval(wo, at(95.0)), Color::ZERO);
     }
 
     #[test]
@@ -946,7 +940,7 @@ mod tests {
         // The map leans the normal 60° to +x; the viewer is 60° off +y on
         // the other side, behind the mapped normal (ω_o·n = cos 120°).
         let m = Material::flat(Color::ONE);
-        let (n, wo) = (leaning(60.0), leaning(-60.0));
+        let (n, wo) = (at(60.0), at(-60.0));
         let b = Bsdf::mapped(&m, Vec3::Y, Vec3::Y, n, wo);
         let bent = b.normal();
         let r = bent * (2.0 * bent.dot(wo)) - wo;
@@ -955,11 +949,11 @@ mod tests {
         // The diffuse base still lies about the map's normal: light along
         // it arrives with its full cosine, one from the far side of it
         // (above the facet) with none.
-        let along = leaning(60.0);
+        let along = at(60.0);
         let value = b.eval(wo, along) * to_f32(b.cosine(along));
         let term = 2.0 / (1.0 + (1.0 + 0.125 * 3.0 * 3.0_f32).sqrt());
         assert!((value.x * std::f32::consts::PI - term).abs() < 1e-4, "{value} vs {term}");
-        assert_eq!(b.eval(wo, leaning(-40.0)), Color::ZERO);
+        assert_eq!(b.eval(wo, at(-40.0)), Color::ZERO);
         // The shading-normal rules without a map keep the facet fallback.
         assert_eq!(Bsdf::shaded(&m, Vec3::Y, n, wo).normal(), Vec3::Y);
     }
