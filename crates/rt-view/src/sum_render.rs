@@ -12,9 +12,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use rayon::prelude::*;
 use rt_core::Renderer;
-use rt_core::bvh::PACKET_RAYS;
 use rt_core::math::color::Color;
-use rt_core::render::BAND_ROWS;
 use rt_core::render::passes::{FeatureFrame, FeatureSums};
 use rt_core::scene::effects::RayCounts;
 
@@ -25,7 +23,7 @@ use crate::exact_sum::ExactColorSum;
 /// `stop` was set before the end (Ctrl-C).
 ///
 /// Rows go in parallel bands, as [`Renderer::render`] makes them (up to
-/// [`BAND_ROWS`], fewer the more samples: a band's rays fill a packet), cast
+/// [`rt_core::render::BAND_ROWS`], fewer the more samples: a band's rays fill a packet), cast
 /// in the same packets ([`Renderer::accumulate_region_packets`]), each
 /// sample's colour added to its pixel's exact sum. `row_done` is called once
 /// per finished row, from a worker thread; `stop` is looked at before each
@@ -123,10 +121,10 @@ fn render_bands<T: Send>(
     let (out, features) = out;
     assert_eq!(out.len(), width * rows.len(), "one output per pixel of the rows");
     // Bands as tall as a packet's worth of samples per pixel fills, as
-    // `Renderer::render`'s: with 64 samples or more a pixel fills packets
+    // `Renderer::render`'s (`band_rows`): with 64 samples or more a pixel fills packets
     // on its own (its rays are the most alike: on a million-triangle mesh,
     // 2.5 times faster than 8 × 8 pixels at one sample each).
-    let band_rows = (PACKET_RAYS as u32 / samples.len().max(1) as u32).clamp(1, BAND_ROWS);
+    let band_rows = rt_core::render::band_rows(samples.len() as u32);
     let band_len = width * band_rows as usize;
     // Each band's part of the features, or none.
     let feature_bands: Vec<Option<&mut [FeatureSums]>> = match features {

@@ -65,7 +65,7 @@ use rayon::prelude::*;
 
 use crate::math::color::Color;
 use crate::render::settings::AdaptiveSampling;
-use crate::render::{BAND_ROWS, Frame, NoFeatures, Renderer};
+use crate::render::{Frame, NoFeatures, Renderer, band_rows};
 use crate::scene::effects::RayCounts;
 
 /// Added to the square root of the intensity in [`relative_error`]
@@ -253,7 +253,7 @@ fn run_schedule(
         for p in pixels.iter_mut().filter(|p| p.state != State::Done) {
             (p.pass, p.pass_taken) = (Color::ZERO, 0);
         }
-        let band_rows = (crate::bvh::PACKET_RAYS as u32 / samples.len() as u32).clamp(1, BAND_ROWS);
+        let band_rows = band_rows(samples.len() as u32);
         rays += pixels
             .par_chunks_mut(width as usize * band_rows as usize)
             .enumerate()

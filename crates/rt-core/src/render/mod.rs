@@ -40,6 +40,15 @@ use crate::scene::effects::{EffectPlan, RayCounts};
 /// than eight samples per pixel, one at 64 or more).
 pub const BAND_ROWS: u32 = 8;
 
+/// How many rows a band holds when each of its pixels takes `samples`
+/// samples: as many as a packet's worth of samples fills, from one (at
+/// [`PACKET_RAYS`] samples or more a pixel fills packets on its own, and
+/// single rows share the work out more finely among the threads) to
+/// [`BAND_ROWS`].
+pub fn band_rows(samples: u32) -> u32 {
+    (PACKET_RAYS as u32 / samples.max(1)).clamp(1, BAND_ROWS)
+}
+
 /// A sample's colour with its pixel's index in the region rendered
 /// (row-major), as [`Renderer::accumulate_region_packets`] hands them out.
 pub type RegionColour = (usize, Color);
@@ -438,7 +447,7 @@ impl<'s> Renderer<'s> {
         let (width, height) = (self.view.width(), self.view.height());
         let mut pixels = vec![Color::ZERO; width as usize * height as usize];
         let mut features = vec![FeatureSums::default(); pixels.len()];
-        let band_rows = (PACKET_RAYS as u32 / self.spp).clamp(1, BAND_ROWS);
+        let band_rows = band_rows(self.spp);
         let band = width as usize * band_rows as usize;
         let rays = pixels
             .par_chunks_mut(band)
@@ -490,10 +499,7 @@ impl<'s> Renderer<'s> {
     pub fn render_until(&self, row_done: impl Fn(u32) + Sync, stop: &AtomicBool) -> Option<Frame> {
         let (width, height) = (self.view.width(), self.view.height());
         let mut pixels = vec![Color::ZERO; width as usize * height as usize];
-        // Bands as tall as a packet's worth of samples per pixel fills:
-        // with 64 or more a pixel fills packets on its own, and single rows
-        // share the work out more finely among the threads.
-        let band_rows = (PACKET_RAYS as u32 / self.spp).clamp(1, BAND_ROWS);
+        let band_rows = band_rows(self.spp);
         let rays = pixels
             .par_chunks_mut(width as usize * band_rows as usize)
             .enumerate()
