@@ -124,33 +124,23 @@ impl Light {
     /// sample (the layout takes a square root, divisions and, for some
     /// counts, a search for the cell order's stride).
     pub fn strata(&self) -> Strata {
-        match self.sample_count() {
-            1 => Strata::ONE,
-            n => Strata::new(n),
-        }
+        Strata::new(self.sample_count())
     }
 
     /// [`Light::sample`] in `strata`, which must be [`Light::strata`].
     #[inline]
     pub fn sample_in(&self, strata: &Strata, p: Vec3, k: u32, jitter: (Real, Real)) -> Option<LightSample> {
-        self.sample_stratum(p, k, self.sample_count(), strata, jitter)
+        self.sample_stratum(p, k, strata, jitter)
     }
 
     /// One sample on its own, at `u` ∈ [0,1)² (a path's next-event estimate).
     pub fn sample_one(&self, p: Vec3, u: (Real, Real)) -> Option<LightSample> {
-        self.sample_stratum(p, 0, 1, &Strata::ONE, u)
+        self.sample_stratum(p, 0, &Strata::ONE, u)
     }
 
-    /// Sample `k` of `samples` stratified ones (laid out as `strata`), at
-    /// `jitter` in its stratum.
-    fn sample_stratum(
-        &self,
-        p: Vec3,
-        k: u32,
-        samples: u32,
-        strata: &Strata,
-        jitter: (Real, Real),
-    ) -> Option<LightSample> {
+    /// Sample `k` of the stratified ones laid out as `strata`, at `jitter`
+    /// in its stratum.
+    fn sample_stratum(&self, p: Vec3, k: u32, strata: &Strata, jitter: (Real, Real)) -> Option<LightSample> {
         let towards = |target: Vec3, share: f32| {
             let v = target - p;
             let distance = v.length();
@@ -173,7 +163,7 @@ impl Light {
             LightKind::Sphere { center, radius, .. } => {
                 let axis = center - p;
                 let distance = axis.length();
-                let share = 1.0 / samples as f32;
+                let share = 1.0 / strata.count() as f32;
                 // From inside the light (or at its centre) it is a point light.
                 if !(distance > radius && distance.is_finite()) {
                     return towards(center, share);

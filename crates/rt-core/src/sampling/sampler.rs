@@ -185,9 +185,10 @@ fn compact_even_bits(mut x: u32) -> u32 {
 }
 
 impl Strata {
-    /// The one cell of a single point, [`Strata::new`]`(1)` laid out by
-    /// hand: a light sampled once per point (a path's next-event estimate)
-    /// pays for no square root or division to lay out its strata.
+    /// The one cell of a single point, laid out by hand and what
+    /// [`Strata::new`]`(1)` returns: a light sampled once per point (a
+    /// path's next-event estimate) pays for no square root or division to
+    /// lay out its strata.
     pub const ONE: Strata = Strata {
         n: 1,
         base: 1,
@@ -199,6 +200,17 @@ impl Strata {
 
     /// The cells of `n` points (`n` = 0 counts as 1).
     pub fn new(n: u32) -> Self {
+        if n <= 1 { Self::ONE } else { Self::laid_out(n) }
+    }
+
+    /// How many points the strata hold.
+    pub fn count(&self) -> u32 {
+        self.n
+    }
+
+    /// The cells of `n` points laid out by the general rule (`n` = 0
+    /// counts as 1).
+    fn laid_out(n: u32) -> Self {
         let n = n.max(1);
         let rows = (n as f64).sqrt().floor().max(1.0) as u32;
         let (base, extra) = (n / rows, n % rows);
@@ -832,11 +844,11 @@ mod tests {
 
     #[test]
     fn the_one_cell_constant_is_the_layout_of_one_point() {
-        assert_eq!(Strata::ONE, Strata::new(1));
+        assert_eq!(Strata::ONE, Strata::laid_out(1));
         let mut rng = SampleRng::new(2, 9, 4);
         for _ in 0..64 {
             let u = rng.next_pair();
-            let (a, b) = (Strata::ONE.point(0, u), Strata::new(1).point(0, u));
+            let (a, b) = (Strata::ONE.point(0, u), Strata::laid_out(1).point(0, u));
             assert_eq!((a.0.to_bits(), a.1.to_bits()), (b.0.to_bits(), b.1.to_bits()));
         }
     }
