@@ -162,10 +162,35 @@ impl Leaf {
         self.object[lane]
     }
 
-    /// The triangle index in `lane` (0 for a whole object).
+    /// The triangle index in `lane`; for a whole object the number of its
+    /// block's [`super::object_block::ObjectBlock`] (`u32::MAX` if none).
     #[inline(always)]
     pub fn index(&self, lane: usize) -> u32 {
         self.index[lane]
+    }
+
+    /// The lanes holding whole objects (any primitive of `objects` but a
+    /// mesh).
+    pub fn whole_object_lanes(&self, objects: &[Object]) -> u32 {
+        (0..LANES).fold(0, |mask, lane| match objects.get(self.object[lane] as usize).map(|o| &o.primitive) {
+            Some(Primitive::Mesh(_)) | None => mask,
+            Some(_) => mask | 1 << lane,
+        })
+    }
+
+    /// Sets the index of `lane`, a whole object's: the number of its block's
+    /// [`super::object_block::ObjectBlock`].
+    pub fn set_index(&mut self, lane: usize, index: u32) {
+        self.index[lane] = index;
+    }
+
+    /// A block of the whole objects `objects` (at most [`LANES`]), in order.
+    #[cfg(test)]
+    pub fn whole_objects(objects: &[u32]) -> Self {
+        let mut leaf =
+            Leaf { corners: [[[Real::NAN; LANES]; 3]; 3], object: [u32::MAX; LANES], index: [0; LANES] };
+        leaf.object[..objects.len()].copy_from_slice(objects);
+        leaf
     }
 
     /// The corners a, b, c of the triangle in `lane`.

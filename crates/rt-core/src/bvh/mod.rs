@@ -31,6 +31,7 @@ mod huge_pages;
 mod item;
 mod leaf;
 mod node;
+mod object_block;
 mod packet;
 pub mod parts;
 mod query;
@@ -51,6 +52,7 @@ use crate::math::real::{Real, Vec3, gamma, to_f64};
 use item::Item;
 use leaf::{Lanes, Leaf, lanes_of};
 use node::{Child, Node, WIDTH};
+use object_block::ObjectBlock;
 use query::{Best, Query, object_primitive};
 
 /// Traversal stack entries kept on the machine stack at most: a node visit
@@ -102,6 +104,9 @@ pub struct Bvh {
     /// The most entries the traversal stack can hold: over all paths from
     /// the root, the largest sum of (children − 1) of the nodes on it.
     stack_bound: usize,
+    /// The leaves' boxes and polygons laid out for four-lane tests, one per
+    /// block that has any ([`object_block::attach`]).
+    object_blocks: Vec<ObjectBlock>,
     /// Objects without bounds (planes), tested on every query.
     unbounded: Vec<u32>,
     /// The box around every bounded object; `None` if there is none.
@@ -220,6 +225,7 @@ impl Bvh {
         // Filled in place, on all threads, once marked for huge pages.
         let mut leaves: Vec<Leaf> = huge_pages::with_capacity(leaf_items.len());
         leaves.par_extend(leaf_items.into_par_iter().map(|range| Leaf::new(&items[range], objects).0));
+        let object_blocks = object_block::attach(&mut leaves, objects);
         let mut nodes = if nodes.capacity() * size_of::<Node>() >= LARGE_NODES {
             nodes
         } else {
@@ -233,11 +239,13 @@ impl Bvh {
             leaves: leaf_count,
             leaf_blocks: leaves.len(),
             depth,
-            bytes: nodes.len() * size_of::<Node>() + leaves.len() * size_of::<Leaf>(),
+            bytes: nodes.len() * size_of::<Node>()
+                + leaves.len() * size_of::<Leaf>()
+                + object_blocks.len() * size_of::<ObjectBlock>(),
             sah_cost,
             build_time: start.elapsed(),
         };
-        Self { nodes, leaves, stack_bound, unbounded, bounds, stats }
+        Self { nodes, leaves, object_blocks, stack_bound, unbounded, bounds, stats }
     }
 
     /// The box around every bounded object; `None` if there is none.
@@ -303,7 +311,13 @@ impl Bvh {
         // The query is borrowed, not moved in: a move copies it with wide
         // loads from the narrower stores that just wrote it, which stalls
         // on the store-to-load forwarding.
-        let mut closest = Closest::<AVX2> { query: &mut query, objects, methods, best_lane: None };
+        let mut closest = Closest::<AVX2> {
+            query: &mut query,
+            objects,
+            object_blocks: &self.object_blocks,
+            methods,
+            best_lane: None,
+        };
         self.traverse_by::<AVX2, _>(ray, range, &mut closest);
         let best_lane = closest.best_lane;
         match best_lane {
@@ -328,8 +342,26 @@ impl Bvh {
         let mut found = false;
         self.traverse(ray, range, |blocks, lanes| {
             found = Leaf::intersect_leaf(blocks, lanes, &prepared, range, methods.triangle).1 != 0
-                || (blocks.iter().enumerate())
-                    .any(|(b, leaf)| lanes_of(lanes.block(b).objects()).any(|lane| hits(leaf.object(lane))));
+                || (blocks.iter().enumerate()).any(|(b, leaf)| {
+                    let whole = lanes.block(b).objects();
+                    if whole == 0 {
+                        return false;
+                    }
+                    // The block's boxes and polygons four at a time, the
+                    // rest one by one; a block that blocks the ray ends the
+                    // test before the next is looked at.
+                    let mut scalar = whole;
+                    if let Some(block) =
+                        self.object_blocks.get(leaf.index(whole.trailing_zeros() as usize) as usize)
+                    {
+                        let mask = block.lanes(methods) & whole;
+                        if block.intersect(mask, ray, range).hit != 0 {
+                            return true;
+                        }
+                        scalar &= !mask;
+                    }
+                    lanes_of(scalar).any(|lane| hits(leaf.object(lane)))
+                });
             // −∞ as the new limit: no box can be entered before it, so the traversal ends.
             found.then_some(Real::NEG_INFINITY)
         });
@@ -552,6 +584,7 @@ impl<'a, F: FnMut(&'a [Leaf], Lanes) -> Option<Real>> LeafTest<'a> for F {
 struct Closest<'a, 'q, const AVX2: bool> {
     query: &'q mut Query,
     objects: &'a [Object],
+    object_blocks: &'a [ObjectBlock],
     methods: Methods,
     best_lane: Option<(&'a Leaf, usize)>,
 }
@@ -559,7 +592,8 @@ struct Closest<'a, 'q, const AVX2: bool> {
 impl<'a, const AVX2: bool> LeafTest<'a> for Closest<'a, '_, AVX2> {
     #[inline(always)]
     fn test(&mut self, blocks: &'a [Leaf], lanes: Lanes) -> Option<Real> {
-        match self.query.test_leaf_with::<AVX2>(self.objects, blocks, lanes, self.methods) {
+        match self.query.test_leaf_with::<AVX2>(self.objects, self.object_blocks, blocks, lanes, self.methods)
+        {
             Best::Kept => {}
             Best::Triangle(block, lane) => self.best_lane = Some((&blocks[block], lane)),
             Best::Object => self.best_lane = None,

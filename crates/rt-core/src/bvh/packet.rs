@@ -439,7 +439,7 @@ impl Bvh {
                     let range = Interval::new(query.range.min, query.t_max());
                     let ray = query.prepared.ray;
                     self.traverse(&ray, range, |leaf, lanes| {
-                        query.test_leaf(objects, leaf, lanes, methods);
+                        query.test_leaf_with::<false>(objects, &self.object_blocks, leaf, lanes, methods);
                         query.best_t()
                     });
                 }
@@ -517,7 +517,13 @@ impl Bvh {
                 for (b, block) in blocks.iter_mut().enumerate() {
                     for lane in lanes_of(block.entering(enter, leave)) {
                         let query = &mut queries[b * BLOCK + lane];
-                        query.test_leaf(objects, leaf, current.child.lanes, methods);
+                        query.test_leaf_with::<false>(
+                            objects,
+                            &self.object_blocks,
+                            leaf,
+                            current.child.lanes,
+                            methods,
+                        );
                         block.t_max[lane] = query.t_max();
                     }
                 }

@@ -116,7 +116,7 @@ impl Bvh {
         if let Some(&o) = a.unbounded.iter().find(|&&o| o as usize >= objects.len()) {
             return Err(BvhArraysError::Unbounded(o));
         }
-        let leaves: Vec<Leaf> = a
+        let mut leaves: Vec<Leaf> = a
             .leaf_corners
             .chunks_exact(Leaf::FLAT_REALS)
             .zip(a.leaf_ids.chunks_exact(Leaf::FLAT_IDS))
@@ -195,6 +195,9 @@ impl Bvh {
             stack[n] = below_stack + used.max(1) - 1;
             depth[n] = below_depth + 1;
         }
+        // The block numbers of whole-object lanes are worked out again, not
+        // trusted.
+        let object_blocks = super::object_block::attach(&mut leaves, objects);
         let stats = BvhStats {
             primitives,
             nodes: nodes.len(),
@@ -202,13 +205,16 @@ impl Bvh {
             leaves: leaf_count,
             leaf_blocks: leaves.len(),
             depth: depth.first().copied().unwrap_or(0),
-            bytes: nodes.len() * size_of::<Node>() + leaves.len() * size_of::<Leaf>(),
+            bytes: nodes.len() * size_of::<Node>()
+                + leaves.len() * size_of::<Leaf>()
+                + object_blocks.len() * size_of::<super::object_block::ObjectBlock>(),
             sah_cost: a.sah_cost,
             build_time: std::time::Duration::ZERO,
         };
         Ok(Self {
             nodes: super::huge_pages::moved(nodes),
             leaves: super::huge_pages::moved(leaves),
+            object_blocks,
             stack_bound: stack.first().copied().unwrap_or(0),
             unbounded: a.unbounded.to_vec(),
             bounds: a.bounds,

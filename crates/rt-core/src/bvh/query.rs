@@ -3,6 +3,7 @@
 //! do at a leaf.
 
 use super::leaf::{LANES, Lanes, Leaf, lanes_of};
+use super::object_block::ObjectBlock;
 use crate::geometry::hit::Hit;
 use crate::geometry::method::Methods;
 use crate::geometry::object::Object;
@@ -88,17 +89,13 @@ impl Query {
     }
 
     /// Tests the primitives of a leaf (its `blocks`, with `lanes`); says
-    /// which of them, if any, is the best hit now.
-    #[inline(always)]
-    pub fn test_leaf(&mut self, objects: &[Object], blocks: &[Leaf], lanes: Lanes, methods: Methods) -> Best {
-        self.test_leaf_with::<false>(objects, blocks, lanes, methods)
-    }
-
-    /// [`Query::test_leaf`]; `AVX2` as in [`Leaf::intersect_leaf_with`].
+    /// which of them, if any, is the best hit now. `AVX2` as in
+    /// [`Leaf::intersect_leaf_with`].
     #[inline(always)]
     pub fn test_leaf_with<const AVX2: bool>(
         &mut self,
         objects: &[Object],
+        object_blocks: &[ObjectBlock],
         blocks: &[Leaf],
         lanes: Lanes,
         methods: Methods,
@@ -115,8 +112,36 @@ impl Query {
                 best = Best::Triangle(i / LANES, lane);
             }
         }
+        // The blocks' boxes and polygons four at a time (the same bits as
+        // their own tests), all blocks against the same range before any
+        // hit is taken, so that their tests do not wait on each other (a
+        // wider range than the best so far gives the same best: a farther
+        // hit loses anyway); then the other objects one by one.
+        let ray = self.prepared.ray;
+        let within = self.within();
+        let mut found = [None; super::leaf::BLOCKS];
         for (b, leaf) in blocks.iter().enumerate() {
-            for lane in lanes_of(lanes.block(b).objects()) {
+            let whole = lanes.block(b).objects();
+            if whole != 0
+                && let Some(block) = object_blocks.get(leaf.index(whole.trailing_zeros() as usize) as usize)
+            {
+                let mask = block.lanes(methods) & whole;
+                found[b] = Some((block, mask, block.intersect(mask, &ray, within)));
+            }
+        }
+        for (b, leaf) in blocks.iter().enumerate() {
+            let mut scalar = lanes.block(b).objects();
+            if let Some((block, mask, hits)) = found[b] {
+                for lane in lanes_of(hits.hit) {
+                    let normal = block.normal(lane, &hits, &ray);
+                    let object = leaf.object(lane) as usize;
+                    if self.consider(Hit { t: hits.t[lane], object, primitive: 0, normal }) {
+                        best = Best::Object;
+                    }
+                }
+                scalar &= !mask;
+            }
+            for lane in lanes_of(scalar) {
                 if self.test_object(objects, leaf.object(lane), methods) {
                     best = Best::Object;
                 }

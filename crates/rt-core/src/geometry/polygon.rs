@@ -63,6 +63,16 @@ impl Polygon {
     pub fn normal(&self) -> Vec3 {
         self.normal
     }
+    /// `d` of the polygon's plane `p·n = d` ([`Polygon::normal`] `n`).
+    pub fn plane_d(&self) -> Real {
+        self.d
+    }
+    /// The two axes the polygon is projected on for the crossing-number
+    /// test ([`Polygon::contains_projected`]): the normal's largest axis
+    /// dropped, the other two in cyclic order.
+    pub fn axes(&self) -> [usize; 2] {
+        self.axes
+    }
     /// The box around the corners.
     pub fn bounds(&self) -> Aabb {
         self.bounds
