@@ -290,7 +290,7 @@ fn build_node(
                 }
             };
             match best_split(bins, bounds) {
-                Some(best) if !(n <= MAX_LEAF && best.1 >= all.leaf_cost()) => {
+                Some(best) if !(n <= MAX_LEAF && best.1 >= all.leaf_cost() && !apart_pays(items, &all)) => {
                     let side =
                         |range: std::ops::Range<usize>| bins[range].iter().fold(Bin::EMPTY, Bin::merged);
                     let (left, right) = (side(0..best.0), side(best.0..BINS));
@@ -392,6 +392,25 @@ fn partition_and_bin<const WHOLE: bool>(
         j -= 1;
     }
     i
+}
+
+/// Whether the whole objects among `items` (at most [`MAX_LEAF`], with
+/// their bin `all`) are cheaper in leaves of their own than in one leaf:
+/// split down to single items, they end up as children of one 8-wide node
+/// (the collapse fills a node's eight slots), so a ray pays one node visit
+/// and then tests only the items whose boxes it enters: `c_node + Σ
+/// A(itemᵢ)/A(all)·c_leaf(itemᵢ)` against the leaf's `Σ c_leaf`. The
+/// greedy binned SAH never sees this for a few large objects that overlap
+/// (the walls of a room): every split into two groups has children as
+/// large as the room, so each split alone costs more than the leaf. Mesh
+/// triangles are left to the SAH (a block of four costs one test).
+fn apart_pays(items: &[Item], all: &Bin) -> bool {
+    if all.whole == 0 {
+        return false;
+    }
+    let area = all.bounds().surface_area().max(Real::MIN_POSITIVE);
+    let apart: Real = items.iter().map(|item| item.bounds().surface_area() / area).sum();
+    TRAVERSAL_COST + apart < all.leaf_cost()
 }
 
 /// The best split between bins `k − 1` and `k`, and its cost relative to
@@ -642,5 +661,33 @@ mod tests {
         }
         walk(&tree, &mut seen);
         assert!(seen.iter().all(|&s| s == 1));
+    }
+
+    #[test]
+    fn a_room_of_large_whole_objects_is_split_into_leaves_of_their_own() {
+        // The Cornell box's five walls, light and two blocks: any split into
+        // two groups has a child as large as the room, so the greedy SAH
+        // alone keeps all eight in one leaf, and every ray tests them all.
+        let b = |min: [Real; 3], max: [Real; 3]| Aabb::from_corners(Vec3::from(min), Vec3::from(max));
+        let boxes = [
+            b([0.0, 0.0, 0.0], [5.56, 0.0, 5.59]),
+            b([0.0, 5.49, 0.0], [5.56, 5.49, 5.59]),
+            b([0.0, 0.0, 5.59], [5.56, 5.49, 5.59]),
+            b([0.0, 0.0, 0.0], [0.0, 5.49, 5.59]),
+            b([5.56, 0.0, 0.0], [5.56, 5.49, 5.59]),
+            b([2.13, 5.48, 2.27], [3.43, 5.48, 3.32]),
+            b([1.3, 0.0, 0.65], [2.95, 1.65, 2.3]),
+            b([2.65, 0.0, 2.95], [4.3, 3.3, 4.6]),
+        ];
+        let mut v: Vec<Item> = boxes.iter().enumerate().map(|(o, &b)| Item::whole(b, o as u32)).collect();
+        let (tree, leaves) = build(&mut v);
+        // Seven: the light shares a leaf with the ceiling, whose slab its
+        // box lies in (apart, a ray entering one box would enter both).
+        assert_eq!(leaves, 7);
+        // Two mesh triangles' worth of items stay together: a block of four
+        // costs one test.
+        let mut triangles: Vec<Item> = boxes.iter().take(4).map(|&b| Item::new(b, 0, 0)).collect();
+        assert_eq!(build(&mut triangles).1, 1);
+        assert!(matches!(tree, BuildNode::Inner { .. }));
     }
 }

@@ -118,7 +118,6 @@ impl Item {
     }
 
     /// The box.
-    #[cfg(test)]
     #[allow(clippy::useless_conversion)] // `Wide` is `Vec3` in the f64 build
     pub fn bounds(&self) -> Aabb {
         Aabb::from_corners(self.min().into(), self.max().into())
