@@ -21,12 +21,16 @@ for each thread count T, it measures:
     embreex casts on the calling thread, so T threads are T processes, each
     pinned to its own CPU with its own copy of the scene, casting a 1/T share;
     the time is the slowest one's.
+and the memory: the heap memory the commit added and kept (Embree's BVH, as
+glibc's `mallinfo2` counts blocks in use) plus the mesh's vertex and index
+buffers, per triangle, beside rt-view's bytes per triangle (BVH plus mesh).
 It prints medians, the hit counts (compare them with rt-view's), how many
 bounce rays hit the same primitive in both, and, from bench-out/bench.csv,
 rt-view's figures over Embree's for the same mesh and thread count.
 """
 import argparse
 import csv
+import ctypes
 import glob
 import json
 import multiprocessing as mp
@@ -79,8 +83,25 @@ def load_bounce(path):
     return np.ascontiguousarray(rays[:, :3]), np.ascontiguousarray(rays[:, 3:]), rec["id"].astype(np.int64)
 
 
+class _MallInfo2(ctypes.Structure):
+    _fields_ = [(name, ctypes.c_size_t) for name in
+                "arena ordblks smblks hblks hblkhd usmblks fsmblks uordblks fordblks keepcost".split()]
+
+
+def heap_in_use():
+    """Bytes the C heap has handed out and not taken back (glibc's
+    `mallinfo2`: in-use arena blocks plus mapped blocks), where Embree keeps
+    its BVH. Unlike the resident size it does not miss memory that earlier
+    work freed and the commit reused."""
+    libc = ctypes.CDLL("libc.so.6")
+    libc.mallinfo2.restype = _MallInfo2
+    info = libc.mallinfo2()
+    return info.uordblks + info.hblkhd
+
+
 def new_scene(verts, tris):
-    """A committed Embree scene of the mesh, and the seconds the commit took.
+    """A committed Embree scene of the mesh, the seconds the commit took, and
+    the heap memory the commit added and kept (bytes: its BVH).
 
     `TriangleMesh` copies the arrays into Embree's buffers in Python; the
     first `run` commits the scene (`rtcCommitScene`: the BVH build) and casts
@@ -89,9 +110,11 @@ def new_scene(verts, tris):
     scene = rtcs.EmbreeScene()
     TriangleMesh(scene, verts, tris)
     one = np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32)
+    before = heap_in_use()
     t0 = time.perf_counter()
     scene.run(*one)  # commits: builds the BVH
-    return scene, time.perf_counter() - t0
+    seconds = time.perf_counter() - t0
+    return scene, seconds, heap_in_use() - before
 
 
 # Set in the parent before forking; the children read them.
@@ -101,14 +124,18 @@ DATA = {}
 def build_worker(cpus, runs, out):
     os.sched_setaffinity(0, cpus)
     times = []
+    grown = []
     for _ in range(runs):
-        times.append(new_scene(DATA["verts"], DATA["tris"])[1])
-    out.put(statistics.median(times))
+        scene, seconds, grew = new_scene(DATA["verts"], DATA["tris"])
+        times.append(seconds)
+        grown.append(grew)
+        del scene
+    out.put((statistics.median(times), statistics.median(grown)))
 
 
 def cast_worker(cpu, share, runs, barrier, out):
     os.sched_setaffinity(0, {cpu})
-    scene, _ = new_scene(DATA["verts"], DATA["tris"])
+    scene = new_scene(DATA["verts"], DATA["tris"])[0]
     result = {}
     for name in ("primary", "bounce"):
         origins, dirs = DATA[name]
@@ -131,7 +158,7 @@ def measure(threads, runs):
     cpus = sorted(os.sched_getaffinity(0))
     p = ctx.Process(target=build_worker, args=(set(cpus[:threads]), runs, out))
     p.start()
-    build = out.get()
+    build, grown = out.get()
     p.join()
     DATA["parts"] = threads
     barrier = ctx.Barrier(threads)
@@ -141,7 +168,7 @@ def measure(threads, runs):
     parts = dict(out.get() for _ in procs)
     for p in procs:
         p.join()
-    res = {"build": build}
+    res = {"build": build, "grown": grown}
     for name in ("primary", "bounce"):
         # Run k took as long as its slowest process.
         walls = [max(parts[s][name][0][k] for s in parts) for k in range(runs)]
@@ -163,9 +190,13 @@ def main():
         for row in csv.DictReader(open(bench_csv)):
             ours[(row["mesh"], int(row["threads"]))] = row
     print(f"Intel Embree 4 (embreex, rtcIntersect1), medians of {args.runs} runs; Mrays/s; "
-          "build s: the scene commit alone (rtcCommitScene), not embreex's copying of the arrays")
-    print(f"{'mesh':>5} {'triangles':>10} {'threads':>7} {'build s':>8} {'primary':>8} {'bounce':>8} "
-          f"{'hits':>8} {'b. hits':>8} {'same id':>8}   rt-view / Embree: {'build':>6} {'single':>7} {'packets':>8} {'bounce':>7}")
+          "build s: the scene commit alone (rtcCommitScene), not embreex's copying of the arrays; "
+          "B/tri: the heap memory the commit added and kept (its BVH; glibc mallinfo2) plus the mesh's "
+          "vertex and index buffers (12 bytes per vertex and per triangle), per triangle, beside "
+          "rt-view's BVH plus mesh")
+    print(f"{'mesh':>5} {'triangles':>10} {'threads':>7} {'build s':>8} {'B/tri':>6} {'primary':>8} {'bounce':>8} "
+          f"{'hits':>8} {'b. hits':>8} {'same id':>8}   rt-view / Embree: {'build':>6} {'single':>7} {'packets':>8} "
+          f"{'bounce':>7} {'B/tri':>6}")
     for obj in sorted(glob.glob(os.path.join(args.out, "terrain_*.obj")), key=os.path.getsize):
         label = os.path.basename(obj)[len("terrain_"):-len(".obj")]
         DATA["verts"], DATA["tris"] = load_obj(obj)
@@ -182,14 +213,17 @@ def main():
             b_hits = int((b_ids >= 0).sum())
             ours_ids = np.where(our_ids == 0xFFFFFFFF, -1, our_ids)
             same = float((b_ids == ours_ids).mean())
-            line = (f"{label:>5} {len(DATA['tris']):>10} {t:>7} {r['build']:>8.4f} {r['primary'][0]:>8.3f} "
-                    f"{r['bounce'][0]:>8.3f} {hits:>8} {b_hits:>8} {same:>8.5f}")
+            mesh_bytes = 12 * (len(DATA["verts"]) + len(DATA["tris"]))
+            per_tri = (r["grown"] + mesh_bytes) / len(DATA["tris"])
+            line = (f"{label:>5} {len(DATA['tris']):>10} {t:>7} {r['build']:>8.4f} {per_tri:>6.1f} "
+                    f"{r['primary'][0]:>8.3f} {r['bounce'][0]:>8.3f} {hits:>8} {b_hits:>8} {same:>8.5f}")
             o = ours.get((label, t))
             if o:
                 line += (f"   {' ':>16} {r['build'] / float(o['bvh_build_s']):>5.2f}x "
                          f"{float(o['primary_single_mrays_per_s']) / r['primary'][0]:>6.2f}x "
                          f"{float(o['primary_packets_mrays_per_s']) / r['primary'][0]:>7.2f}x "
-                         f"{float(o['bounce_mrays_per_s']) / r['bounce'][0]:>6.2f}x")
+                         f"{float(o['bounce_mrays_per_s']) / r['bounce'][0]:>6.2f}x "
+                         f"{float(o['bytes_per_triangle']) / per_tri:>5.2f}x")
             print(line, flush=True)
 
 
