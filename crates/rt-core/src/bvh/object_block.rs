@@ -482,7 +482,14 @@ mod tests {
             targets.push(b.center());
             targets.push(0.5 * (b.min() + Vec3::new(b.max().x, b.min().y, b.max().z)));
         }
-        let origins = [Vec3::new(2.78, 2.73, -8.0), Vec3::new(2.78, 2.73, 2.0), Vec3::new(0.0, 2.0, 1.0)];
+        // From outside everything, from inside the room, on a wall, and
+        // from inside the first box.
+        let origins = [
+            Vec3::new(2.78, 2.73, -8.0),
+            Vec3::new(2.78, 2.73, 2.0),
+            Vec3::new(0.0, 2.0, 1.0),
+            Vec3::new(2.0, 1.0, 1.5),
+        ];
         let ranges = [Interval::new(0.0, Real::INFINITY), Interval::new(1e-4, 3.0)];
         for origin in origins {
             for &target in &targets {
