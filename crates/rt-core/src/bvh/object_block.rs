@@ -1,13 +1,13 @@
 //! A leaf block's whole boxes and polygons laid out lane by lane, so that
 //! one pass of four-lane arithmetic tests them all.
 //!
-//! Scenes built from the course's primitives (the Cornell box: five walls,
-//! a light and two boxes) put every object into one or two leaves: each
-//! ray tests all of them. Looked up in the scene and tested one by one,
-//! each such test is a chain of dependent divisions and branches (the slab
-//! test's six quotients, the polygon's plane hit and crossing-number test)
-//! waiting on the last; here each step is done for a block's four lanes at
-//! once, the way the triangle lanes of [`super::leaf`] are.
+//! Scenes built from the course's primitives put several objects into one
+//! leaf where splitting them does not pay (the build's SAH). Looked up in
+//! the scene and tested one by one, each such test is a chain of dependent
+//! divisions and branches (the slab test's six quotients, the polygon's
+//! plane hit and crossing-number test) waiting on the last; here each step
+//! is done for a block's four lanes at once, the way the triangle lanes of
+//! [`super::leaf`] are.
 //!
 //! Each lane performs exactly the operations of [`Aabb::intersect`] (the
 //! slab test) or [`Polygon::intersect`] (plane, then crossing-number test),
