@@ -53,9 +53,13 @@ impl BuildNode {
 
 /// Builds the binary tree over `items` (non-empty), reordering them so that
 /// every leaf's items are contiguous; also returns how many leaves it has.
-pub(super) fn build(items: &mut [Item]) -> (BuildNode, usize) {
+/// `sizes` (as long as `items`, all 0) gets each leaf's item count at its
+/// first item's position, so the leaves can be listed in tree order (their
+/// items' order) without walking the tree.
+pub(super) fn build(items: &mut [Item], sizes: &mut [u8]) -> (BuildNode, usize) {
+    debug_assert_eq!(items.len(), sizes.len());
     let all = Bin::of(items, items.len() > PARALLEL_ITEMS);
-    build_node(items, all, None, 0, 0)
+    build_node(items, sizes, all, None, 0, 0)
 }
 
 /// How a node's items are binned: along `axis`, item `i` into bin
@@ -233,9 +237,11 @@ fn bin_items<const WHOLE: bool>(items: &[Item], binning: Binning) -> [Bin; BINS]
 
 /// The node over `items` (`all` is their [`Bin`]; `binned`, if given,
 /// their bins by [`Binning::of`]), which start at `first` in the final
-/// order, and how many leaves it has.
+/// order, and how many leaves it has; each leaf's size goes into `sizes`
+/// (the items' slice of [`build`]'s) at its first item.
 fn build_node(
     items: &mut [Item],
+    sizes: &mut [u8],
     all: Bin,
     binned: Option<&[Bin; BINS]>,
     first: usize,
@@ -244,9 +250,13 @@ fn build_node(
     let n = items.len();
     let parallel = n > PARALLEL_ITEMS;
     let bounds = all.bounds();
-    let leaf = (BuildNode::Leaf { bounds, first: first as u32, count: n as u32 }, 1);
+    let leaf = |sizes: &mut [u8]| {
+        // MAX_LEAF items at most: a size fits a byte.
+        sizes[0] = n as u8;
+        (BuildNode::Leaf { bounds, first: first as u32, count: n as u32 }, 1)
+    };
     if n <= 1 {
-        return leaf;
+        return leaf(sizes);
     }
     // The node's own bins where it bins its items, and its children's
     // where they are binned here; referred to, not copied (1.3 kB each).
@@ -262,7 +272,7 @@ fn build_node(
         None => {
             // Coincident centroids, or deep enough: a leaf if small, else the median.
             if n <= MAX_LEAF && all.centroids().size().max_element() <= 0.0 {
-                return leaf;
+                return leaf(sizes);
             }
             median(items)
         }
@@ -323,21 +333,22 @@ fn build_node(
                     let [l, r] = &children_bins;
                     (mid, left, right, plans[0].map(|_| l), plans[1].map(|_| r))
                 }
-                _ if n <= MAX_LEAF => return leaf,
+                _ if n <= MAX_LEAF => return leaf(sizes),
                 _ => median(items),
             }
         }
     };
     let (left, right) = items.split_at_mut(mid);
+    let (left_sizes, right_sizes) = sizes.split_at_mut(mid);
     let ((l, l_leaves), (r, r_leaves)) = if parallel {
         rayon::join(
-            || build_node(left, left_bin, left_bins, first, depth + 1),
-            || build_node(right, right_bin, right_bins, first + mid, depth + 1),
+            || build_node(left, left_sizes, left_bin, left_bins, first, depth + 1),
+            || build_node(right, right_sizes, right_bin, right_bins, first + mid, depth + 1),
         )
     } else {
         (
-            build_node(left, left_bin, left_bins, first, depth + 1),
-            build_node(right, right_bin, right_bins, first + mid, depth + 1),
+            build_node(left, left_sizes, left_bin, left_bins, first, depth + 1),
+            build_node(right, right_sizes, right_bin, right_bins, first + mid, depth + 1),
         )
     };
     (BuildNode::Inner { bounds, children: Box::new([l, r]) }, l_leaves + r_leaves)
@@ -495,26 +506,39 @@ mod tests {
     fn the_tree_is_the_same_on_one_thread_and_on_many() {
         let mut a = items(150); // 22 500 items: the top levels go parallel.
         let mut b = a.clone();
-        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| build(&mut a));
-        let four = rayon::ThreadPoolBuilder::new().num_threads(4).build().unwrap().install(|| build(&mut b));
+        let (mut sa, mut sb) = (vec![0; a.len()], vec![0; b.len()]);
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(|| build(&mut a, &mut sa));
+        let four = rayon::ThreadPoolBuilder::new()
+            .num_threads(4)
+            .build()
+            .unwrap()
+            .install(|| build(&mut b, &mut sb));
         assert!(matches!(one.0, BuildNode::Inner { .. }));
         assert_eq!(one, four);
         let order = |v: &[Item]| v.iter().map(|i| i.index()).collect::<Vec<_>>();
         assert_eq!(order(&a), order(&b));
+        assert_eq!(sa, sb);
     }
 
     /// Checks that `tree` over `items` (as `build` left them) is a valid
     /// tree of `leaves` leaves: every item in exactly one leaf of at most
-    /// [`MAX_LEAF`] items, every leaf's box around its items' boxes, every
-    /// inner node's box around its children's. Returns how many leaves it saw.
-    fn check(node: &BuildNode, items: &[Item], seen: &mut [u32]) -> usize {
+    /// [`MAX_LEAF`] items, each leaf's size at its first item in `sizes`,
+    /// every leaf's box around its items' boxes, every inner node's box
+    /// around its children's. Returns how many leaves it saw.
+    fn check(node: &BuildNode, items: &[Item], sizes: &[u8], seen: &mut [u32]) -> usize {
         let contains = |outer: Aabb, inner: Aabb| {
             outer.min().cmple(inner.min()).all() && outer.max().cmpge(inner.max()).all()
         };
         match node {
             BuildNode::Leaf { bounds, first, count } => {
                 assert!(*count >= 1 && *count as usize <= MAX_LEAF, "leaf of {count} items");
+                assert_eq!(u32::from(sizes[*first as usize]), *count, "a leaf's size not at its first item");
                 for i in *first..first + count {
+                    assert!(i == *first || sizes[i as usize] == 0, "a leaf's size inside another leaf");
                     seen[i as usize] += 1;
                     assert!(contains(*bounds, items[i as usize].bounds()), "a leaf's box misses an item");
                 }
@@ -522,7 +546,7 @@ mod tests {
             }
             BuildNode::Inner { bounds, children } => {
                 children.iter().for_each(|c| assert!(contains(*bounds, c.bounds()), "a box misses a child"));
-                children.iter().map(|c| check(c, items, seen)).sum()
+                children.iter().map(|c| check(c, items, sizes, seen)).sum()
             }
         }
     }
@@ -532,9 +556,10 @@ mod tests {
     fn build_and_check(mut items: Vec<Item>) {
         let key = |i: &Item| (i.object(), i.index(), i.is_whole());
         let mut before: Vec<_> = items.iter().map(key).collect();
-        let (tree, leaves) = build(&mut items);
+        let mut sizes = vec![0; items.len()];
+        let (tree, leaves) = build(&mut items, &mut sizes);
         let mut seen = vec![0; items.len()];
-        assert_eq!(check(&tree, &items, &mut seen), leaves);
+        assert_eq!(check(&tree, &items, &sizes, &mut seen), leaves);
         assert!(seen.iter().all(|&s| s == 1), "an item in no leaf or in two");
         let mut after: Vec<_> = items.iter().map(key).collect();
         before.sort_unstable();
@@ -646,7 +671,7 @@ mod tests {
     #[test]
     fn every_item_lands_in_exactly_one_leaf_of_at_most_the_leaf_size() {
         let mut v = items(40);
-        let (tree, _) = build(&mut v);
+        let (tree, _) = build(&mut v, &mut vec![0; 1600]);
         let mut seen = vec![0; v.len()];
         fn walk(n: &BuildNode, seen: &mut [u32]) {
             match n {
@@ -680,14 +705,14 @@ mod tests {
             b([2.65, 0.0, 2.95], [4.3, 3.3, 4.6]),
         ];
         let mut v: Vec<Item> = boxes.iter().enumerate().map(|(o, &b)| Item::whole(b, o as u32)).collect();
-        let (tree, leaves) = build(&mut v);
+        let (tree, leaves) = build(&mut v, &mut vec![0; 8]);
         // Seven: the light shares a leaf with the ceiling, whose slab its
         // box lies in (apart, a ray entering one box would enter both).
         assert_eq!(leaves, 7);
         // Two mesh triangles' worth of items stay together: a block of four
         // costs one test.
         let mut triangles: Vec<Item> = boxes.iter().take(4).map(|&b| Item::new(b, 0, 0)).collect();
-        assert_eq!(build(&mut triangles).1, 1);
+        assert_eq!(build(&mut triangles, &mut vec![0; 4]).1, 1);
         assert!(matches!(tree, BuildNode::Inner { .. }));
     }
 }

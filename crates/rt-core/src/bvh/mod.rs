@@ -37,6 +37,7 @@ pub mod parts;
 mod query;
 
 use std::mem::MaybeUninit;
+use std::ops::Range;
 use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
@@ -126,7 +127,10 @@ const LARGE_NODES: usize = 16 << 20;
 /// One build item per bounded primitive of `objects`, in object order, a
 /// mesh's triangles one by one in index order, degenerate ones (zero normal)
 /// left out. A large mesh's triangle boxes are computed on all threads,
-/// straight into the list (no per-thread lists joined afterwards).
+/// straight into the list (no per-thread lists joined afterwards), which is
+/// marked for huge pages before it is written: the build reads it once per
+/// level of the tree, and a 1 M-triangle mesh's 32 MB of items fault in as
+/// 16 huge pages instead of 8 000 small ones (docs/performance.md).
 fn items_of(objects: &[Object]) -> Vec<Item> {
     use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
     /// Meshes with fewer triangles than this are done on the calling thread.
@@ -138,7 +142,7 @@ fn items_of(objects: &[Object]) -> Vec<Item> {
             _ => 1,
         })
         .sum();
-    let mut items: Vec<Item> = Vec::with_capacity(total);
+    let mut items: Vec<Item> = huge_pages::with_capacity(total);
     let degenerate = AtomicBool::new(false);
     for (o, object) in objects.iter().enumerate() {
         let o = o as u32;
@@ -169,6 +173,24 @@ fn items_of(objects: &[Object]) -> Vec<Item> {
     items
 }
 
+/// The item ranges of the leaves' blocks, in item order, from the leaf sizes
+/// [`build::build`] wrote (a leaf of `c` items at `i` is blocks of up to
+/// [`leaf::LANES`] items from `i` on).
+fn leaf_blocks(sizes: &[u8]) -> Vec<Range<usize>> {
+    let mut blocks = Vec::with_capacity(sizes.len() / leaf::LANES + sizes.len() / 8);
+    let mut i = 0;
+    while i < sizes.len() {
+        let count = usize::from(sizes[i]);
+        debug_assert!(count > 0, "items outside every leaf");
+        let end = i + count.max(1);
+        for start in (i..end).step_by(leaf::LANES) {
+            blocks.push(start..(start + leaf::LANES).min(end));
+        }
+        i = end;
+    }
+    blocks
+}
+
 impl Bvh {
     /// Builds the hierarchy over `objects`, on rayon's current pool.
     pub fn build(objects: &[Object]) -> Self {
@@ -177,41 +199,62 @@ impl Bvh {
             (0..objects.len() as u32).filter(|&o| objects[o as usize].primitive.bounds().is_none()).collect();
         let mut items = items_of(objects);
         let mut nodes = Vec::new();
-        let mut leaf_items = Vec::new();
+        let mut leaves: Vec<Leaf> = Vec::new();
         let mut leaf_count = 0;
         let (mut depth, mut stack_bound, mut sah_cost) = (0, 0, 0.0);
         let mut bounds = None;
         if !items.is_empty() {
-            let (tree, binary_leaves) = build::build(&mut items);
+            let mut sizes = vec![0; items.len()];
+            let (tree, binary_leaves) = build::build(&mut items, &mut sizes);
+            // Each leaf's blocks, in tree order (the leaves' items come in
+            // tree order): the leaves' slots are known before the collapse,
+            // so the blocks are filled while it runs.
+            let blocks = leaf_blocks(&sizes);
+            drop(sizes);
             // A tree of L leaves has at most L − 1 inner nodes (each has two
-            // children or more), and a leaf of c items has at most
-            // 1 + ⌊c / LANES⌋ blocks: room for both from the start, so
-            // neither list is copied as it grows. A large tree's nodes go
-            // on huge pages at once ([`LARGE_NODES`]); a smaller tree's
-            // are moved there once built, below, if they fill one.
+            // children or more): room for them from the start, so the list
+            // is not copied as it grows. A large tree's nodes go on huge
+            // pages at once ([`LARGE_NODES`]); a smaller tree's are moved
+            // there once built, below, if they fill one.
             let node_bound = binary_leaves.max(2) - 1;
             nodes = if node_bound * size_of::<Node>() >= LARGE_NODES {
                 huge_pages::with_capacity(node_bound)
             } else {
                 Vec::with_capacity(node_bound)
             };
-            leaf_items = Vec::with_capacity(binary_leaves + items.len() / leaf::LANES);
+            leaves = huge_pages::with_capacity(blocks.len());
             let root_box = tree.bounds();
             bounds = Some(root_box);
-            // Leaves get their blocks' slots in tree order; the blocks are
-            // filled below, on all threads.
+            let items = &items;
+            // The leaves' child entries, their blocks' slots counted in tree order.
+            let mut next_block = 0;
             let mut leaf = |first: u32, count: u32| {
-                let index = leaf_items.len() as u32;
+                let index = next_block as u32;
                 let mut lanes = Lanes(0);
                 for (b, start) in (first..first + count).step_by(leaf::LANES).enumerate() {
                     let range = start as usize..(start as usize + leaf::LANES).min((first + count) as usize);
-                    lanes = lanes.with_block(b, Leaf::lanes(&items[range.clone()], objects));
-                    leaf_items.push(range);
+                    debug_assert_eq!(blocks[next_block], range);
+                    lanes = lanes.with_block(b, Leaf::lanes(&items[range], objects));
+                    next_block += 1;
                 }
                 leaf_count += 1;
                 Child { index, lanes }
             };
-            let root = collapse::collapse(&tree, &mut nodes, &mut leaf);
+            // The collapse on one thread, the blocks filled on the others
+            // (in place, in memory marked for huge pages); the binary tree
+            // is freed on the collapse's side too.
+            let (root, ()) = rayon::join(
+                || {
+                    let root = collapse::collapse(&tree, &mut nodes, &mut leaf);
+                    drop(tree);
+                    root
+                },
+                || {
+                    leaves.par_extend(
+                        blocks.par_iter().map(|range| Leaf::new(&items[range.clone()], objects).0),
+                    )
+                },
+            );
             (depth, stack_bound) = (root.depth, root.stack);
             if root.child.is_leaf() {
                 // The whole tree is one leaf: a root node with it as its only child.
@@ -222,9 +265,6 @@ impl Bvh {
             }
             sah_cost = root.cost / to_f64(root_box.surface_area()).max(f64::MIN_POSITIVE);
         }
-        // Filled in place, on all threads, once marked for huge pages.
-        let mut leaves: Vec<Leaf> = huge_pages::with_capacity(leaf_items.len());
-        leaves.par_extend(leaf_items.into_par_iter().map(|range| Leaf::new(&items[range], objects).0));
         let object_blocks = object_block::attach(&mut leaves, objects);
         let mut nodes = if nodes.capacity() * size_of::<Node>() >= LARGE_NODES {
             nodes

@@ -365,6 +365,9 @@ impl ObjectBlock {
 /// stored.
 pub(super) fn attach(leaves: &mut [Leaf], objects: &[Object]) -> Vec<ObjectBlock> {
     let mut blocks = Vec::new();
+    if objects.iter().all(|o| matches!(o.primitive, Primitive::Mesh(_) | Primitive::Plane(_))) {
+        return blocks; // Meshes and planes only: no leaf has a whole object.
+    }
     for leaf in leaves.iter_mut() {
         let whole = leaf.whole_object_lanes(objects);
         if whole == 0 {
