@@ -321,7 +321,13 @@ impl RayBlock {
 /// code compiled for AVX2, a two-block leaf's eight-lane test is inlined
 /// ([`Query::test_leaf_with`]); else the test that asks the CPU.
 #[inline(always)]
-fn test_leaf<const AVX2: bool>(query: &mut Query, objects: &[Object], blocks: &[Leaf], lanes: Lanes, methods: Methods) {
+fn test_leaf<const AVX2: bool>(
+    query: &mut Query,
+    objects: &[Object],
+    blocks: &[Leaf],
+    lanes: Lanes,
+    methods: Methods,
+) {
     if AVX2 {
         query.test_leaf_with::<true>(objects, blocks, lanes, methods);
     } else {
