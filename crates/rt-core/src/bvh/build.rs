@@ -705,14 +705,14 @@ mod tests {
             b([2.65, 0.0, 2.95], [4.3, 3.3, 4.6]),
         ];
         let mut v: Vec<Item> = boxes.iter().enumerate().map(|(o, &b)| Item::whole(b, o as u32)).collect();
-        let (tree, leaves) = build(&mut v, &mut vec![0; 8]);
+        let (tree, leaves) = build(&mut v, &mut [0; 8]);
         // Seven: the light shares a leaf with the ceiling, whose slab its
         // box lies in (apart, a ray entering one box would enter both).
         assert_eq!(leaves, 7);
         // Two mesh triangles' worth of items stay together: a block of four
         // costs one test.
         let mut triangles: Vec<Item> = boxes.iter().take(4).map(|&b| Item::new(b, 0, 0)).collect();
-        assert_eq!(build(&mut triangles, &mut vec![0; 4]).1, 1);
+        assert_eq!(build(&mut triangles, &mut [0; 4]).1, 1);
         assert!(matches!(tree, BuildNode::Inner { .. }));
     }
 }

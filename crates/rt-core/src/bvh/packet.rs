@@ -387,12 +387,29 @@ impl Bvh {
         methods: Methods,
         hits: &mut [Option<Hit>],
     ) {
-        self.closest_hits_packet_baseline(objects, rays, ranges, methods, hits)
+        self.closest_hits_packet_with::<true>(objects, rays, ranges, methods, hits)
     }
 
     /// [`Bvh::closest_hits_packet`] for any CPU of the target.
-    #[inline(always)]
     fn closest_hits_packet_baseline(
+        &self,
+        objects: &[Object],
+        rays: &[Ray],
+        ranges: &[Interval],
+        methods: Methods,
+        hits: &mut [Option<Hit>],
+    ) {
+        self.closest_hits_packet_with::<false>(objects, rays, ranges, methods, hits)
+    }
+
+    /// [`Bvh::closest_hits_packet`]; with `AVX2` the caller is compiled for
+    /// AVX2 (it has checked the CPU), and a two-block leaf's eight-lane
+    /// test is inlined into the leaf loop ([`Query::test_leaf_with`])
+    /// instead of called: as a call, its eight `t`s came back through
+    /// memory written four lanes at a time and were read back eight at a
+    /// time, which stalls the store-to-load forwarding.
+    #[inline(always)]
+    fn closest_hits_packet_with<const AVX2: bool>(
         &self,
         objects: &[Object],
         rays: &[Ray],
@@ -432,14 +449,14 @@ impl Bvh {
             Some(frustum) if !self.nodes.is_empty() && self.stack_bound <= INLINE_STACK => {
                 // One ray's frustum test is its own slab test already.
                 let cone = if n > 1 { Cone::new(blocks, &frustum, &rays[0]) } else { None };
-                self.traverse_packet(objects, &frustum, cone.as_ref(), blocks, queries, methods)
+                self.traverse_packet::<AVX2>(objects, &frustum, cone.as_ref(), blocks, queries, methods)
             }
             _ => {
                 for query in queries.iter_mut() {
                     let range = Interval::new(query.range.min, query.t_max());
                     let ray = query.prepared.ray;
                     self.traverse(&ray, range, |leaf, lanes| {
-                        query.test_leaf_with::<false>(objects, &self.object_blocks, leaf, lanes, methods);
+                        query.test_leaf_with::<AVX2>(objects, &self.object_blocks, leaf, lanes, methods);
                         query.best_t()
                     });
                 }
@@ -454,7 +471,7 @@ impl Bvh {
     /// packet's entry bound; at each leaf the rays that enter its box test
     /// its primitives.
     #[inline(always)]
-    fn traverse_packet(
+    fn traverse_packet<const AVX2: bool>(
         &self,
         objects: &[Object],
         frustum: &Frustum,
@@ -517,7 +534,7 @@ impl Bvh {
                 for (b, block) in blocks.iter_mut().enumerate() {
                     for lane in lanes_of(block.entering(enter, leave)) {
                         let query = &mut queries[b * BLOCK + lane];
-                        query.test_leaf_with::<false>(
+                        query.test_leaf_with::<AVX2>(
                             objects,
                             &self.object_blocks,
                             leaf,
