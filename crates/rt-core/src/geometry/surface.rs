@@ -32,6 +32,7 @@ pub struct SurfacePoint {
 
 impl SurfacePoint {
     /// Where a ray leaving along `dir` starts: see [`offset_ray_origin`].
+    #[inline(always)]
     pub fn spawn_origin(&self, dir: Vec3) -> Vec3 {
         offset_ray_origin(self.p, self.error, self.normal, dir)
     }
@@ -44,6 +45,10 @@ impl SurfacePoint {
 /// moved one more float away from the surface, so the rounding of the sum
 /// cannot bring it back (pbrt-v4 `OffsetRayOrigin`, with the extra float also
 /// applied when the bound is exactly zero, as on a box face).
+///
+/// Inlined: called out of line, its vectors went through memory and the
+/// reload of `n` and `error` stalled on the stores that had just written them.
+#[inline(always)]
 pub fn offset_ray_origin(p: Vec3, error: Vec3, n: Vec3, dir: Vec3) -> Vec3 {
     let side: Real = if dir.dot(n) < 0.0 { -1.0 } else { 1.0 };
     let push = n * (n.abs().dot(error) * side);

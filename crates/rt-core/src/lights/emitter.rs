@@ -48,7 +48,9 @@ enum Shape {
     /// A sphere, sampled by solid angle.
     Sphere { center: Vec3, radius: Real },
     /// Triangles, sampled by area: the corners and normals of the
-    /// non-degenerate ones, the running sums of their areas, and the total.
+    /// non-degenerate ones, the running sums of their areas from 0 (one
+    /// more than the triangles: triangle `i` spans `cumulative[i]` to
+    /// `cumulative[i + 1]`, with no branch for the first), and the total.
     Triangles { corners: Vec<[Vec3; 3]>, normals: Vec<Vec3>, cumulative: Vec<Real>, area: Real },
     /// An infinite plane: not sampled.
     Unbounded,
@@ -83,7 +85,8 @@ impl Emitter {
         };
         let mut kept = Vec::with_capacity(corners.len());
         let mut normals = Vec::with_capacity(corners.len());
-        let mut cumulative = Vec::with_capacity(corners.len());
+        let mut cumulative = Vec::with_capacity(corners.len() + 1);
+        cumulative.push(0.0);
         let mut area: Real = 0.0;
         for [a, b, c] in corners {
             let Some(n) = geometric_normal(a, b, c) else { continue };
@@ -135,9 +138,9 @@ impl Emitter {
             Shape::Triangles { corners, normals, cumulative, area } => {
                 // Choose a triangle by area, and reuse u within it.
                 let target = u * area;
-                let i = cumulative.partition_point(|&c| c <= target).min(corners.len() - 1);
-                let start = if i == 0 { 0.0 } else { cumulative[i - 1] };
-                let width = cumulative[i] - start;
+                let i = cumulative[1..].partition_point(|&c| c <= target).min(corners.len() - 1);
+                let start = cumulative[i];
+                let width = cumulative[i + 1] - start;
                 let u = if width > 0.0 { ((target - start) / width).clamp(0.0, 1.0) } else { 0.5 };
                 let [a, b, c] = corners[i];
                 // A uniform point on the triangle (pbrt-v4 §A.5.4, `SampleUniformTriangle`).

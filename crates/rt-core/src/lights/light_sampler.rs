@@ -38,7 +38,9 @@ pub enum Source {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LightSampler {
     sources: Vec<Source>,
-    /// Running sums of the candidates' powers.
+    /// Running sums of the candidates' powers from 0 (one more than the
+    /// candidates: candidate `i` spans `cumulative[i]` to `cumulative[i + 1]`,
+    /// with no branch for the first); empty when there are none.
     cumulative: Vec<Real>,
     /// Probability of choosing each light of the scene file.
     light_probability: Vec<Real>,
@@ -68,6 +70,9 @@ impl LightSampler {
             ..Self::default()
         };
         let mut running = 0.0;
+        if !candidates.is_empty() {
+            sampler.cumulative.push(running);
+        }
         for (source, power) in candidates {
             running += power;
             sampler.sources.push(source);
@@ -92,9 +97,9 @@ impl LightSampler {
     pub fn choose(&self, u: Real) -> Option<(Source, Real)> {
         let total = *self.cumulative.last()?;
         let target = u * total;
-        let i = self.cumulative.partition_point(|&c| c <= target).min(self.sources.len() - 1);
-        let below = if i == 0 { 0.0 } else { self.cumulative[i - 1] };
-        Some((self.sources[i], (self.cumulative[i] - below) / total))
+        let i = self.cumulative[1..].partition_point(|&c| c <= target).min(self.sources.len() - 1);
+        let (below, above) = (self.cumulative[i], self.cumulative[i + 1]);
+        Some((self.sources[i], (above - below) / total))
     }
 
     /// The probability of choosing `source` (0 for one that gives off nothing).
