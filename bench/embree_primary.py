@@ -21,9 +21,12 @@ for each thread count T, it measures:
     embreex casts on the calling thread, so T threads are T processes, each
     pinned to its own CPU with its own copy of the scene, casting a 1/T share;
     the time is the slowest one's.
-and the memory: the heap memory the commit added and kept (Embree's BVH, as
-glibc's `mallinfo2` counts blocks in use) plus the mesh's vertex and index
-buffers, per triangle, beside rt-view's bytes per triangle (BVH plus mesh).
+and the memory: what the commit added and kept (Embree's BVH: the larger of
+the C heap's growth, as glibc's `mallinfo2` counts blocks in use, which sees
+small trees' memory even where freed memory is reused, and the resident
+size's growth, which sees the blocks Embree maps itself for large trees)
+plus the mesh's vertex and index buffers, per triangle, beside rt-view's
+bytes per triangle (BVH plus mesh).
 It prints medians, the hit counts (compare them with rt-view's), how many
 bounce rays hit the same primitive in both, and, from bench-out/bench.csv,
 rt-view's figures over Embree's for the same mesh and thread count.
@@ -99,9 +102,15 @@ def heap_in_use():
     return info.uordblks + info.hblkhd
 
 
+def resident_bytes():
+    """The process's resident memory (Linux `/proc/self/statm`), in bytes."""
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+
 def new_scene(verts, tris):
     """A committed Embree scene of the mesh, the seconds the commit took, and
-    the heap memory the commit added and kept (bytes: its BVH).
+    the memory the commit added and kept (bytes: its BVH).
 
     `TriangleMesh` copies the arrays into Embree's buffers in Python; the
     first `run` commits the scene (`rtcCommitScene`: the BVH build) and casts
@@ -110,11 +119,15 @@ def new_scene(verts, tris):
     scene = rtcs.EmbreeScene()
     TriangleMesh(scene, verts, tris)
     one = np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32)
-    before = heap_in_use()
+    heap, resident = heap_in_use(), resident_bytes()
     t0 = time.perf_counter()
     scene.run(*one)  # commits: builds the BVH
     seconds = time.perf_counter() - t0
-    return scene, seconds, heap_in_use() - before
+    # Embree takes small trees' memory from the C heap and maps large
+    # blocks itself: the heap's growth sees the first (where freed memory
+    # was reused, the resident size does not grow), the resident growth
+    # the second (mappings the heap does not count); the larger of the two.
+    return scene, seconds, max(heap_in_use() - heap, resident_bytes() - resident)
 
 
 # Set in the parent before forking; the children read them.
@@ -191,7 +204,8 @@ def main():
             ours[(row["mesh"], int(row["threads"]))] = row
     print(f"Intel Embree 4 (embreex, rtcIntersect1), medians of {args.runs} runs; Mrays/s; "
           "build s: the scene commit alone (rtcCommitScene), not embreex's copying of the arrays; "
-          "B/tri: the heap memory the commit added and kept (its BVH; glibc mallinfo2) plus the mesh's "
+          "B/tri: the memory the commit added and kept (its BVH: the larger of the C heap's growth, "
+          "glibc mallinfo2, and the resident size's) plus the mesh's "
           "vertex and index buffers (12 bytes per vertex and per triangle), per triangle, beside "
           "rt-view's BVH plus mesh")
     print(f"{'mesh':>5} {'triangles':>10} {'threads':>7} {'build s':>8} {'B/tri':>6} {'primary':>8} {'bounce':>8} "
