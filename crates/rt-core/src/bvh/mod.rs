@@ -391,10 +391,9 @@ impl Bvh {
                     // rest one by one; a block that blocks the ray ends the
                     // test before the next is looked at.
                     let mut scalar = whole;
-                    if let Some(block) =
-                        self.object_blocks.get(leaf.index(whole.trailing_zeros() as usize) as usize)
+                    if let Some((block, mask)) =
+                        object_block::block_of(&self.object_blocks, leaf, whole, methods)
                     {
-                        let mask = block.lanes(methods) & whole;
                         if block.intersect(mask, ray, range).hit != 0 {
                             return true;
                         }

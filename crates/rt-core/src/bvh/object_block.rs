@@ -357,6 +357,21 @@ impl ObjectBlock {
     }
 }
 
+/// The object block of `leaf`'s whole objects (its lanes `whole`, not 0),
+/// found by the number [`attach`] put in their index, and the lanes of
+/// `whole` it tests under `methods` ([`ObjectBlock::lanes`]); `None` where
+/// the leaf has none (its whole objects are all tested one by one).
+#[inline(always)]
+pub(super) fn block_of<'a>(
+    blocks: &'a [ObjectBlock],
+    leaf: &Leaf,
+    whole: u32,
+    methods: Methods,
+) -> Option<(&'a ObjectBlock, u32)> {
+    let block = blocks.get(leaf.index(whole.trailing_zeros() as usize) as usize)?;
+    Some((block, block.lanes(methods) & whole))
+}
+
 /// The object blocks of `leaves` (whose whole objects are among
 /// `objects`), numbered in leaf order: each block with lanes a block can
 /// test gets one, and its whole-object lanes' index (unused by whole

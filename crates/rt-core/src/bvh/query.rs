@@ -3,7 +3,7 @@
 //! do at a leaf.
 
 use super::leaf::{LANES, Lanes, Leaf, lanes_of};
-use super::object_block::ObjectBlock;
+use super::object_block::{self, ObjectBlock};
 use crate::geometry::hit::Hit;
 use crate::geometry::method::Methods;
 use crate::geometry::object::Object;
@@ -123,9 +123,8 @@ impl Query {
         for (b, leaf) in blocks.iter().enumerate() {
             let whole = lanes.block(b).objects();
             if whole != 0
-                && let Some(block) = object_blocks.get(leaf.index(whole.trailing_zeros() as usize) as usize)
+                && let Some((block, mask)) = object_block::block_of(object_blocks, leaf, whole, methods)
             {
-                let mask = block.lanes(methods) & whole;
                 found[b] = Some((block, mask, block.intersect(mask, &ray, within)));
             }
         }
