@@ -96,7 +96,9 @@ impl ObjectBlock {
         for lane in 0..LANES {
             match objects.get(leaf.object(lane) as usize).map(|o| &o.primitive) {
                 Some(Primitive::Aabb(b)) => block.set_box(lane, b),
-                Some(Primitive::Polygon(p)) if p.points().len() <= POLYGON_CORNERS => {
+                // At least three corners, as `Polygon::new` makes them (a
+                // polygon read back from a scene cache is not made again).
+                Some(Primitive::Polygon(p)) if (3..=POLYGON_CORNERS).contains(&p.points().len()) => {
                     block.set_polygon(lane, p)
                 }
                 _ => {}
