@@ -427,28 +427,52 @@ fn apart_pays(items: &[Item], all: &Bin) -> bool {
 /// The best split between bins `k − 1` and `k`, and its cost relative to
 /// testing one primitive (`TRAVERSAL_COST + Σ nᵢ·Aᵢ / A`); `None` if every
 /// item is in one bin.
+///
+/// Only the bins with items are swept: an empty bin leaves both sides'
+/// boxes and counts as they are (min with +∞, max with −∞, +0 are exact),
+/// so a split next to it costs what the split before it costs, and of equal
+/// costs the first wins. Among the splits that leave the same items on each
+/// side that is the one just past the last non-empty bin on the left, which
+/// is the one returned (the same as a sweep over all bins, tested). Most
+/// nodes are small (a few dozen items or fewer in 16 bins), and this halves
+/// their sweeps.
 fn best_split(bins: &[Bin; BINS], bounds: Aabb) -> Option<(usize, Real)> {
-    // Sweep from the right for the right-hand areas, then from the left.
+    // The non-empty bins' indices, in order (written unconditionally, kept
+    // by advancing the count: no branch on the bin's count).
+    let mut full = [0u8; BINS];
+    let mut m = 0;
+    for (k, bin) in bins.iter().enumerate() {
+        full[m] = k as u8;
+        m += usize::from(bin.count > 0);
+    }
+    if m < 2 {
+        return None;
+    }
+    // Sweep from the right for the right-hand areas, then from the left;
+    // `t` is the first non-empty bin on the right.
     let mut right_area = [0.0 as Real; BINS];
     let mut right_cost = [0.0 as Real; BINS];
-    let mut right_count = [0usize; BINS];
     let mut acc = Bin::EMPTY;
-    for k in (1..BINS).rev() {
-        acc.merge(&bins[k]);
-        right_area[k] = acc.area();
-        right_cost[k] = acc.leaf_cost();
-        right_count[k] = acc.count;
+    for t in (1..m).rev() {
+        acc.merge(&bins[usize::from(full[t])]);
+        right_area[t] = acc.area();
+        right_cost[t] = acc.leaf_cost();
     }
     let (mut best, mut best_cost) = (0, Real::INFINITY);
     let mut acc = Bin::EMPTY;
-    for k in 1..BINS {
-        acc.merge(&bins[k - 1]);
-        let cost = acc.leaf_cost() * acc.area() + right_cost[k] * right_area[k];
-        if cost < best_cost && acc.count > 0 && right_count[k] > 0 {
-            (best, best_cost) = (k, cost);
+    for t in 1..m {
+        acc.merge(&bins[usize::from(full[t - 1])]);
+        let cost = acc.leaf_cost() * acc.area() + right_cost[t] * right_area[t];
+        if cost < best_cost {
+            (best, best_cost) = (t, cost);
         }
     }
-    (best > 0).then(|| (best, TRAVERSAL_COST + best_cost / bounds.surface_area().max(Real::MIN_POSITIVE)))
+    (best > 0).then(|| {
+        (
+            usize::from(full[best - 1]) + 1,
+            TRAVERSAL_COST + best_cost / bounds.surface_area().max(Real::MIN_POSITIVE),
+        )
+    })
 }
 
 /// Sorts `items` by their centroids' coordinate on `axis`.
@@ -574,6 +598,57 @@ mod tests {
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
         ((z ^ (z >> 31)) >> 40) as Real / (1u64 << 24) as Real
+    }
+
+    /// The sweep over all bins, empty ones too, as [`best_split`] was
+    /// written before it skipped them.
+    fn best_split_over_all_bins(bins: &[Bin; BINS], bounds: Aabb) -> Option<(usize, Real)> {
+        let mut right_area = [0.0 as Real; BINS];
+        let mut right_cost = [0.0 as Real; BINS];
+        let mut right_count = [0usize; BINS];
+        let mut acc = Bin::EMPTY;
+        for k in (1..BINS).rev() {
+            acc.merge(&bins[k]);
+            right_area[k] = acc.area();
+            right_cost[k] = acc.leaf_cost();
+            right_count[k] = acc.count;
+        }
+        let (mut best, mut best_cost) = (0, Real::INFINITY);
+        let mut acc = Bin::EMPTY;
+        for k in 1..BINS {
+            acc.merge(&bins[k - 1]);
+            let cost = acc.leaf_cost() * acc.area() + right_cost[k] * right_area[k];
+            if cost < best_cost && acc.count > 0 && right_count[k] > 0 {
+                (best, best_cost) = (k, cost);
+            }
+        }
+        (best > 0).then(|| (best, TRAVERSAL_COST + best_cost / bounds.surface_area().max(Real::MIN_POSITIVE)))
+    }
+
+    #[test]
+    fn skipping_empty_bins_finds_the_split_and_cost_of_the_sweep_over_all_bins() {
+        let mut state = 7u64;
+        let mut checked = 0;
+        for round in 0..4000 {
+            // 1 to 40 random small boxes, some coincident, binned as a node would.
+            let n = 1 + round % 40;
+            let its: Vec<Item> = (0..n)
+                .map(|i| {
+                    let p = Vec3::new(random(&mut state), random(&mut state), random(&mut state))
+                        * if round % 3 == 0 { 4.0 } else { 100.0 };
+                    let p = if round % 5 == 0 { p.round() } else { p };
+                    Item::new(Aabb::from_corners(p, p + Vec3::splat(random(&mut state))), 0, i as u32)
+                })
+                .collect();
+            let all = Bin::of(&its, false);
+            let Some(binning) = Binning::of(&all, its.len(), 0) else { continue };
+            let bins = bin_items::<false>(&its, binning);
+            let (fast, slow) =
+                (best_split(&bins, all.bounds()), best_split_over_all_bins(&bins, all.bounds()));
+            assert_eq!(fast.map(|(k, c)| (k, c.to_bits())), slow.map(|(k, c)| (k, c.to_bits())));
+            checked += 1;
+        }
+        assert!(checked > 3000, "{checked}");
     }
 
     #[test]
