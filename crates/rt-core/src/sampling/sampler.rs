@@ -363,6 +363,10 @@ const PATH_SLOTS: u32 = 2;
 /// choice, point on the light), BSDF sampling two (lobe, direction),
 /// Russian roulette one; the rest are spare.
 pub const BOUNCE_SLOTS: u32 = 8;
+/// Slots below this ([`FILM_SLOT`], [`LENS_SLOT`] and those of bounces 1
+/// to 15) keep their sequences for the pixel a [`Sampler`] is in
+/// ([`PixelSequences`]); the random walks' are made per value.
+const CACHED_SLOTS: usize = 128;
 /// The first slot of the random walks' values: the walk of bounce b starts
 /// at `WALK_SLOTS + b·2²⁰` ([`Sampler::start_walk`]), far from any bounce's.
 const WALK_SLOTS: u32 = 1 << 31;
@@ -389,6 +393,13 @@ const WALK_SLOTS: u32 = 1 << 31;
 ///   sample draws and another does not (Russian roulette) does not shift
 ///   the later bounces' dimensions. At one sample per pixel the film
 ///   position is the pixel centre, as for the stratified method.
+///
+/// A Sobol sampler keeps the hashes of each slot's sequence for the pixel
+/// it is in ([`PixelSequences`]): they do not depend on the sample index,
+/// and a render takes a pixel's samples one after another, so they are
+/// made once per pixel and slot rather than once per value. The values are
+/// the same bit for bit; a render keeps one sampler per run of pixels
+/// rather than copying it per sample (it is 2 KiB).
 #[derive(Clone, Copy, Debug)]
 pub struct Sampler {
     kind: SamplerKind,
@@ -397,11 +408,109 @@ pub struct Sampler {
     /// Film positions stratified per [`open_ended_block`], not over `spp`.
     open_ended: bool,
     seed: u64,
+    /// [`seed_bits`] of `seed`, made once.
+    seed_bits: u64,
     stream: SampleRng,
-    /// Sobol: the current pixel's seed, its sample and the next slot.
-    pixel: u64,
+    /// The current sample: its pixel and index.
+    x: u32,
+    y: u32,
     sample: u32,
+    /// Sobol: the next slot.
     slot: u32,
+    /// Sobol: the current pixel's sequences.
+    sobol: PixelSequences,
+}
+
+/// A Sobol [`Sampler`]'s sequences for the pixel it is in: each slot's
+/// [`sobol::Sequence`] below [`CACHED_SLOTS`], made when the slot is first
+/// used in the pixel and kept for its later samples.
+#[derive(Clone, Copy, Debug)]
+struct PixelSequences {
+    /// [`sobol::image_bits`] of the image's seed.
+    image: u64,
+    /// The pixel and block of [`sobol::SEQUENCE_LENGTH`] samples the
+    /// sequences are for (none before the first sample).
+    key: (u32, u32, u32),
+    /// The pixel's seed ([`sobol::pixel_seed`]).
+    pixel: u64,
+    /// The current sample's index in its block, its bits reversed.
+    index_rev: u32,
+    /// Which pixel and block, counted from 1, the sequences are for: a
+    /// slot's is made for this one if its tag says so.
+    generation: u32,
+    slots: [Slot; CACHED_SLOTS],
+}
+
+/// A slot's sequence and the [`PixelSequences::generation`] it was made
+/// for (0: none yet).
+#[derive(Clone, Copy, Debug, Default)]
+struct Slot {
+    sequence: sobol::Sequence,
+    generation: u32,
+}
+
+impl PixelSequences {
+    /// None made yet, for the image of seed `seed`.
+    fn new(seed: u64) -> Self {
+        Self {
+            image: sobol::image_bits(seed),
+            key: (u32::MAX, u32::MAX, u32::MAX),
+            pixel: 0,
+            index_rev: 0,
+            generation: 0,
+            slots: [Slot::default(); CACHED_SLOTS],
+        }
+    }
+
+    /// Starts sample `k` of pixel (`x`, `y`): the sequences made so far
+    /// stay if the pixel and block are those of the last sample.
+    #[inline]
+    fn start(&mut self, x: u32, y: u32, k: u32) {
+        let key = (x, y, k / sobol::SEQUENCE_LENGTH);
+        if key != self.key || self.generation == 0 {
+            (self.key, self.pixel) = (key, sobol::pixel_seed_in(x, y, self.image));
+            self.generation = self.generation.wrapping_add(1);
+            if self.generation == 0 {
+                // Tags of 2³² pixels ago could match again: forget them.
+                self.slots = [Slot::default(); CACHED_SLOTS];
+                self.generation = 1;
+            }
+        }
+        self.index_rev = (k % sobol::SEQUENCE_LENGTH).reverse_bits();
+    }
+
+    /// Slot `slot`'s sequence for the current pixel and block.
+    #[inline(always)]
+    fn sequence(&mut self, slot: u32) -> sobol::Sequence {
+        match self.slots.get(slot as usize) {
+            Some(cached) if cached.generation == self.generation => cached.sequence,
+            _ => self.make(slot),
+        }
+    }
+
+    /// [`PixelSequences::sequence`] made, and kept if the slot is cached:
+    /// once per pixel and slot (out of line, so the loops that ask for
+    /// values keep the look-up only).
+    #[inline(never)]
+    fn make(&mut self, slot: u32) -> sobol::Sequence {
+        let sequence = sobol::Sequence::new(self.pixel, slot, self.key.2);
+        if let Some(cached) = self.slots.get_mut(slot as usize) {
+            *cached = Slot { sequence, generation: self.generation };
+        }
+        sequence
+    }
+
+    /// Slot `slot`'s 1D value for the current sample.
+    #[inline]
+    fn value_1d(&mut self, slot: u32) -> Real {
+        self.sequence(slot).value_1d_rev(self.index_rev)
+    }
+
+    /// Slot `slot`'s 2D value for the current sample.
+    #[inline]
+    fn value_2d(&mut self, slot: u32) -> (Real, Real) {
+        self.sequence(slot).value_2d_rev(self.index_rev)
+    }
 }
 
 impl Sampler {
@@ -413,10 +522,13 @@ impl Sampler {
             spp,
             open_ended: false,
             seed,
+            seed_bits: seed_bits(seed),
             stream: SampleRng::seeded(0, 0, 0, seed),
-            pixel: 0,
+            x: 0,
+            y: 0,
             sample: 0,
             slot: PATH_SLOTS,
+            sobol: PixelSequences::new(seed),
         }
     }
 
@@ -457,10 +569,12 @@ impl Sampler {
     /// Starts sample `k` of pixel (`x`, `y`): the values handed out next are that sample's.
     #[inline]
     pub fn start_pixel_sample(&mut self, x: u32, y: u32, k: u32) {
+        (self.x, self.y, self.sample) = (x, y, k);
         match self.kind {
-            SamplerKind::Stratified => self.stream = SampleRng::seeded(x, y, k, self.seed),
+            SamplerKind::Stratified => self.stream = SampleRng::with_seed_bits(x, y, k, self.seed_bits),
             SamplerKind::Sobol => {
-                (self.pixel, self.sample, self.slot) = (sobol::pixel_seed(x, y, self.seed), k, PATH_SLOTS)
+                self.sobol.start(x, y, k);
+                self.slot = PATH_SLOTS;
             }
         }
     }
@@ -497,8 +611,29 @@ impl Sampler {
             if self.spp == 1 && !self.open_ended {
                 return (0.5, 0.5);
             }
-            return sobol::value_2d(sobol::pixel_seed(x, y, self.seed), FILM_SLOT, k);
+            return sobol::value_2d(sobol::pixel_seed_in(x, y, self.sobol.image), FILM_SLOT, k);
         }
+        self.stratified_film_position(x, y, k)
+    }
+
+    /// [`Sampler::film_position`] of the current sample
+    /// ([`Sampler::start_pixel_sample`]), the same bit for bit: for many
+    /// samples of one pixel, a Sobol sampler makes its film slot's
+    /// sequence once.
+    #[inline(always)]
+    pub fn film(&mut self) -> (Real, Real) {
+        if self.kind == SamplerKind::Sobol {
+            if self.spp == 1 && !self.open_ended {
+                return (0.5, 0.5);
+            }
+            return self.sobol.value_2d(FILM_SLOT);
+        }
+        self.stratified_film_position(self.x, self.y, self.sample)
+    }
+
+    /// The stratified method's [`Sampler::film_position`].
+    #[inline(always)]
+    fn stratified_film_position(&self, x: u32, y: u32, k: u32) -> (Real, Real) {
         if self.open_ended {
             let block = open_ended_block(k);
             let strata = Strata::new(block.end - block.start);
@@ -522,9 +657,26 @@ impl Sampler {
     #[inline(always)]
     pub fn lens_position(&self, x: u32, y: u32, k: u32) -> (Real, Real) {
         if self.kind == SamplerKind::Sobol {
-            return sobol::value_2d(sobol::pixel_seed(x, y, self.seed), LENS_SLOT, k);
+            return sobol::value_2d(sobol::pixel_seed_in(x, y, self.sobol.image), LENS_SLOT, k);
         }
-        let h = mix(hash(x, y, k) ^ LENS_SALT ^ seed_bits(self.seed));
+        self.stratified_lens_position(x, y, k)
+    }
+
+    /// [`Sampler::lens_position`] of the current sample
+    /// ([`Sampler::start_pixel_sample`]), the same bit for bit (as
+    /// [`Sampler::film`] is the film position).
+    #[inline(always)]
+    pub fn lens(&mut self) -> (Real, Real) {
+        if self.kind == SamplerKind::Sobol {
+            return self.sobol.value_2d(LENS_SLOT);
+        }
+        self.stratified_lens_position(self.x, self.y, self.sample)
+    }
+
+    /// The stratified method's [`Sampler::lens_position`].
+    #[inline(always)]
+    fn stratified_lens_position(&self, x: u32, y: u32, k: u32) -> (Real, Real) {
+        let h = mix(hash(x, y, k) ^ LENS_SALT ^ self.seed_bits);
         (unit_float(h as u32), unit_float((h >> 32) as u32))
     }
 
@@ -535,7 +687,7 @@ impl Sampler {
             SamplerKind::Stratified => self.stream.next_pair().0,
             SamplerKind::Sobol => {
                 self.slot = self.slot.wrapping_add(1);
-                sobol::value_1d(self.pixel, self.slot.wrapping_sub(1), self.sample)
+                self.sobol.value_1d(self.slot.wrapping_sub(1))
             }
         }
     }
@@ -547,7 +699,7 @@ impl Sampler {
             SamplerKind::Stratified => self.stream.next_pair(),
             SamplerKind::Sobol => {
                 self.slot = self.slot.wrapping_add(1);
-                sobol::value_2d(self.pixel, self.slot.wrapping_sub(1), self.sample)
+                self.sobol.value_2d(self.slot.wrapping_sub(1))
             }
         }
     }
@@ -568,7 +720,13 @@ impl SampleRng {
     /// `seed`: images with different seeds are independent estimates (their
     /// noise can be measured by comparing them); seed 0 is the default image.
     pub fn seeded(x: u32, y: u32, sample: u32, seed: u64) -> Self {
-        Self(hash(x, y, sample) ^ 0x5851_F42D_4C95_7F2D ^ seed_bits(seed))
+        Self::with_seed_bits(x, y, sample, seed_bits(seed))
+    }
+
+    /// [`SampleRng::seeded`] from the seed's [`seed_bits`], made once.
+    #[inline]
+    fn with_seed_bits(x: u32, y: u32, sample: u32, bits: u64) -> Self {
+        Self(hash(x, y, sample) ^ 0x5851_F42D_4C95_7F2D ^ bits)
     }
 
     /// The next pair of numbers in [0, 1).
@@ -1077,6 +1235,66 @@ mod tests {
         };
         let side = Interval { lo: 0.0, hi: 1.0, n: 16 };
         chi_square::plane("open-ended", Rectangle { s: side, t: side }, 204_800, draw, &|_, _| 1.0);
+    }
+
+    #[test]
+    fn a_sobol_sampler_kept_over_many_pixels_hands_out_each_slots_values_bit_for_bit() {
+        // One sampler visits pixels in runs, back and forth, across the
+        // block boundary of the Sobol table, past its cached slots (deep
+        // bounces, walks) and through its tags' wrap-around: every value is
+        // the one sobol::value_1d/value_2d make from scratch, and the film
+        // and lens positions those of `film_position`/`lens_position`.
+        let seed = 9;
+        let mut sampler = sobol(64, seed);
+        let end = sobol::SEQUENCE_LENGTH;
+        let visits = [(3, 4, 0), (3, 4, 1), (3, 4, 2), (4, 3, 0), (3, 4, 3), (3, 4, end - 1), (3, 4, end)]
+            .into_iter()
+            .chain([(3, 4, end + 1), (3, 4, 5), (0, 0, 0), (0, 0, 0)]);
+        let wrap = [(3, 4, 0), (4, 3, 0)];
+        for (round, (x, y, k)) in visits.clone().chain(visits).chain(wrap).enumerate() {
+            if round == 23 {
+                // The tags wrap here: those made for the first pixel (tag 1
+                // after the last wrap) are not the second's.
+                let mut fresh = sobol(64, seed);
+                fresh.start_pixel_sample(3, 4, 0);
+                (0..16).for_each(|b| {
+                    fresh.start_bounce(b);
+                    fresh.get_2d();
+                });
+                sampler = fresh;
+                sampler.sobol.generation = u32::MAX;
+            }
+            let pixel = sobol::pixel_seed(x, y, seed);
+            sampler.start_pixel_sample(x, y, k);
+            assert_eq!(sampler.film(), sampler.film_position(x, y, k), "({x}, {y}) {k}");
+            assert_eq!(sampler.film(), sobol::value_2d(pixel, FILM_SLOT, k));
+            assert_eq!(sampler.lens(), sampler.lens_position(x, y, k));
+            for bounce in [1, 2, 7, 15, 16, 40] {
+                sampler.start_bounce(bounce);
+                let slot = PATH_SLOTS + bounce * BOUNCE_SLOTS;
+                assert_eq!(sampler.get_1d(), sobol::value_1d(pixel, slot, k), "bounce {bounce}, {k}");
+                assert_eq!(sampler.get_2d(), sobol::value_2d(pixel, slot + 1, k));
+            }
+            sampler.start_walk(3);
+            assert_eq!(sampler.get_2d(), sobol::value_2d(pixel, WALK_SLOTS + 3 * (1 << 20), k));
+        }
+    }
+
+    #[test]
+    fn the_current_samples_film_and_lens_positions_are_those_of_its_pixel_and_index() {
+        for kind in [SamplerKind::Stratified, SamplerKind::Sobol] {
+            for spp in [1, 4, 70] {
+                for mut sampler in
+                    [Sampler::new(spp, 2).with_kind(kind), Sampler::open_ended(2).with_kind(kind)]
+                {
+                    for (x, y, k) in [(0, 0, 0), (5, 1, 3), (5, 1, 2), (6, 1, 2), (6, 1, 1000)] {
+                        sampler.start_pixel_sample(x, y, k);
+                        assert_eq!(sampler.film(), sampler.film_position(x, y, k), "{kind:?} {spp} {k}");
+                        assert_eq!(sampler.lens(), sampler.lens_position(x, y, k));
+                    }
+                }
+            }
+        }
     }
 
     #[test]
