@@ -395,11 +395,11 @@ const WALK_SLOTS: u32 = 1 << 31;
 ///   position is the pixel centre, as for the stratified method.
 ///
 /// A Sobol sampler keeps the hashes of each slot's sequence for the pixel
-/// it is in ([`PixelSequences`]): they do not depend on the sample index,
-/// and a render takes a pixel's samples one after another, so they are
-/// made once per pixel and slot rather than once per value. The values are
-/// the same bit for bit; a render keeps one sampler per run of pixels
-/// rather than copying it per sample (it is 2 KiB).
+/// it is in: they do not depend on the sample index, and a render takes a
+/// pixel's samples one after another, so they are made once per pixel and
+/// slot rather than once per value. The values are the same bit for bit;
+/// a render keeps one sampler per run of pixels rather than copying it per
+/// sample (it is 2 KiB).
 #[derive(Clone, Copy, Debug)]
 pub struct Sampler {
     kind: SamplerKind,
