@@ -435,18 +435,19 @@ struct PixelSequences {
     pixel: u64,
     /// The current sample's index in its block, its bits reversed.
     index_rev: u32,
-    /// Which pixel and block, counted from 1, the sequences are for: a
-    /// slot's is made for this one if its tag says so.
+    /// Which pixel and block, counted from 1, the sequences are for: slot
+    /// i's sequence is made for this one if `tags[i]` says so (0: none yet).
     generation: u32,
-    slots: [Slot; CACHED_SLOTS],
-}
-
-/// A slot's sequence and the [`PixelSequences::generation`] it was made
-/// for (0: none yet).
-#[derive(Clone, Copy, Debug, Default)]
-struct Slot {
-    sequence: sobol::Sequence,
-    generation: u32,
+    tags: [u32; CACHED_SLOTS],
+    sequences: [sobol::Sequence; CACHED_SLOTS],
+    /// Whether eight slots' values can be made at once
+    /// ([`sobol::values_8x2`]), asked once.
+    wide: bool,
+    /// The current sample's values of slots `batch_slot..batch_slot + 8`
+    /// (a bounce's), dimension 0 and 1, made at once, if `batched`.
+    batch: [[f32; 8]; 2],
+    batch_slot: u32,
+    batched: bool,
 }
 
 impl PixelSequences {
@@ -458,7 +459,12 @@ impl PixelSequences {
             pixel: 0,
             index_rev: 0,
             generation: 0,
-            slots: [Slot::default(); CACHED_SLOTS],
+            tags: [0; CACHED_SLOTS],
+            sequences: [sobol::Sequence::default(); CACHED_SLOTS],
+            wide: sobol::values_8x2(&[sobol::Sequence::default(); 8], 0).is_some(),
+            batch: [[0.0; 8]; 2],
+            batch_slot: 0,
+            batched: false,
         }
     }
 
@@ -472,18 +478,40 @@ impl PixelSequences {
             self.generation = self.generation.wrapping_add(1);
             if self.generation == 0 {
                 // Tags of 2³² pixels ago could match again: forget them.
-                self.slots = [Slot::default(); CACHED_SLOTS];
+                self.tags = [0; CACHED_SLOTS];
                 self.generation = 1;
             }
         }
         self.index_rev = (k % sobol::SEQUENCE_LENGTH).reverse_bits();
+        self.batched = false;
+    }
+
+    /// Makes the current sample's values of the eight slots from `first`
+    /// at once, if they are cached slots and the processor can
+    /// ([`sobol::values_8x2`]).
+    #[inline(never)]
+    fn make_batch(&mut self, first: u32) {
+        let range = first as usize..first as usize + 8;
+        self.batched = false;
+        if !self.wide || range.end > CACHED_SLOTS {
+            return;
+        }
+        for slot in first..first + 8 {
+            if self.tags[slot as usize] != self.generation {
+                self.make(slot);
+            }
+        }
+        let sequences = self.sequences[range].try_into().expect("eight slots");
+        if let Some(values) = sobol::values_8x2(sequences, self.index_rev) {
+            (self.batch, self.batch_slot, self.batched) = (values, first, true);
+        }
     }
 
     /// Slot `slot`'s sequence for the current pixel and block.
     #[inline(always)]
     fn sequence(&mut self, slot: u32) -> sobol::Sequence {
-        match self.slots.get(slot as usize) {
-            Some(cached) if cached.generation == self.generation => cached.sequence,
+        match self.tags.get(slot as usize) {
+            Some(&tag) if tag == self.generation => self.sequences[slot as usize],
             _ => self.make(slot),
         }
     }
@@ -494,8 +522,10 @@ impl PixelSequences {
     #[inline(never)]
     fn make(&mut self, slot: u32) -> sobol::Sequence {
         let sequence = sobol::Sequence::new(self.pixel, slot, self.key.2);
-        if let Some(cached) = self.slots.get_mut(slot as usize) {
-            *cached = Slot { sequence, generation: self.generation };
+        if let (Some(tag), Some(cached)) =
+            (self.tags.get_mut(slot as usize), self.sequences.get_mut(slot as usize))
+        {
+            (*tag, *cached) = (self.generation, sequence);
         }
         sequence
     }
@@ -503,12 +533,20 @@ impl PixelSequences {
     /// Slot `slot`'s 1D value for the current sample.
     #[inline]
     fn value_1d(&mut self, slot: u32) -> Real {
+        let i = slot.wrapping_sub(self.batch_slot) as usize;
+        if self.batched && i < 8 {
+            return self.batch[0][i] as Real;
+        }
         self.sequence(slot).value_1d_rev(self.index_rev)
     }
 
     /// Slot `slot`'s 2D value for the current sample.
     #[inline]
     fn value_2d(&mut self, slot: u32) -> (Real, Real) {
+        let i = slot.wrapping_sub(self.batch_slot) as usize;
+        if self.batched && i < 8 {
+            return (self.batch[0][i] as Real, self.batch[1][i] as Real);
+        }
         self.sequence(slot).value_2d_rev(self.index_rev)
     }
 }
@@ -587,6 +625,7 @@ impl Sampler {
     pub fn start_bounce(&mut self, bounce: u32) {
         if self.kind == SamplerKind::Sobol {
             self.slot = PATH_SLOTS.wrapping_add(bounce.wrapping_mul(BOUNCE_SLOTS));
+            self.sobol.make_batch(self.slot);
         }
     }
 

@@ -76,6 +76,7 @@ pub fn value_2d(pixel: u64, slot: u32, k: u32) -> (Real, Real) {
 /// each value then costs two or three Owen scrambles and two table
 /// look-ups instead of also two 64-bit and two or three 32-bit hashes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
 pub struct Sequence {
     /// `hash(seed ^ 0x79c68e4a)`: the index shuffle's scramble.
     shuffle: u32,
@@ -147,6 +148,96 @@ impl Sequence {
     #[inline]
     fn shuffled_rev(&self, index_rev: u32) -> u32 {
         sobol_burley::parts::owen_scramble_rev(index_rev, self.shuffle)
+    }
+}
+
+/// Eight slots' values at once: for the sequences `sequences` (slots side
+/// by side) and the sample whose reversed index is `index_rev`, dimension 0
+/// and dimension 1 of each, the values [`Sequence::value_2d_rev`] gives,
+/// bit for bit (the same integer operations lane by lane, and the same
+/// float conversion). With AVX2; `None` without it.
+#[inline]
+pub fn values_8x2(sequences: &[Sequence; 8], index_rev: u32) -> Option<[[f32; 8]; 2]> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: AVX2 is available, checked just above.
+        return Some(unsafe { values_8x2_avx2(sequences, index_rev) });
+    }
+    let _ = (sequences, index_rev);
+    None
+}
+
+/// [`values_8x2`] with AVX2: the index shuffle and both Owen scrambles on
+/// eight lanes (`vpmulld`), the byte tables read by gathers, the bits
+/// reversed by byte shuffles (bytes swapped, then each byte's nibbles
+/// looked up reversed).
+///
+/// # Safety
+/// The processor must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn values_8x2_avx2(sequences: &[Sequence; 8], index_rev: u32) -> [[f32; 8]; 2] {
+    use std::arch::x86_64::*;
+    // Each sequence is three u32s (shuffle, scramble 0, scramble 1), so
+    // lane i's fields are at 3i, 3i + 1 and 3i + 2.
+    const _: () = assert!(std::mem::size_of::<Sequence>() == 12);
+    let base = sequences.as_ptr() as *const i32;
+    let lanes = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
+    // SAFETY (all loads below): in bounds of `sequences` (8 × 3 u32s) and
+    // of the byte tables (2 × 256 × 2 u32s), AVX2 as the caller promises.
+    unsafe {
+        let shuffle = _mm256_i32gather_epi32::<4>(base, lanes);
+        let scramble0 = _mm256_i32gather_epi32::<4>(base.add(1), lanes);
+        let scramble1 = _mm256_i32gather_epi32::<4>(base.add(2), lanes);
+        let owen = |n: __m256i, scramble: __m256i| {
+            let n = _mm256_xor_si256(n, _mm256_mullo_epi32(n, _mm256_set1_epi32(0x3d20adea)));
+            let n = _mm256_add_epi32(n, scramble);
+            let odd = _mm256_or_si256(_mm256_srli_epi32::<16>(scramble), _mm256_set1_epi32(1));
+            let n = _mm256_mullo_epi32(n, odd);
+            let n = _mm256_xor_si256(n, _mm256_mullo_epi32(n, _mm256_set1_epi32(0x05526c56)));
+            _mm256_xor_si256(n, _mm256_mullo_epi32(n, _mm256_set1_epi32(0x53a22864)))
+        };
+        let rev = owen(_mm256_set1_epi32(index_rev as i32), shuffle);
+        // Table entries: [half][byte][dimension], u32s.
+        let tables = byte_tables().as_ptr() as *const i32;
+        let hi = _mm256_slli_epi32::<1>(_mm256_srli_epi32::<24>(rev));
+        let lo = _mm256_add_epi32(
+            _mm256_slli_epi32::<1>(_mm256_and_si256(_mm256_srli_epi32::<16>(rev), _mm256_set1_epi32(0xff))),
+            _mm256_set1_epi32(512),
+        );
+        let u = _mm256_xor_si256(
+            _mm256_i32gather_epi32::<4>(tables, hi),
+            _mm256_i32gather_epi32::<4>(tables, lo),
+        );
+        let v = _mm256_xor_si256(
+            _mm256_i32gather_epi32::<4>(tables.add(1), hi),
+            _mm256_i32gather_epi32::<4>(tables.add(1), lo),
+        );
+        let reverse = |x: __m256i| {
+            let swap = _mm256_setr_epi8(
+                3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12, 3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8,
+                15, 14, 13, 12,
+            );
+            let x = _mm256_shuffle_epi8(x, swap);
+            let nibble = _mm256_set1_epi8(0x0f);
+            // Each nibble's bits reversed, as the low and as the high nibble.
+            let rev_low = _mm256_setr_epi8(
+                0x0, 0x8, 0x4, 0xc, 0x2, 0xa, 0x6, 0xe, 0x1, 0x9, 0x5, 0xd, 0x3, 0xb, 0x7, 0xf, 0x0, 0x8,
+                0x4, 0xc, 0x2, 0xa, 0x6, 0xe, 0x1, 0x9, 0x5, 0xd, 0x3, 0xb, 0x7, 0xf,
+            );
+            let rev_high = _mm256_slli_epi16::<4>(rev_low);
+            let low = _mm256_and_si256(x, nibble);
+            let high = _mm256_and_si256(_mm256_srli_epi16::<4>(x), nibble);
+            _mm256_or_si256(_mm256_shuffle_epi8(rev_high, low), _mm256_shuffle_epi8(rev_low, high))
+        };
+        let to_unit = |x: __m256i| {
+            let bits = _mm256_or_si256(_mm256_srli_epi32::<9>(x), _mm256_set1_epi32(0x3f80_0000));
+            _mm256_sub_ps(_mm256_castsi256_ps(bits), _mm256_set1_ps(1.0))
+        };
+        let mut out = [[0.0f32; 8]; 2];
+        _mm256_storeu_ps(out[0].as_mut_ptr(), to_unit(reverse(owen(u, scramble0))));
+        _mm256_storeu_ps(out[1].as_mut_ptr(), to_unit(reverse(owen(v, scramble1))));
+        out
     }
 }
 
@@ -282,6 +373,26 @@ mod tests {
                 assert_eq!(got, (u as Real, v as Real), "index {index}, seed {seed:#x}");
                 assert_eq!(got.0, sobol_burley::sample(index, 0, seed) as Real);
                 assert_eq!(sequence.value_1d(index), got.0);
+            }
+        }
+    }
+
+    #[test]
+    fn eight_slots_at_once_are_each_slots_values_bit_for_bit() {
+        let pixel = pixel_seed(5, 6, 7);
+        for first in [0, 10, 1000] {
+            let sequences: [Sequence; 8] = std::array::from_fn(|i| Sequence::new(pixel, first + i as u32, 0));
+            for index in (0..SEQUENCE_LENGTH).step_by(7).chain([SEQUENCE_LENGTH - 1]) {
+                let Some(values) = values_8x2(&sequences, index.reverse_bits()) else { return };
+                for (i, sequence) in sequences.iter().enumerate() {
+                    let (u, v) = sequence.value_2d(index);
+                    assert_eq!(
+                        (values[0][i] as Real, values[1][i] as Real),
+                        (u, v),
+                        "slot {}, {index}",
+                        first + i as u32
+                    );
+                }
             }
         }
     }
