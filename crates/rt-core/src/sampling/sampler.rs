@@ -397,9 +397,11 @@ const WALK_SLOTS: u32 = 1 << 31;
 /// A Sobol sampler keeps the hashes of each slot's sequence for the pixel
 /// it is in: they do not depend on the sample index, and a render takes a
 /// pixel's samples one after another, so they are made once per pixel and
-/// slot rather than once per value. The values are the same bit for bit;
-/// a render keeps one sampler per run of pixels rather than copying it per
-/// sample (it is 2 KiB).
+/// slot rather than once per value; with AVX2 it also makes a bounce's
+/// eight slots' values at once when the bounce starts
+/// ([`Sampler::start_bounce`]). The values are the same bit for bit; a
+/// render keeps one sampler per run of pixels rather than copying it per
+/// sample (about 2 KiB).
 #[derive(Clone, Copy, Debug)]
 pub struct Sampler {
     kind: SamplerKind,
@@ -619,8 +621,9 @@ impl Sampler {
 
     /// The values handed out next are bounce `bounce`'s (counting the first
     /// surface a camera ray meets as bounce 1): Sobol slots
-    /// `PATH_SLOTS + bounce·`[`BOUNCE_SLOTS`] on. The stratified method's
-    /// stream just goes on.
+    /// `PATH_SLOTS + bounce·`[`BOUNCE_SLOTS`] on, whose values a Sobol
+    /// sampler makes here, eight at once, where it can. The stratified
+    /// method's stream just goes on.
     #[inline]
     pub fn start_bounce(&mut self, bounce: u32) {
         if self.kind == SamplerKind::Sobol {
