@@ -6,7 +6,9 @@
 #   scripts/same_images.sh OLD_RT_VIEW NEW_RT_VIEW [WORK_DIR]
 #
 # Each scene is rendered at 128x96 with its own samples per pixel capped at
-# 32 (--seed 0 and --seed 7) to linear OpenEXR, which holds the 32-bit
+# 32 (--seed 0 and --seed 7; global-illumination scenes, whose every path
+# dimension comes from the sampler, also with --sampler sobol at seed 0)
+# to linear OpenEXR, which holds the 32-bit
 # floats exactly, and the files are compared byte for byte; the ray-count
 # lines of --stats are compared as text (the timing lines are not); and
 # `cast --pixels` at 32x24 is compared as text. Exit status 1 when anything
@@ -29,18 +31,26 @@ for scene in scenes/*.ron; do
   name=$(basename "$scene" .ron)
   spp=$(grep -o -E 'samples_per_pixel: *[0-9]+' "$scene" | grep -o -E '[0-9]+$' || echo 1)
   spp=$(( spp > 32 ? 32 : spp ))
-  for seed in 0 7; do
+  # Runs: "seed" or "seed sampler".
+  runs=("0" "7")
+  if grep -q 'global_illumination' "$scene"; then
+    runs+=("0 sobol")
+  fi
+  for run in "${runs[@]}"; do
+    read -r seed sampler <<< "$run"
+    tag=$seed${sampler:+-$sampler}
     for side in old new; do
       bin=$old; [[ $side == new ]] && bin=$new
       "$bin" render "$scene" --width 128 --height 96 --spp "$spp" --seed "$seed" --stats \
-        -o "$work/$side/$name-$seed.exr" 2> "$work/$side/$name-$seed.stats"
+        ${sampler:+--sampler "$sampler"} \
+        -o "$work/$side/$name-$tag.exr" 2> "$work/$side/$name-$tag.stats"
     done
-    if ! cmp -s "$work/old/$name-$seed.exr" "$work/new/$name-$seed.exr"; then
-      echo "DIFFERENT image: $name (seed $seed, $spp spp)"; differ=1
+    if ! cmp -s "$work/old/$name-$tag.exr" "$work/new/$name-$tag.exr"; then
+      echo "DIFFERENT image: $name (seed $seed${sampler:+, $sampler}, $spp spp)"; differ=1
     fi
-    if ! diff <(counts "$work/old/$name-$seed.stats") <(counts "$work/new/$name-$seed.stats") > /dev/null; then
-      echo "DIFFERENT ray counts: $name (seed $seed)"
-      diff <(counts "$work/old/$name-$seed.stats") <(counts "$work/new/$name-$seed.stats") || true
+    if ! diff <(counts "$work/old/$name-$tag.stats") <(counts "$work/new/$name-$tag.stats") > /dev/null; then
+      echo "DIFFERENT ray counts: $name (seed $seed${sampler:+, $sampler})"
+      diff <(counts "$work/old/$name-$tag.stats") <(counts "$work/new/$name-$tag.stats") || true
       differ=1
     fi
   done
@@ -54,6 +64,6 @@ for scene in scenes/*.ron; do
   echo "checked $name ($spp spp)"
 done
 if [[ $differ == 0 ]]; then
-  echo "every scene: same images (2 seeds), ray counts and cast output"
+  echo "every scene: same images (2 seeds; GI scenes also Sobol), ray counts and cast output"
 fi
 exit $differ

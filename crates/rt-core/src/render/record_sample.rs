@@ -20,9 +20,9 @@ impl Renderer<'_> {
         }
         let film = self.sampler.film_position(x, y, k);
         let lens = if self.view.has_lens() { self.sampler.lens_position(x, y, k) } else { (0.5, 0.5) };
-        let ray = self.primary_ray(x, y, k);
-        let hit = self.scene.cast(&ray);
         let mut sampler = self.sampler;
+        let ray = self.primary_ray(&mut sampler, x, y, k);
+        let hit = self.scene.cast(&ray);
         sampler.start_pixel_sample(x, y, k);
         let mut rec = PathRecorder::new(self.scene);
         let value =

@@ -363,6 +363,10 @@ const PATH_SLOTS: u32 = 2;
 /// choice, point on the light), BSDF sampling two (lobe, direction),
 /// Russian roulette one; the rest are spare.
 pub const BOUNCE_SLOTS: u32 = 8;
+/// Slots below this ([`FILM_SLOT`], [`LENS_SLOT`] and those of bounces 1
+/// to 15) keep their sequences for the pixel a [`Sampler`] is in
+/// ([`PixelSequences`]); the random walks' are made per value.
+const CACHED_SLOTS: usize = 128;
 /// The first slot of the random walks' values: the walk of bounce b starts
 /// at `WALK_SLOTS + b·2²⁰` ([`Sampler::start_walk`]), far from any bounce's.
 const WALK_SLOTS: u32 = 1 << 31;
@@ -389,6 +393,15 @@ const WALK_SLOTS: u32 = 1 << 31;
 ///   sample draws and another does not (Russian roulette) does not shift
 ///   the later bounces' dimensions. At one sample per pixel the film
 ///   position is the pixel centre, as for the stratified method.
+///
+/// A Sobol sampler keeps the hashes of each slot's sequence for the pixel
+/// it is in: they do not depend on the sample index, and a render takes a
+/// pixel's samples one after another, so they are made once per pixel and
+/// slot rather than once per value; with AVX2 it also makes a bounce's
+/// eight slots' values at once when the bounce starts
+/// ([`Sampler::start_bounce`]). The values are the same bit for bit; a
+/// render keeps one sampler per run of pixels rather than copying it per
+/// sample (about 2 KiB).
 #[derive(Clone, Copy, Debug)]
 pub struct Sampler {
     kind: SamplerKind,
@@ -397,11 +410,147 @@ pub struct Sampler {
     /// Film positions stratified per [`open_ended_block`], not over `spp`.
     open_ended: bool,
     seed: u64,
+    /// [`seed_bits`] of `seed`, made once.
+    seed_bits: u64,
     stream: SampleRng,
-    /// Sobol: the current pixel's seed, its sample and the next slot.
-    pixel: u64,
+    /// The current sample: its pixel and index.
+    x: u32,
+    y: u32,
     sample: u32,
+    /// Sobol: the next slot.
     slot: u32,
+    /// Sobol: the current pixel's sequences.
+    sobol: PixelSequences,
+}
+
+/// A Sobol [`Sampler`]'s sequences for the pixel it is in: each slot's
+/// [`sobol::Sequence`] below [`CACHED_SLOTS`], made when the slot is first
+/// used in the pixel and kept for its later samples.
+#[derive(Clone, Copy, Debug)]
+struct PixelSequences {
+    /// [`sobol::image_bits`] of the image's seed.
+    image: u64,
+    /// The pixel and block of [`sobol::SEQUENCE_LENGTH`] samples the
+    /// sequences are for (none before the first sample).
+    key: (u32, u32, u32),
+    /// The pixel's seed ([`sobol::pixel_seed`]).
+    pixel: u64,
+    /// The current sample's index in its block, its bits reversed.
+    index_rev: u32,
+    /// Which pixel and block, counted from 1, the sequences are for: slot
+    /// i's sequence is made for this one if `tags[i]` says so (0: none yet).
+    generation: u32,
+    tags: [u32; CACHED_SLOTS],
+    sequences: [sobol::Sequence; CACHED_SLOTS],
+    /// Whether eight slots' values can be made at once
+    /// ([`sobol::values_8x2`]), asked once.
+    wide: bool,
+    /// The current sample's values of slots `batch_slot..batch_slot + 8`
+    /// (a bounce's), dimension 0 and 1, made at once, if `batched`.
+    batch: [[f32; 8]; 2],
+    batch_slot: u32,
+    batched: bool,
+}
+
+impl PixelSequences {
+    /// None made yet, for the image of seed `seed`.
+    fn new(seed: u64) -> Self {
+        Self {
+            image: sobol::image_bits(seed),
+            key: (u32::MAX, u32::MAX, u32::MAX),
+            pixel: 0,
+            index_rev: 0,
+            generation: 0,
+            tags: [0; CACHED_SLOTS],
+            sequences: [sobol::Sequence::default(); CACHED_SLOTS],
+            wide: sobol::values_8x2(&[sobol::Sequence::default(); 8], 0).is_some(),
+            batch: [[0.0; 8]; 2],
+            batch_slot: 0,
+            batched: false,
+        }
+    }
+
+    /// Starts sample `k` of pixel (`x`, `y`): the sequences made so far
+    /// stay if the pixel and block are those of the last sample.
+    #[inline]
+    fn start(&mut self, x: u32, y: u32, k: u32) {
+        let key = (x, y, k / sobol::SEQUENCE_LENGTH);
+        if key != self.key || self.generation == 0 {
+            (self.key, self.pixel) = (key, sobol::pixel_seed_in(x, y, self.image));
+            self.generation = self.generation.wrapping_add(1);
+            if self.generation == 0 {
+                // Tags of 2³² pixels ago could match again: forget them.
+                self.tags = [0; CACHED_SLOTS];
+                self.generation = 1;
+            }
+        }
+        self.index_rev = (k % sobol::SEQUENCE_LENGTH).reverse_bits();
+        self.batched = false;
+    }
+
+    /// Makes the current sample's values of the eight slots from `first`
+    /// at once, if they are cached slots and the processor can
+    /// ([`sobol::values_8x2`]).
+    #[inline(never)]
+    fn make_batch(&mut self, first: u32) {
+        let range = first as usize..first as usize + 8;
+        self.batched = false;
+        if !self.wide || range.end > CACHED_SLOTS {
+            return;
+        }
+        for slot in first..first + 8 {
+            if self.tags[slot as usize] != self.generation {
+                self.make(slot);
+            }
+        }
+        let sequences = self.sequences[range].try_into().expect("eight slots");
+        if let Some(values) = sobol::values_8x2(sequences, self.index_rev) {
+            (self.batch, self.batch_slot, self.batched) = (values, first, true);
+        }
+    }
+
+    /// Slot `slot`'s sequence for the current pixel and block.
+    #[inline(always)]
+    fn sequence(&mut self, slot: u32) -> sobol::Sequence {
+        match self.tags.get(slot as usize) {
+            Some(&tag) if tag == self.generation => self.sequences[slot as usize],
+            _ => self.make(slot),
+        }
+    }
+
+    /// [`PixelSequences::sequence`] made, and kept if the slot is cached:
+    /// once per pixel and slot (out of line, so the loops that ask for
+    /// values keep the look-up only).
+    #[inline(never)]
+    fn make(&mut self, slot: u32) -> sobol::Sequence {
+        let sequence = sobol::Sequence::new(self.pixel, slot, self.key.2);
+        if let (Some(tag), Some(cached)) =
+            (self.tags.get_mut(slot as usize), self.sequences.get_mut(slot as usize))
+        {
+            (*tag, *cached) = (self.generation, sequence);
+        }
+        sequence
+    }
+
+    /// Slot `slot`'s 1D value for the current sample.
+    #[inline]
+    fn value_1d(&mut self, slot: u32) -> Real {
+        let i = slot.wrapping_sub(self.batch_slot) as usize;
+        if self.batched && i < 8 {
+            return self.batch[0][i] as Real;
+        }
+        self.sequence(slot).value_1d_rev(self.index_rev)
+    }
+
+    /// Slot `slot`'s 2D value for the current sample.
+    #[inline]
+    fn value_2d(&mut self, slot: u32) -> (Real, Real) {
+        let i = slot.wrapping_sub(self.batch_slot) as usize;
+        if self.batched && i < 8 {
+            return (self.batch[0][i] as Real, self.batch[1][i] as Real);
+        }
+        self.sequence(slot).value_2d_rev(self.index_rev)
+    }
 }
 
 impl Sampler {
@@ -413,10 +562,13 @@ impl Sampler {
             spp,
             open_ended: false,
             seed,
+            seed_bits: seed_bits(seed),
             stream: SampleRng::seeded(0, 0, 0, seed),
-            pixel: 0,
+            x: 0,
+            y: 0,
             sample: 0,
             slot: PATH_SLOTS,
+            sobol: PixelSequences::new(seed),
         }
     }
 
@@ -457,22 +609,26 @@ impl Sampler {
     /// Starts sample `k` of pixel (`x`, `y`): the values handed out next are that sample's.
     #[inline]
     pub fn start_pixel_sample(&mut self, x: u32, y: u32, k: u32) {
+        (self.x, self.y, self.sample) = (x, y, k);
         match self.kind {
-            SamplerKind::Stratified => self.stream = SampleRng::seeded(x, y, k, self.seed),
+            SamplerKind::Stratified => self.stream = SampleRng::with_seed_bits(x, y, k, self.seed_bits),
             SamplerKind::Sobol => {
-                (self.pixel, self.sample, self.slot) = (sobol::pixel_seed(x, y, self.seed), k, PATH_SLOTS)
+                self.sobol.start(x, y, k);
+                self.slot = PATH_SLOTS;
             }
         }
     }
 
     /// The values handed out next are bounce `bounce`'s (counting the first
     /// surface a camera ray meets as bounce 1): Sobol slots
-    /// `PATH_SLOTS + bounce·`[`BOUNCE_SLOTS`] on. The stratified method's
-    /// stream just goes on.
+    /// `PATH_SLOTS + bounce·`[`BOUNCE_SLOTS`] on, whose values a Sobol
+    /// sampler makes here, eight at once, where it can. The stratified
+    /// method's stream just goes on.
     #[inline]
     pub fn start_bounce(&mut self, bounce: u32) {
         if self.kind == SamplerKind::Sobol {
             self.slot = PATH_SLOTS.wrapping_add(bounce.wrapping_mul(BOUNCE_SLOTS));
+            self.sobol.make_batch(self.slot);
         }
     }
 
@@ -497,8 +653,29 @@ impl Sampler {
             if self.spp == 1 && !self.open_ended {
                 return (0.5, 0.5);
             }
-            return sobol::value_2d(sobol::pixel_seed(x, y, self.seed), FILM_SLOT, k);
+            return sobol::value_2d(sobol::pixel_seed_in(x, y, self.sobol.image), FILM_SLOT, k);
         }
+        self.stratified_film_position(x, y, k)
+    }
+
+    /// [`Sampler::film_position`] of the current sample
+    /// ([`Sampler::start_pixel_sample`]), the same bit for bit: for many
+    /// samples of one pixel, a Sobol sampler makes its film slot's
+    /// sequence once.
+    #[inline(always)]
+    pub fn film(&mut self) -> (Real, Real) {
+        if self.kind == SamplerKind::Sobol {
+            if self.spp == 1 && !self.open_ended {
+                return (0.5, 0.5);
+            }
+            return self.sobol.value_2d(FILM_SLOT);
+        }
+        self.stratified_film_position(self.x, self.y, self.sample)
+    }
+
+    /// The stratified method's [`Sampler::film_position`].
+    #[inline(always)]
+    fn stratified_film_position(&self, x: u32, y: u32, k: u32) -> (Real, Real) {
         if self.open_ended {
             let block = open_ended_block(k);
             let strata = Strata::new(block.end - block.start);
@@ -522,34 +699,61 @@ impl Sampler {
     #[inline(always)]
     pub fn lens_position(&self, x: u32, y: u32, k: u32) -> (Real, Real) {
         if self.kind == SamplerKind::Sobol {
-            return sobol::value_2d(sobol::pixel_seed(x, y, self.seed), LENS_SLOT, k);
+            return sobol::value_2d(sobol::pixel_seed_in(x, y, self.sobol.image), LENS_SLOT, k);
         }
-        let h = mix(hash(x, y, k) ^ LENS_SALT ^ seed_bits(self.seed));
+        self.stratified_lens_position(x, y, k)
+    }
+
+    /// [`Sampler::lens_position`] of the current sample
+    /// ([`Sampler::start_pixel_sample`]), the same bit for bit (as
+    /// [`Sampler::film`] is the film position).
+    #[inline(always)]
+    pub fn lens(&mut self) -> (Real, Real) {
+        if self.kind == SamplerKind::Sobol {
+            return self.sobol.value_2d(LENS_SLOT);
+        }
+        self.stratified_lens_position(self.x, self.y, self.sample)
+    }
+
+    /// The stratified method's [`Sampler::lens_position`].
+    #[inline(always)]
+    fn stratified_lens_position(&self, x: u32, y: u32, k: u32) -> (Real, Real) {
+        let h = mix(hash(x, y, k) ^ LENS_SALT ^ self.seed_bits);
         (unit_float(h as u32), unit_float((h >> 32) as u32))
     }
 
     /// The next dimension's value in [0, 1).
-    #[inline]
+    // Inlined with both methods: as a call it cost the stratified method
+    // more than its few instructions, and the Sobol method no less.
+    #[inline(always)]
     pub fn get_1d(&mut self) -> Real {
         match self.kind {
             SamplerKind::Stratified => self.stream.next_pair().0,
-            SamplerKind::Sobol => {
-                self.slot = self.slot.wrapping_add(1);
-                sobol::value_1d(self.pixel, self.slot.wrapping_sub(1), self.sample)
-            }
+            SamplerKind::Sobol => self.sobol_1d(),
         }
     }
 
     /// The next dimension's pair of values in [0, 1)².
-    #[inline]
+    #[inline(always)]
     pub fn get_2d(&mut self) -> (Real, Real) {
         match self.kind {
             SamplerKind::Stratified => self.stream.next_pair(),
-            SamplerKind::Sobol => {
-                self.slot = self.slot.wrapping_add(1);
-                sobol::value_2d(self.pixel, self.slot.wrapping_sub(1), self.sample)
-            }
+            SamplerKind::Sobol => self.sobol_2d(),
         }
+    }
+
+    /// The Sobol method's [`Sampler::get_1d`].
+    #[inline(always)]
+    fn sobol_1d(&mut self) -> Real {
+        self.slot = self.slot.wrapping_add(1);
+        self.sobol.value_1d(self.slot.wrapping_sub(1))
+    }
+
+    /// The Sobol method's [`Sampler::get_2d`].
+    #[inline(always)]
+    fn sobol_2d(&mut self) -> (Real, Real) {
+        self.slot = self.slot.wrapping_add(1);
+        self.sobol.value_2d(self.slot.wrapping_sub(1))
     }
 }
 
@@ -568,10 +772,17 @@ impl SampleRng {
     /// `seed`: images with different seeds are independent estimates (their
     /// noise can be measured by comparing them); seed 0 is the default image.
     pub fn seeded(x: u32, y: u32, sample: u32, seed: u64) -> Self {
-        Self(hash(x, y, sample) ^ 0x5851_F42D_4C95_7F2D ^ seed_bits(seed))
+        Self::with_seed_bits(x, y, sample, seed_bits(seed))
+    }
+
+    /// [`SampleRng::seeded`] from the seed's [`seed_bits`], made once.
+    #[inline]
+    fn with_seed_bits(x: u32, y: u32, sample: u32, bits: u64) -> Self {
+        Self(hash(x, y, sample) ^ 0x5851_F42D_4C95_7F2D ^ bits)
     }
 
     /// The next pair of numbers in [0, 1).
+    #[inline]
     pub fn next_pair(&mut self) -> (Real, Real) {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let h = mix(self.0);
@@ -1077,6 +1288,66 @@ mod tests {
         };
         let side = Interval { lo: 0.0, hi: 1.0, n: 16 };
         chi_square::plane("open-ended", Rectangle { s: side, t: side }, 204_800, draw, &|_, _| 1.0);
+    }
+
+    #[test]
+    fn a_sobol_sampler_kept_over_many_pixels_hands_out_each_slots_values_bit_for_bit() {
+        // One sampler visits pixels in runs, back and forth, across the
+        // block boundary of the Sobol table, past its cached slots (deep
+        // bounces, walks) and through its tags' wrap-around: every value is
+        // the one sobol::value_1d/value_2d make from scratch, and the film
+        // and lens positions those of `film_position`/`lens_position`.
+        let seed = 9;
+        let mut sampler = sobol(64, seed);
+        let end = sobol::SEQUENCE_LENGTH;
+        let visits = [(3, 4, 0), (3, 4, 1), (3, 4, 2), (4, 3, 0), (3, 4, 3), (3, 4, end - 1), (3, 4, end)]
+            .into_iter()
+            .chain([(3, 4, end + 1), (3, 4, 5), (0, 0, 0), (0, 0, 0)]);
+        let wrap = [(3, 4, 0), (4, 3, 0)];
+        for (round, (x, y, k)) in visits.clone().chain(visits).chain(wrap).enumerate() {
+            if round == 23 {
+                // The tags wrap here: those made for the first pixel (tag 1
+                // after the last wrap) are not the second's.
+                let mut fresh = sobol(64, seed);
+                fresh.start_pixel_sample(3, 4, 0);
+                (0..16).for_each(|b| {
+                    fresh.start_bounce(b);
+                    fresh.get_2d();
+                });
+                sampler = fresh;
+                sampler.sobol.generation = u32::MAX;
+            }
+            let pixel = sobol::pixel_seed(x, y, seed);
+            sampler.start_pixel_sample(x, y, k);
+            assert_eq!(sampler.film(), sampler.film_position(x, y, k), "({x}, {y}) {k}");
+            assert_eq!(sampler.film(), sobol::value_2d(pixel, FILM_SLOT, k));
+            assert_eq!(sampler.lens(), sampler.lens_position(x, y, k));
+            for bounce in [1, 2, 7, 15, 16, 40] {
+                sampler.start_bounce(bounce);
+                let slot = PATH_SLOTS + bounce * BOUNCE_SLOTS;
+                assert_eq!(sampler.get_1d(), sobol::value_1d(pixel, slot, k), "bounce {bounce}, {k}");
+                assert_eq!(sampler.get_2d(), sobol::value_2d(pixel, slot + 1, k));
+            }
+            sampler.start_walk(3);
+            assert_eq!(sampler.get_2d(), sobol::value_2d(pixel, WALK_SLOTS + 3 * (1 << 20), k));
+        }
+    }
+
+    #[test]
+    fn the_current_samples_film_and_lens_positions_are_those_of_its_pixel_and_index() {
+        for kind in [SamplerKind::Stratified, SamplerKind::Sobol] {
+            for spp in [1, 4, 70] {
+                for mut sampler in
+                    [Sampler::new(spp, 2).with_kind(kind), Sampler::open_ended(2).with_kind(kind)]
+                {
+                    for (x, y, k) in [(0, 0, 0), (5, 1, 3), (5, 1, 2), (6, 1, 2), (6, 1, 1000)] {
+                        sampler.start_pixel_sample(x, y, k);
+                        assert_eq!(sampler.film(), sampler.film_position(x, y, k), "{kind:?} {spp} {k}");
+                        assert_eq!(sampler.lens(), sampler.lens_position(x, y, k));
+                    }
+                }
+            }
+        }
     }
 
     #[test]

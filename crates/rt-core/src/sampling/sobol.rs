@@ -36,26 +36,28 @@ pub const SEQUENCE_LENGTH: u32 = 1 << 16;
 /// shuffled and scrambled differently.
 #[inline]
 pub fn pixel_seed(x: u32, y: u32, seed: u64) -> u64 {
-    let z = (x as u64) ^ ((y as u64) << 32) ^ PIXEL_SALT;
-    mix(mix(z) ^ mix(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(1)))
+    pixel_seed_in(x, y, image_bits(seed))
 }
 
-/// The 32-bit seed of slot `slot`'s sequence for the pixel of seed `pixel`,
-/// at sample `k` (whose index past [`SEQUENCE_LENGTH`] picks another
-/// sequence), and the index in it.
+/// What the image seed `seed` adds to every pixel's seed
+/// ([`pixel_seed_in`]): a hash of it, the same for every pixel, so a
+/// sampler makes it once per image.
 #[inline]
-fn sequence(pixel: u64, slot: u32, k: u32) -> (u32, u32) {
-    let block = (k / SEQUENCE_LENGTH) as u64;
-    let h = mix(pixel ^ mix((slot as u64) | (block << 32)));
-    (k % SEQUENCE_LENGTH, h as u32)
+pub fn image_bits(seed: u64) -> u64 {
+    mix(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(1))
+}
+
+/// [`pixel_seed`] of pixel (`x`, `y`) from its image's [`image_bits`].
+#[inline]
+pub fn pixel_seed_in(x: u32, y: u32, image: u64) -> u64 {
+    let z = (x as u64) ^ ((y as u64) << 32) ^ PIXEL_SALT;
+    mix(mix(z) ^ image)
 }
 
 /// Slot `slot`'s 1D value for sample `k` of the pixel of seed `pixel`, in [0, 1).
 #[inline]
 pub fn value_1d(pixel: u64, slot: u32, k: u32) -> Real {
-    let (index, seed) = sequence(pixel, slot, k);
-    let [u, _] = sobol_rev_pair(shuffled_rev(index, seed));
-    dimension_value(u, seed, 0)
+    Sequence::new(pixel, slot, k / SEQUENCE_LENGTH).value_1d(k % SEQUENCE_LENGTH)
 }
 
 /// Slot `slot`'s 2D value for sample `k` of the pixel of seed `pixel`, in
@@ -63,31 +65,187 @@ pub fn value_1d(pixel: u64, slot: u32, k: u32) -> Real {
 /// so a pixel's samples are stratified in the pair (the module's nets).
 #[inline]
 pub fn value_2d(pixel: u64, slot: u32, k: u32) -> (Real, Real) {
-    let (index, seed) = sequence(pixel, slot, k);
-    let [u, v] = sobol_rev_pair(shuffled_rev(index, seed));
-    (dimension_value(u, seed, 0), dimension_value(v, seed, 1))
+    Sequence::new(pixel, slot, k / SEQUENCE_LENGTH).value_2d(k % SEQUENCE_LENGTH)
 }
 
-/// Sample `index` of the sequence of seed `seed` shuffled (Burley §4: a
-/// nested uniform scramble of the index's reversed bits), still reversed:
-/// `sobol_burley::sample`'s first step.
-#[inline]
-fn shuffled_rev(index: u32, seed: u32) -> u32 {
-    use sobol_burley::parts::{hash, owen_scramble_rev};
-    owen_scramble_rev(index.reverse_bits(), hash(seed ^ 0x79c6_8e4a))
+/// One slot's sequence for one pixel and one block of [`SEQUENCE_LENGTH`]
+/// samples: the hashes of its seed that shuffle its index and scramble its
+/// two dimensions (`sobol_burley::sample`'s, Burley §§3–4). They do not
+/// depend on the sample index, so a sampler that takes many samples of one
+/// pixel makes them once per slot ([`super::sampler::Sampler`]'s cache);
+/// each value then costs two or three Owen scrambles and two table
+/// look-ups instead of also two 64-bit and two or three 32-bit hashes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
+pub struct Sequence {
+    /// `hash(seed ^ 0x79c68e4a)`: the index shuffle's scramble.
+    shuffle: u32,
+    /// Dimension d's Owen scramble, `hash(seed · 0x9c8f2d3b ^ salt_d)`.
+    scramble: [u32; 2],
 }
 
-/// Dimension `d` (0 or 1) of the sequence of seed `seed` from its unscrambled
-/// reversed Sobol value `sobol_rev`: Owen-scrambled by a hash of seed and
-/// dimension (Burley §3), its bits put back in order and made a float in
-/// [0, 1) from the top 23 — `sobol_burley::sample`'s last steps, with its
-/// constants for dimension set 0.
+impl Sequence {
+    /// Slot `slot`'s sequence for the pixel of seed `pixel`, for the
+    /// samples of block `block` (sample indices `block · SEQUENCE_LENGTH`
+    /// on): its 32-bit seed is a SplitMix64 hash of the three.
+    #[inline]
+    pub fn new(pixel: u64, slot: u32, block: u32) -> Self {
+        Self::of_seed(mix(pixel ^ mix((slot as u64) | ((block as u64) << 32))) as u32)
+    }
+
+    /// The sequence of 32-bit seed `seed` (`sobol_burley`'s `seed`).
+    #[inline]
+    fn of_seed(seed: u32) -> Self {
+        use sobol_burley::parts::hash;
+        // The crate's constants for dimension set 0.
+        const DIMENSION_SALT: [u32; 2] = [0x912f_69ba, 0x174f_18ab];
+        let scramble = seed.wrapping_mul(0x9c8f_2d3b);
+        Self {
+            shuffle: hash(seed ^ 0x79c6_8e4a),
+            scramble: [hash(scramble ^ DIMENSION_SALT[0]), hash(scramble ^ DIMENSION_SALT[1])],
+        }
+    }
+
+    /// Dimension 0 of sample `index` (< [`SEQUENCE_LENGTH`]), in [0, 1).
+    #[inline]
+    pub fn value_1d(&self, index: u32) -> Real {
+        self.value_1d_rev(index.reverse_bits())
+    }
+
+    /// Dimensions 0 and 1 of sample `index` (< [`SEQUENCE_LENGTH`]), in [0, 1)².
+    #[inline]
+    pub fn value_2d(&self, index: u32) -> (Real, Real) {
+        self.value_2d_rev(index.reverse_bits())
+    }
+
+    /// [`Sequence::value_1d`] of the sample whose index, bits reversed, is
+    /// `index_rev`: a sampler reverses a sample's index once for all its
+    /// slots (x86 has no instruction for it: some twenty).
+    #[inline]
+    pub fn value_1d_rev(&self, index_rev: u32) -> Real {
+        use sobol_burley::parts::owen_scramble_rev;
+        let [u, _] = sobol_rev_pair(self.shuffled_rev(index_rev));
+        to_unit(owen_scramble_rev(u, self.scramble[0]).reverse_bits())
+    }
+
+    /// [`Sequence::value_2d`] of the sample whose index, bits reversed, is
+    /// `index_rev`. The two scrambled values' bits are put back in order
+    /// by one 64-bit reversal (of v·2³² + u, which is rev(u)·2³² + rev(v)).
+    #[inline]
+    pub fn value_2d_rev(&self, index_rev: u32) -> (Real, Real) {
+        use sobol_burley::parts::owen_scramble_rev;
+        let [u, v] = sobol_rev_pair(self.shuffled_rev(index_rev));
+        let (u, v) = (owen_scramble_rev(u, self.scramble[0]), owen_scramble_rev(v, self.scramble[1]));
+        let both = ((v as u64) << 32 | u as u64).reverse_bits();
+        (to_unit((both >> 32) as u32), to_unit(both as u32))
+    }
+
+    /// The sample whose reversed index is `index_rev` shuffled (Burley §4:
+    /// a nested uniform scramble of the index's reversed bits), still
+    /// reversed: `sobol_burley::sample`'s first step. Its dimensions' values
+    /// are then Owen-scrambled (Burley §3), their bits put back in order
+    /// and made floats ([`to_unit`]): the crate's last steps.
+    #[inline]
+    fn shuffled_rev(&self, index_rev: u32) -> u32 {
+        sobol_burley::parts::owen_scramble_rev(index_rev, self.shuffle)
+    }
+}
+
+/// Eight slots' values at once: for the sequences `sequences` (slots side
+/// by side) and the sample whose reversed index is `index_rev`, dimension 0
+/// and dimension 1 of each, the values [`Sequence::value_2d_rev`] gives,
+/// bit for bit (the same integer operations lane by lane, and the same
+/// float conversion). With AVX2; `None` without it.
 #[inline]
-fn dimension_value(sobol_rev: u32, seed: u32, d: usize) -> Real {
-    use sobol_burley::parts::{hash, owen_scramble_rev, u32_to_f32_norm};
-    const DIMENSION_SALT: [u32; 2] = [0x912f_69ba, 0x174f_18ab];
-    let scramble = seed.wrapping_mul(0x9c8f_2d3b) ^ DIMENSION_SALT[d];
-    u32_to_f32_norm(owen_scramble_rev(sobol_rev, hash(scramble)).reverse_bits()) as Real
+pub fn values_8x2(sequences: &[Sequence; 8], index_rev: u32) -> Option<[[f32; 8]; 2]> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: AVX2 is available, checked just above.
+        return Some(unsafe { values_8x2_avx2(sequences, index_rev) });
+    }
+    let _ = (sequences, index_rev);
+    None
+}
+
+/// [`values_8x2`] with AVX2: the index shuffle and both Owen scrambles on
+/// eight lanes (`vpmulld`), the byte tables read by gathers, the bits
+/// reversed by byte shuffles (bytes swapped, then each byte's nibbles
+/// looked up reversed).
+///
+/// # Safety
+/// The processor must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn values_8x2_avx2(sequences: &[Sequence; 8], index_rev: u32) -> [[f32; 8]; 2] {
+    use std::arch::x86_64::*;
+    // Each sequence is three u32s (shuffle, scramble 0, scramble 1), so
+    // lane i's fields are at 3i, 3i + 1 and 3i + 2.
+    const _: () = assert!(std::mem::size_of::<Sequence>() == 12);
+    let base = sequences.as_ptr() as *const i32;
+    let lanes = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
+    // SAFETY (all loads below): in bounds of `sequences` (8 × 3 u32s) and
+    // of the byte tables (2 × 256 × 2 u32s), AVX2 as the caller promises.
+    unsafe {
+        let shuffle = _mm256_i32gather_epi32::<4>(base, lanes);
+        let scramble0 = _mm256_i32gather_epi32::<4>(base.add(1), lanes);
+        let scramble1 = _mm256_i32gather_epi32::<4>(base.add(2), lanes);
+        let owen = |n: __m256i, scramble: __m256i| {
+            let n = _mm256_xor_si256(n, _mm256_mullo_epi32(n, _mm256_set1_epi32(0x3d20adea)));
+            let n = _mm256_add_epi32(n, scramble);
+            let odd = _mm256_or_si256(_mm256_srli_epi32::<16>(scramble), _mm256_set1_epi32(1));
+            let n = _mm256_mullo_epi32(n, odd);
+            let n = _mm256_xor_si256(n, _mm256_mullo_epi32(n, _mm256_set1_epi32(0x05526c56)));
+            _mm256_xor_si256(n, _mm256_mullo_epi32(n, _mm256_set1_epi32(0x53a22864)))
+        };
+        let rev = owen(_mm256_set1_epi32(index_rev as i32), shuffle);
+        // Table entries: [half][byte][dimension], u32s.
+        let tables = byte_tables().as_ptr() as *const i32;
+        let hi = _mm256_slli_epi32::<1>(_mm256_srli_epi32::<24>(rev));
+        let lo = _mm256_add_epi32(
+            _mm256_slli_epi32::<1>(_mm256_and_si256(_mm256_srli_epi32::<16>(rev), _mm256_set1_epi32(0xff))),
+            _mm256_set1_epi32(512),
+        );
+        let u = _mm256_xor_si256(
+            _mm256_i32gather_epi32::<4>(tables, hi),
+            _mm256_i32gather_epi32::<4>(tables, lo),
+        );
+        let v = _mm256_xor_si256(
+            _mm256_i32gather_epi32::<4>(tables.add(1), hi),
+            _mm256_i32gather_epi32::<4>(tables.add(1), lo),
+        );
+        let reverse = |x: __m256i| {
+            let swap = _mm256_setr_epi8(
+                3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12, 3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8,
+                15, 14, 13, 12,
+            );
+            let x = _mm256_shuffle_epi8(x, swap);
+            let nibble = _mm256_set1_epi8(0x0f);
+            // Each nibble's bits reversed, as the low and as the high nibble.
+            let rev_low = _mm256_setr_epi8(
+                0x0, 0x8, 0x4, 0xc, 0x2, 0xa, 0x6, 0xe, 0x1, 0x9, 0x5, 0xd, 0x3, 0xb, 0x7, 0xf, 0x0, 0x8,
+                0x4, 0xc, 0x2, 0xa, 0x6, 0xe, 0x1, 0x9, 0x5, 0xd, 0x3, 0xb, 0x7, 0xf,
+            );
+            let rev_high = _mm256_slli_epi16::<4>(rev_low);
+            let low = _mm256_and_si256(x, nibble);
+            let high = _mm256_and_si256(_mm256_srli_epi16::<4>(x), nibble);
+            _mm256_or_si256(_mm256_shuffle_epi8(rev_high, low), _mm256_shuffle_epi8(rev_low, high))
+        };
+        let to_unit = |x: __m256i| {
+            let bits = _mm256_or_si256(_mm256_srli_epi32::<9>(x), _mm256_set1_epi32(0x3f80_0000));
+            _mm256_sub_ps(_mm256_castsi256_ps(bits), _mm256_set1_ps(1.0))
+        };
+        let mut out = [[0.0f32; 8]; 2];
+        _mm256_storeu_ps(out[0].as_mut_ptr(), to_unit(reverse(owen(u, scramble0))));
+        _mm256_storeu_ps(out[1].as_mut_ptr(), to_unit(reverse(owen(v, scramble1))));
+        out
+    }
+}
+
+/// A float in [0, 1) from the top 23 bits of `bits`
+/// (`sobol_burley::parts::u32_to_f32_norm`).
+#[inline]
+fn to_unit(bits: u32) -> Real {
+    sobol_burley::parts::u32_to_f32_norm(bits) as Real
 }
 
 /// The first two dimensions' reversed Sobol values of the (reversed,
@@ -192,11 +350,11 @@ mod tests {
 
     #[test]
     fn a_pair_is_the_first_two_dimensions_of_its_sequence() {
+        // Slot 4's sequence in the first block: seed mix(pixel ^ mix(4)).
         let pixel = pixel_seed(8, 9, 10);
+        let seed = mix(pixel ^ mix(4)) as u32;
         for k in [0, 1, 77, 4095] {
-            let (index, seed) = sequence(pixel, 4, k);
-            let pair =
-                (sobol_burley::sample(index, 0, seed) as Real, sobol_burley::sample(index, 1, seed) as Real);
+            let pair = (sobol_burley::sample(k, 0, seed) as Real, sobol_burley::sample(k, 1, seed) as Real);
             assert_eq!(value_2d(pixel, 4, k), pair);
             assert_eq!(value_1d(pixel, 4, k), pair.0);
         }
@@ -209,11 +367,32 @@ mod tests {
         // the 1D value `sample`'s dimension 0.
         for seed in [0, 1, 0x8000_0000, 0xdead_beef, u32::MAX, 0x79c6_8e4a] {
             for index in 0..SEQUENCE_LENGTH {
-                let [a, b] = sobol_rev_pair(shuffled_rev(index, seed));
+                let sequence = Sequence::of_seed(seed);
                 let [u, v, _, _] = sobol_burley::sample_4d(index, 0, seed);
-                let got = (dimension_value(a, seed, 0), dimension_value(b, seed, 1));
+                let got = sequence.value_2d(index);
                 assert_eq!(got, (u as Real, v as Real), "index {index}, seed {seed:#x}");
                 assert_eq!(got.0, sobol_burley::sample(index, 0, seed) as Real);
+                assert_eq!(sequence.value_1d(index), got.0);
+            }
+        }
+    }
+
+    #[test]
+    fn eight_slots_at_once_are_each_slots_values_bit_for_bit() {
+        let pixel = pixel_seed(5, 6, 7);
+        for first in [0, 10, 1000] {
+            let sequences: [Sequence; 8] = std::array::from_fn(|i| Sequence::new(pixel, first + i as u32, 0));
+            for index in (0..SEQUENCE_LENGTH).step_by(7).chain([SEQUENCE_LENGTH - 1]) {
+                let Some(values) = values_8x2(&sequences, index.reverse_bits()) else { return };
+                for (i, sequence) in sequences.iter().enumerate() {
+                    let (u, v) = sequence.value_2d(index);
+                    assert_eq!(
+                        (values[0][i] as Real, values[1][i] as Real),
+                        (u, v),
+                        "slot {}, {index}",
+                        first + i as u32
+                    );
+                }
             }
         }
     }
