@@ -254,6 +254,13 @@ impl Leaf {
         method: TriangleMethod,
     ) -> ([Real; BLOCKS * LANES], u32) {
         let mask = (0..blocks.len()).fold(0, |m, b| m | lanes.block(b).triangles() << (b * LANES));
+        // A leaf of whole objects only (the Cornell box's walls, spheres)
+        // has nothing to test: the block loop below would still write each
+        // block's `t` in four-lane pieces that the caller reads back whole,
+        // a store-to-load forwarding stall for nothing.
+        if mask == 0 {
+            return ([0.0; BLOCKS * LANES], 0);
+        }
         #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
         if let Ok(pair) = <&[Leaf; 2]>::try_from(blocks)
             && method == TriangleMethod::Watertight

@@ -130,15 +130,18 @@ impl Query {
         }
         for (b, leaf) in blocks.iter().enumerate() {
             let mut scalar = lanes.block(b).objects();
-            if let Some((block, mask, hits)) = found[b] {
+            // Borrowed, not copied out: the copy read the block's result in
+            // 16-byte pieces across the narrower stores that had just
+            // written it, which the store-to-load forwarding cannot serve.
+            if let Some((block, mask, hits)) = &found[b] {
                 for lane in lanes_of(hits.hit) {
-                    let normal = block.normal(lane, &hits, &ray);
+                    let normal = block.normal(lane, hits, &ray);
                     let object = leaf.object(lane) as usize;
                     if self.consider(Hit { t: hits.t[lane], object, primitive: 0, normal }) {
                         best = Best::Object;
                     }
                 }
-                scalar &= !mask;
+                scalar &= !*mask;
             }
             for lane in lanes_of(scalar) {
                 if self.test_object(objects, leaf.object(lane), methods) {

@@ -475,6 +475,9 @@ impl Scene {
     }
 
     /// The BVH query on a ray already rescaled by `2ᵏ`, with `t` mapped back.
+    /// Inlined into its callers, so that a single ray's set-up (rescaling, the
+    /// range) runs in one function up to the BVH's.
+    #[inline(always)]
     fn closest_hit_rescaled(&self, unit: &Ray, range: Interval, k: i32) -> Option<Hit> {
         let mut hit = self.bvh.closest_hit(&self.objects, unit, range, self.methods)?;
         if self.cuts && self.cut_out(unit, &hit) {
@@ -843,6 +846,7 @@ impl Scene {
 
 /// The ray rescaled by `2ᵏ` ([`Ray::rescaled`]), the range of `t` mapped to
 /// it, and `k`; `None` for a ray that can hit nothing.
+#[inline(always)]
 fn rescaled_query(ray: &Ray, range: Interval) -> Option<(Ray, Interval, i32)> {
     let (unit, k) = ray.rescaled()?;
     Some((unit, Interval::new(scale_pow2(range.min, -k), scale_pow2(range.max, -k)), k))
