@@ -88,6 +88,22 @@ impl Lanes {
     pub fn objects(self) -> u32 {
         self.0 >> LANES
     }
+    /// Whether any block of the leaf holds a whole object (most leaves of
+    /// a mesh hold only its triangles).
+    #[inline(always)]
+    pub fn has_objects(self) -> bool {
+        // The whole-object bits of every block: the upper half of each byte.
+        const OBJECT_BITS: u32 = {
+            let mut bits = 0;
+            let mut b = 0;
+            while b < BLOCKS {
+                bits |= ((1 << LANES) - 1) << (LANES as u32 + Lanes::BITS * b as u32);
+                b += 1;
+            }
+            bits
+        };
+        self.0 & OBJECT_BITS != 0
+    }
     /// The tests a ray makes in the leaf: one per block with triangles
     /// (they are tested at once), one per whole object.
     pub fn tests(self) -> u32 {

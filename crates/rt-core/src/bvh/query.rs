@@ -112,6 +112,9 @@ impl Query {
                 best = Best::Triangle(i / LANES, lane);
             }
         }
+        if !lanes.has_objects() {
+            return best;
+        }
         // The blocks' boxes and polygons four at a time (the same bits as
         // their own tests), all blocks against the same range before any
         // hit is taken, so that their tests do not wait on each other (a
