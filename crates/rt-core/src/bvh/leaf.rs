@@ -633,6 +633,20 @@ mod tests {
     }
 
     #[test]
+    fn a_leaf_has_objects_when_any_block_holds_a_whole_object() {
+        let triangles = Lanes(0b0111);
+        let object = Lanes(1 << LANES);
+        assert!(!triangles.has_objects());
+        assert!(!triangles.with_block(1, Lanes(0b1111)).has_objects());
+        assert!(object.has_objects());
+        assert!(triangles.with_block(1, Lanes(0b0001 | 1 << (LANES + 3))).has_objects());
+        for lane in 0..LANES {
+            assert!(!Lanes(1 << lane).with_block(1, Lanes(1 << lane)).has_objects(), "{lane}");
+            assert!(Lanes(1).with_block(1, Lanes(1 << (LANES + lane))).has_objects(), "{lane}");
+        }
+    }
+
+    #[test]
     fn lanes_outside_the_mask_and_unused_lanes_are_never_hit() {
         let tri = [[-1.0, -1.0, 1.0], [1.0, -1.0, 1.0], [0.0, 1.0, 1.0]];
         let (leaf, lanes) = leaf_of(&[tri, tri, tri]);
