@@ -291,6 +291,13 @@ impl Leaf {
                 return unsafe { Self::watertight_pair_avx2(pair, mask, ray, range) };
             }
         }
+        if let [leaf] = blocks {
+            // Widened in registers: copied into the eight-lane array in
+            // memory, its four `t`s would be read back eight at a time by
+            // the caller, a store-to-load forwarding stall.
+            let (block_t, hit) = leaf.intersect_triangles(mask, ray, range, method);
+            return (std::array::from_fn(|i| if i < LANES { block_t[i] } else { 0.0 }), hit);
+        }
         let mut t = [0.0; BLOCKS * LANES];
         let mut hit = 0;
         for (b, leaf) in blocks.iter().enumerate() {
