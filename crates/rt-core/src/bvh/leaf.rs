@@ -593,6 +593,23 @@ mod tests {
     }
 
     proptest! {
+        /// A leaf's normal of a triangle is its mesh's, bit for bit: a
+        /// closest-hit query takes it from either (`NORMALS_READ_UP_TO`).
+        #[test]
+        fn a_leaf_makes_its_triangles_normals_as_the_mesh_does(
+            corners in prop::array::uniform4(prop::array::uniform3(prop::array::uniform3(-1.0 as Real..1.0))),
+            scale in prop::sample::select(vec![1.0 as Real, 1e-3, 1e4, 1e20, 1e-20]),
+        ) {
+            let corners: Vec<[[Real; 3]; 3]> = corners.iter().map(|t| t.map(|p| p.map(|x| x * scale))).collect();
+            let positions = corners.iter().flatten().map(|&p| Vec3::from(p)).collect();
+            let triangles = (0..4u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
+            let mesh = Mesh::new(positions, triangles).unwrap();
+            let (leaf, _) = leaf_of(&corners);
+            for lane in 0..LANES {
+                prop_assert_eq!(leaf.normal(lane).to_array().map(Real::to_bits), mesh.normal(lane).to_array().map(Real::to_bits));
+            }
+        }
+
         /// The SIMD tests and the scalar one agree bit for bit, on random
         /// triangles and on triangles sharing edges and corners with rays
         /// through them (where edge functions are 0 and the exact

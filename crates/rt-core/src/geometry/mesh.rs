@@ -483,6 +483,23 @@ impl Mesh {
     pub fn normal(&self, i: usize) -> Vec3 {
         self.normals[i]
     }
+    /// Bytes of the list of triangle normals.
+    pub fn normal_list_bytes(&self) -> usize {
+        std::mem::size_of_val(self.normals.as_slice())
+    }
+    /// Asks the CPU to start loading [`Mesh::normal`]`(i)` into the cache
+    /// (no effect on results; nothing where the target has no prefetch).
+    #[inline(always)]
+    pub fn prefetch_normal(&self, i: usize) {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: prefetching never faults, whatever the address.
+        unsafe {
+            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+            _mm_prefetch::<_MM_HINT_T0>(self.normals.as_ptr().wrapping_add(i) as *const i8);
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = i;
+    }
     /// Whether the mesh bounds a volume, with its faces wound outward, as a
     /// translucent object's must: every edge belongs to exactly two faces,
     /// which run along it in opposite directions (so the winding is
