@@ -369,9 +369,9 @@ fn after_a_drag_or_the_wheel_no_row_of_an_older_view_is_shown_once_a_newer_one_i
     let dragged = full_after(&lines, first).unwrap();
 
     // Three wheel clicks on the image, again (up to five times in all,
-    // zooming in and out in turn) until a full render has started over an unfinished preview: the
-    // case where two views could mix, which a faster machine may not
-    // reach on the first try.
+    // zooming in and out in turn) until a full render has started over an
+    // unfinished preview: the case where two views could mix, which a
+    // faster machine may not reach on the first try.
     let mut previous = dragged;
     let mut lines = window.lines();
     for attempt in 0..5 {

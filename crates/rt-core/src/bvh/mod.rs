@@ -363,8 +363,9 @@ impl Bvh {
             // The normal from the corners in the leaf, which is still in the
             // cache, where the mesh's normal list is too long to stay in it
             // (a cache miss for incoherent rays). Same corners, same
-            // function, so the same bits as `Mesh::normal` (tested by the
-            // brute-force comparisons).
+            // function, so the same bits as `Mesh::normal` (a proptest in
+            // `leaf.rs` pins it; the brute-force comparisons' meshes are
+            // small enough to be read).
             Some((leaf, lane)) => query.finish_with_normal(leaf.normal(lane)),
             None => query.finish(objects),
         }
@@ -636,11 +637,11 @@ struct Closest<'a, 'q, const AVX2: bool> {
 /// corners. Reading is the cheaper of the two while the list stays in the
 /// cache: making it is a chain of two divisions, a square root and a third
 /// division. `rt-view bench --threads 1` on the 2-core development machine
-/// (docs/performance.md): reading made single rays 23–28 % faster on the
+/// (docs/performance.md): reading made single rays 23–29 % faster on the
 /// 10 k and 100 k meshes (120 KB and 1.2 MB of normals) and bounce rays
 /// 0–4 %; on the 1 M mesh (12 MB) single rays 9–12 % faster but bounce
 /// rays, whose normals are scattered over the list, 8 % slower.
-pub(crate) const NORMALS_READ_UP_TO: usize = 4 << 20;
+const NORMALS_READ_UP_TO: usize = 4 << 20;
 
 impl<'a, const AVX2: bool> LeafTest<'a> for Closest<'a, '_, AVX2> {
     #[inline(always)]
