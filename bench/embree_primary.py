@@ -30,6 +30,11 @@ bytes per triangle (BVH plus mesh).
 It prints medians, the hit counts (compare them with rt-view's), how many
 bounce rays hit the same primitive in both, and, from bench-out/bench.csv,
 rt-view's figures over Embree's for the same mesh and thread count.
+
+With --build-only it times the commits alone (no rays, no bounce files
+needed), the counterpart of `rt-view bench --build-only`: run the two in
+turn, several times, to compare builds on a machine whose speed drifts
+(docs/performance.md, "The build beside Embree's commit").
 """
 import argparse
 import csv
@@ -190,13 +195,37 @@ def measure(threads, runs):
     return res
 
 
+def build_only(out, threads, runs):
+    """Embree's commit time per mesh and thread count (medians of `runs`)."""
+    print(f"Intel Embree 4 (embreex): the scene commit alone (rtcCommitScene), medians of {runs}")
+    objs = sorted(glob.glob(os.path.join(out, "terrain_*.obj")), key=os.path.getsize)
+    if not objs:
+        raise SystemExit(f"no terrain_*.obj in {out}: run `rt-view bench --out {out}` first")
+    ctx = mp.get_context("fork")
+    cpus = sorted(os.sched_getaffinity(0))
+    for obj in objs:
+        label = os.path.basename(obj)[len("terrain_"):-len(".obj")]
+        DATA["verts"], DATA["tris"] = load_obj(obj)
+        for t in threads:
+            q = ctx.Queue()
+            p = ctx.Process(target=build_worker, args=(set(cpus[:t]), runs, q))
+            p.start()
+            build, _ = q.get()
+            p.join()
+            print(f"terrain {label}: {len(DATA['tris'])} triangles, {t} thread(s): commit {build:.4f} s", flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("out", help="the folder `rt-view bench --out` wrote")
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--threads", default="1,2", help="thread counts, comma-separated")
+    ap.add_argument("--build-only", action="store_true", help="time the scene commits alone")
     args = ap.parse_args()
     threads = [int(t) for t in args.threads.split(",")]
+    if args.build_only:
+        build_only(args.out, threads, args.runs)
+        return
     ours = {}
     bench_csv = os.path.join(args.out, "bench.csv")
     if os.path.exists(bench_csv):

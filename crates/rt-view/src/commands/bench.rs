@@ -103,19 +103,26 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         if args.build_only {
             for &threads in &args.threads {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-                let (mut builds, mut cpu) = (Vec::new(), Vec::new());
+                let (mut builds, mut cpu, mut system, mut faults) =
+                    (Vec::new(), Vec::new(), Vec::new(), Vec::new());
                 for _ in 0..runs {
                     let mesh = mesh.clone();
-                    let before = process_cpu_time();
+                    let (before, usage) = (process_cpu_time(), KernelUsage::now());
                     let scene = pool.install(|| scene_of(mesh))?;
                     cpu.push(process_cpu_time().saturating_sub(before));
+                    let spent = KernelUsage::now().since(usage);
+                    system.push(spent.system);
+                    faults.push(spent.page_faults);
                     builds.push(scene.bvh_stats().build_time);
                 }
+                faults.sort_unstable();
                 println!(
-                    "terrain {label}: {} triangles, {threads} thread(s): build {:.4} s, CPU of the scene set-up with it {:.4} s (medians of {runs}), SAH {:.2}, {} nodes, {} leaves",
+                    "terrain {label}: {} triangles, {threads} thread(s): build {:.4} s, CPU of the scene set-up with it {:.4} s, of which the kernel's {:.4} s, {} page faults (medians of {runs}), SAH {:.2}, {} nodes, {} leaves",
                     stats.primitives,
                     median(builds).as_secs_f64(),
                     median(cpu).as_secs_f64(),
+                    median(system).as_secs_f64(),
+                    faults[faults.len() / 2],
                     stats.sah_cost,
                     stats.nodes,
                     stats.leaves
@@ -203,6 +210,45 @@ fn process_cpu_time() -> Duration {
         .filter_map(|stat| stat.split_whitespace().next()?.parse::<u64>().ok())
         .sum();
     Duration::from_nanos(ns)
+}
+
+/// The kernel's share of this process's work so far (all threads): its
+/// system CPU time and the page faults it served without reading a file
+/// (`getrusage`'s `ru_stime` and `ru_minflt`). A build writes fresh memory
+/// (its items, tree, nodes and leaves); each first touch of a page is a
+/// fault the kernel serves by clearing the page, and in a virtual machine
+/// the host may have to fault the memory in as well, so the same build
+/// varies with how much of it it pays (docs/performance.md).
+#[derive(Clone, Copy)]
+struct KernelUsage {
+    system: Duration,
+    page_faults: u64,
+}
+
+impl KernelUsage {
+    #[cfg(unix)]
+    fn now() -> Self {
+        // SAFETY: getrusage writes one `rusage` into memory this owns; on
+        // failure (it has none for RUSAGE_SELF) the zeros stay.
+        let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+        unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut usage) };
+        let system = Duration::from_secs(usage.ru_stime.tv_sec.max(0) as u64)
+            + Duration::from_micros(usage.ru_stime.tv_usec.max(0) as u64);
+        Self { system, page_faults: usage.ru_minflt.max(0) as u64 }
+    }
+
+    #[cfg(not(unix))]
+    fn now() -> Self {
+        Self { system: Duration::ZERO, page_faults: 0 }
+    }
+
+    /// What was spent between `earlier` and this.
+    fn since(self, earlier: Self) -> Self {
+        Self {
+            system: self.system.saturating_sub(earlier.system),
+            page_faults: self.page_faults.saturating_sub(earlier.page_faults),
+        }
+    }
 }
 
 /// The median wall time of `runs` calls of `f`, after one untimed call
