@@ -18,36 +18,45 @@ pub(super) struct Collapsed {
     pub cost: f64,
 }
 
-/// Collapses `node` into `nodes` (appending); `leaf(first, count)` makes
-/// the child entry of the leaf over items `first..first + count`.
+/// Collapses `node`, whose children are in `arena` (a
+/// [`BuildNode::Subtree`] brings its own), into `nodes` (appending);
+/// `leaf(first, count)` makes the child entry of the leaf over items
+/// `first..first + count`.
 pub(super) fn collapse(
     node: &BuildNode,
+    arena: &[[BuildNode; 2]],
     nodes: &mut Vec<Node>,
     leaf: &mut impl FnMut(u32, u32) -> Child,
 ) -> Collapsed {
     let area = |n: &BuildNode| to_f64(n.bounds().surface_area());
+    let (node, arena) = node.resolve(arena);
     let BuildNode::Inner { children, .. } = node else {
         let BuildNode::Leaf { first, count, .. } = node else { unreachable!() };
         let child = leaf(*first, *count);
         let cost = area(node) * f64::from(child.lanes.tests());
         return Collapsed { child, depth: 0, stack: 0, cost };
     };
-    // The children it opens to, on the stack: `open[..len]`.
-    let mut open: [&BuildNode; WIDTH] = [node; WIDTH];
-    open[..2].copy_from_slice(&[&children[0], &children[1]]);
+    // The children it opens to, each with the arena of its own children,
+    // on the stack: `open[..len]`.
+    fn pair(children: u32, arena: &[[BuildNode; 2]]) -> [(&BuildNode, &[[BuildNode; 2]]); 2] {
+        let [a, b] = &arena[children as usize];
+        [a.resolve(arena), b.resolve(arena)]
+    }
+    let mut open: [(&BuildNode, &[[BuildNode; 2]]); WIDTH] = [(node, arena); WIDTH];
+    open[..2].copy_from_slice(&pair(*children, arena));
     let mut len = 2;
     while len < WIDTH {
         let widest = open[..len]
             .iter()
             .enumerate()
-            .filter(|(_, c)| matches!(c, BuildNode::Inner { .. }))
-            .max_by(|a, b| area(a.1).total_cmp(&area(b.1)));
-        let Some((slot, BuildNode::Inner { children, .. })) = widest.map(|(slot, c)| (slot, *c)) else {
+            .filter(|(_, c)| matches!(c.0, BuildNode::Inner { .. }))
+            .max_by(|a, b| area(a.1.0).total_cmp(&area(b.1.0)));
+        let Some((slot, (BuildNode::Inner { children, .. }, arena))) = widest.map(|(slot, c)| (slot, *c))
+        else {
             break;
         };
         open.copy_within(slot + 1..len, slot + 2);
-        open[slot] = &children[0];
-        open[slot + 1] = &children[1];
+        open[slot..slot + 2].copy_from_slice(&pair(*children, arena));
         len += 1;
     }
     let open = &open[..len];
@@ -56,8 +65,8 @@ pub(super) fn collapse(
     // A node visit costs TRAVERSAL_COST per unit of its area.
     let mut cost = area(node) * to_f64(super::build::TRAVERSAL_COST);
     let (mut depth, mut stack) = (0, 0);
-    for (slot, &c) in open.iter().enumerate() {
-        let below = collapse(c, nodes, leaf);
+    for (slot, &(c, arena)) in open.iter().enumerate() {
+        let below = collapse(c, arena, nodes, leaf);
         nodes[index].set(slot, c.bounds(), below.child);
         depth = depth.max(below.depth);
         stack = stack.max(below.stack);

@@ -223,7 +223,7 @@ impl Bvh {
                 Vec::with_capacity(node_bound)
             };
             leaves = huge_pages::with_capacity(blocks.len());
-            let root_box = tree.bounds();
+            let root_box = tree.root.bounds();
             bounds = Some(root_box);
             let items = &items;
             // The leaves' child entries, their blocks' slots counted in tree order.
@@ -245,7 +245,7 @@ impl Bvh {
             // is freed on the collapse's side too.
             let (root, ()) = rayon::join(
                 || {
-                    let root = collapse::collapse(&tree, &mut nodes, &mut leaf);
+                    let root = collapse::collapse(&tree.root, &tree.arena, &mut nodes, &mut leaf);
                     drop(tree);
                     root
                 },
