@@ -39,6 +39,7 @@ use crate::geometry::surface::SurfacePoint;
 use crate::integrators::interaction::SurfaceInteraction;
 use crate::integrators::random_walk::{RandomWalk, WalkEnd};
 use crate::lights::light_sampler::{LightSampler, Source};
+use crate::lights::light_source::LightSample;
 use crate::materials::bsdf::{self, Bsdf};
 use crate::materials::texture_lod::RayCone;
 use crate::math::color::Color;
@@ -184,16 +185,25 @@ impl<'s> PathTracer<'s> {
             // and outside are the facets' (step 6).
             let bsdf = si.bsdf_of(m, si.shading_normal.filter(|_| medium.is_none()));
 
-            // 3. Next-event estimation.
-            if bsdf.has_smooth_lobes() {
-                let term = beta * self.next_event(&sp, &bsdf, wo, lights, sampler, counts, rec);
+            // 3. Next-event estimation, and 4. BSDF sampling. Both samples
+            // are drawn before the shadow ray is cast (the sampler's values in
+            // the order light, then BSDF): the light's direction is a chain of
+            // square roots and divisions that the shadow ray waits for, and the
+            // BSDF's sample does not depend on it, so the processor works on
+            // both at once.
+            let light = bsdf.has_smooth_lobes().then(|| {
+                let u = sampler.get_1d();
+                let uv = sampler.get_2d();
+                self.light_sample(&sp, lights, u, uv)
+            });
+            let u = sampler.get_1d();
+            let scattered = bsdf.sample(wo, u, sampler.get_2d());
+            if let Some(light) = light {
+                let term = beta * self.next_event(&sp, &bsdf, wo, light, counts, rec);
                 radiance += term;
                 rec.contribution(ContributionKind::NextEvent, term);
             }
-
-            // 4. BSDF sampling.
-            let u = sampler.get_1d();
-            let Some(s) = bsdf.sample(wo, u, sampler.get_2d()) else {
+            let Some(s) = scattered else {
                 rec.event(|| Event::Stopped { reason: "no_scatter" });
                 break;
             };
@@ -261,27 +271,39 @@ impl<'s> PathTracer<'s> {
         radiance
     }
 
+    /// The light sample of next-event estimation at `sp`: a light chosen by
+    /// the [`LightSampler`] with `u`, and a direction towards it drawn with
+    /// `uv` ([`crate::lights::light_source::LightSource::sample`]), with the
+    /// light's choice probability; `None` where there is no light or no
+    /// direction.
+    #[inline(always)]
+    fn light_sample(
+        &self,
+        sp: &SurfacePoint,
+        lights: &LightSampler,
+        u: Real,
+        uv: (Real, Real),
+    ) -> Option<(Source, Real, LightSample)> {
+        let (source, chosen) = lights.choose(u)?;
+        let s = self.scene.light_source(source).sample(sp.p, uv)?;
+        Some((source, chosen, s))
+    }
+
     /// One light sample's contribution at `sp` (throughput not applied):
-    /// a light chosen by the [`LightSampler`], a direction towards it
-    /// ([`crate::lights::light_source::LightSource::sample`]), and, unless a shadow
-    /// ray finds something in the way, `f·cos θ·weight·w/P(light)` with w the
-    /// power heuristic of the light's density against the BSDF's (1 for a
-    /// light no ray can find).
-    #[allow(clippy::too_many_arguments)]
+    /// for `light`, what [`PathTracer::light_sample`] drew (`None` when it
+    /// drew nothing), unless a shadow ray finds something in the way,
+    /// `f·cos θ·weight·w/P(light)` with w the power heuristic of the light's
+    /// density against the BSDF's (1 for a light no ray can find).
     fn next_event<R: Recorder>(
         &self,
         sp: &SurfacePoint,
         bsdf: &Bsdf,
         wo: Vec3,
-        lights: &LightSampler,
-        sampler: &mut Sampler,
+        light: Option<(Source, Real, LightSample)>,
         counts: &mut RayCounts,
         rec: &mut R,
     ) -> Color {
-        let u = sampler.get_1d();
-        let uv = sampler.get_2d();
-        let Some((source, chosen)) = lights.choose(u) else { return Color::ZERO };
-        let Some(s) = self.scene.light_source(source).sample(sp.p, uv) else { return Color::ZERO };
+        let Some((source, chosen, s)) = light else { return Color::ZERO };
         let f = bsdf.eval(wo, s.wi);
         if f == Color::ZERO {
             return Color::ZERO;
