@@ -121,7 +121,11 @@ impl Emitter {
     }
 
     /// A direction from `p` towards the emitter for (u, v) ∈ [0,1)².
-    #[inline]
+    /// Inlined into the path tracer's loop, so that the sample stays in
+    /// registers (returned through memory, it was read back with loads
+    /// wider than the stores that wrote it, a store-to-load forwarding
+    /// stall).
+    #[inline(always)]
     pub fn sample(&self, p: Vec3, (u, v): (Real, Real)) -> Option<EmitterSample> {
         match &self.shape {
             Shape::Sphere { center, radius } => {

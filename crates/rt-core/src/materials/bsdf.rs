@@ -350,7 +350,11 @@ impl Bsdf {
         if cos_i <= 0.0 || cos_o <= 0.0 || (self.shaded && self.ng.dot(wi) <= 0.0) {
             return Color::ZERO;
         }
-        let mut f = self.diffuse * std::f32::consts::FRAC_1_PI;
+        // On four lanes, so that the three products are made, and kept, as
+        // one vector (the same bits): as `Color` they were made as one and
+        // two lanes, stored apart and read back with one 8-byte load, a
+        // store-to-load forwarding stall.
+        let mut f = Color::from(glam::Vec3A::from(self.diffuse) * std::f32::consts::FRAC_1_PI);
         let diffuse = f;
         if self.glossy > 0.0 {
             f += self.specular_color * (self.glossy * to_f32(self.ggx(self.local(wo), self.local(wi))));
