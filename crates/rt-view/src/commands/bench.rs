@@ -130,6 +130,21 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             }
             continue;
         }
+        // The builds first, while the process holds little more than the
+        // mesh (as Embree's commits are timed, in a process holding only the
+        // mesh's arrays). Timed after the ray sets below were made, the 1 M
+        // build on one thread took 0.26 s against 0.18–0.19 s here (two
+        // alternating runs each on a virtual machine, where memory handed
+        // back and taken again is slow to clear: docs/performance.md).
+        let mut builds = Vec::new();
+        for &threads in &args.threads {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+            builds.push(median(
+                (0..runs)
+                    .map(|_| pool.install(|| scene_of(mesh.clone())).map(|s| s.bvh_stats().build_time))
+                    .collect::<Result<_, _>>()?,
+            ));
+        }
         let settings = RenderSettings { image: ImageSize::new(WIDTH, HEIGHT)?, ..RenderSettings::default() };
         let renderer = Renderer::new(&scene, camera, &settings)?;
         let view = renderer.view_plane();
@@ -139,16 +154,11 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         write_rays(&args.out.join(format!("terrain_{label}.bounce")), &bounce, &bounce_ids)?;
         let hits = primary.iter().filter(|r| scene.cast(r).is_some()).count();
         let bounce_hits = bounce_ids.iter().filter(|&&id| id != u32::MAX).count();
-        for &threads in &args.threads {
+        for (&threads, &build) in args.threads.iter().zip(&builds) {
             eprintln!("terrain {label}: {threads} thread(s) ...");
             // A pool per measurement, dropped after it: idle workers of
             // another pool would compete for the cores.
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-            let build = median(
-                (0..runs)
-                    .map(|_| pool.install(|| scene_of(mesh.clone())).map(|s| s.bvh_stats().build_time))
-                    .collect::<Result<_, _>>()?,
-            );
             let rays = |f: &(dyn Fn() + Sync)| {
                 primary.len() as f64 / median_of(runs, || pool.install(f)).as_secs_f64() / 1e6
             };
