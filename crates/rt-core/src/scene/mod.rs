@@ -479,16 +479,12 @@ impl Scene {
     /// range) runs in one function up to the BVH's.
     #[inline(always)]
     fn closest_hit_rescaled(&self, unit: &Ray, range: Interval, k: i32) -> Option<Hit> {
-        let mut hit = self.bvh.closest_hit(&self.objects, unit, range, self.methods)?;
-        if self.cuts && self.cut_out(unit, &hit) {
-            hit = self.closest_past_cut_outs(unit, Interval::new(hit.t, range.max))?;
+        let found = self.bvh.closest_hit(&self.objects, unit, range, self.methods)?;
+        if self.cuts && self.cut_out(unit, &found) {
+            let hit = self.closest_past_cut_outs(unit, Interval::new(found.t, range.max))?;
+            return rescaled_hit(&hit, k);
         }
-        // The answer written field by field: with `hit.t` set in place, the
-        // hit was copied out with 16-byte loads across the 4-byte store of
-        // `t`, a stall the store-to-load forwarding cannot serve (12 % of
-        // this function's samples; docs/performance.md).
-        let t = rescale_t(hit.t, k)?;
-        Some(Hit { t, object: hit.object, primitive: hit.primitive, normal: hit.normal })
+        rescaled_hit(&found, k)
     }
 
     /// The nearest hit on `unit` (rescaled) in `range` that alpha does not
@@ -846,6 +842,18 @@ impl Scene {
             self.objects.iter().map(|o| &self.materials[o.material]),
         )
     }
+}
+
+/// `hit` of a ray rescaled by `2⁻ᵏ`, its `t` mapped back to the ray's
+/// own scale; `None` where that `t` is not finite. Written field by field
+/// from the hit the tree wrote: copied whole, or with `t` set in place,
+/// the hit was read back with 16-byte loads across the narrower stores
+/// that had just written it, a stall the store-to-load forwarding cannot
+/// serve (`docs/performance.md`).
+#[inline(always)]
+fn rescaled_hit(hit: &Hit, k: i32) -> Option<Hit> {
+    let t = rescale_t(hit.t, k)?;
+    Some(Hit { t, object: hit.object, primitive: hit.primitive, normal: hit.normal })
 }
 
 /// The ray rescaled by `2ᵏ` ([`Ray::rescaled`]), the range of `t` mapped to
