@@ -92,6 +92,10 @@ impl Primitive {
     /// The hit point `p = o + t·d` of a hit on `primitive` (the triangle
     /// index in a mesh) with geometric `normal`, moved onto the surface and
     /// given an error bound, so secondary rays can leave it safely.
+    /// Inlined into its callers, so that the point comes back in registers
+    /// (returned through memory, it was read back with loads wider than the
+    /// stores that wrote it, a store-to-load forwarding stall).
+    #[inline(always)]
     pub fn surface_point(&self, primitive: usize, normal: Vec3, p: Vec3) -> SurfacePoint {
         match self {
             Self::Sphere(s) => s.surface_point(p, normal),
