@@ -161,11 +161,17 @@ impl Query {
         self.best.map(|best| Hit { normal, ..best })
     }
 
-    /// The closest hit, with its normal.
+    /// The closest hit, with its normal: written field by field, each read
+    /// once from the best hit (copied whole, it was read with 16-byte loads
+    /// across the narrower stores the last leaf test had just made, a
+    /// store-to-load forwarding stall).
     pub fn finish(self, objects: &[Object]) -> Option<Hit> {
-        let mut hit = None;
-        self.finish_into(objects, &mut hit);
-        hit
+        let best = self.best?;
+        let normal = match object_primitive(objects, best.object as u32) {
+            Primitive::Mesh(mesh) => mesh.normal(best.primitive),
+            _ => best.normal,
+        };
+        Some(Hit { t: best.t, object: best.object, primitive: best.primitive, normal })
     }
 
     /// [`Query::finish`] into `out`, the normal written straight into its
