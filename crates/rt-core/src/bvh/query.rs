@@ -161,16 +161,15 @@ impl Query {
         self.best.map(|best| Hit { normal, ..best })
     }
 
-    /// The closest hit, with its normal: written field by field, each read
-    /// once from the best hit (copied whole, it was read with 16-byte loads
-    /// across the narrower stores the last leaf test had just made, a
-    /// store-to-load forwarding stall).
+    /// The closest hit, with its normal. A mesh triangle's is written field
+    /// by field, each read once from the best hit (copied whole and its
+    /// normal set in place, it was read with 16-byte loads across the
+    /// narrower stores the last leaf test had just made, a store-to-load
+    /// forwarding stall); a whole object's, whose test made its normal, is
+    /// the best hit as it is.
     pub fn finish(self, objects: &[Object]) -> Option<Hit> {
         let best = self.best?;
-        let normal = match object_primitive(objects, best.object as u32) {
-            Primitive::Mesh(mesh) => mesh.normal(best.primitive),
-            _ => best.normal,
-        };
+        let Some(normal) = mesh_normal(objects, &best) else { return Some(best) };
         Some(Hit { t: best.t, object: best.object, primitive: best.primitive, normal })
     }
 
@@ -182,10 +181,21 @@ impl Query {
     pub fn finish_into(&self, objects: &[Object], out: &mut Option<Hit>) {
         *out = self.best;
         if let Some(best) = out
-            && let Primitive::Mesh(mesh) = object_primitive(objects, best.object as u32)
+            && let Some(normal) = mesh_normal(objects, best)
         {
-            best.normal = mesh.normal(best.primitive);
+            best.normal = normal;
         }
+    }
+}
+
+/// The normal of `hit` where it is a mesh triangle: the mesh's own for the
+/// triangle (a leaf test leaves it unset); `None` for a whole object, whose
+/// test made it.
+#[inline(always)]
+fn mesh_normal(objects: &[Object], hit: &Hit) -> Option<Vec3> {
+    match object_primitive(objects, hit.object as u32) {
+        Primitive::Mesh(mesh) => Some(mesh.normal(hit.primitive)),
+        _ => None,
     }
 }
 

@@ -611,7 +611,7 @@ impl Scene {
         // the narrower stores that had just written it (a store-to-load
         // forwarding stall, a third of this function's samples).
         let Some((unit, k)) = ray.rescaled() else { return false };
-        let range = Interval::new(scale_pow2(range.min, -k), scale_pow2(range.max, -k));
+        let range = rescaled_range(range, k);
         self.bvh.any_hit(&self.objects, &unit, range, self.methods)
             && (!self.cuts || self.closest_past_cut_outs(&unit, range).is_some())
     }
@@ -865,7 +865,14 @@ fn rescaled_hit(hit: &Hit, k: i32) -> Option<Hit> {
 #[inline(always)]
 fn rescaled_query(ray: &Ray, range: Interval) -> Option<(Ray, Interval, i32)> {
     let (unit, k) = ray.rescaled()?;
-    Some((unit, Interval::new(scale_pow2(range.min, -k), scale_pow2(range.max, -k)), k))
+    Some((unit, rescaled_range(range, k), k))
+}
+
+/// The range of `t` of a ray mapped to the ray rescaled by `2ᵏ` (exact:
+/// both ends scaled by `2⁻ᵏ`).
+#[inline(always)]
+fn rescaled_range(range: Interval, k: i32) -> Interval {
+    Interval::new(scale_pow2(range.min, -k), scale_pow2(range.max, -k))
 }
 
 /// A scene's emitters and, for each object, the index of its emitter.
