@@ -100,50 +100,32 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         };
         let scene = scene_of(mesh.clone())?;
         let stats = scene.bvh_stats();
-        if args.build_only {
-            for &threads in &args.threads {
-                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-                let (mut builds, mut cpu, mut system, mut faults) =
-                    (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-                for _ in 0..runs {
-                    let mesh = mesh.clone();
-                    let (before, usage) = (process_cpu_time(), KernelUsage::now());
-                    let scene = pool.install(|| scene_of(mesh))?;
-                    cpu.push(process_cpu_time().saturating_sub(before));
-                    let spent = KernelUsage::now().since(usage);
-                    system.push(spent.system);
-                    faults.push(spent.page_faults);
-                    builds.push(scene.bvh_stats().build_time);
-                }
-                faults.sort_unstable();
-                println!(
-                    "terrain {label}: {} triangles, {threads} thread(s): build {:.4} s, CPU of the scene set-up with it {:.4} s, of which the kernel's {:.4} s, {} page faults (medians of {runs}), SAH {:.2}, {} nodes, {} leaves",
-                    stats.primitives,
-                    median(builds).as_secs_f64(),
-                    median(cpu).as_secs_f64(),
-                    median(system).as_secs_f64(),
-                    faults[faults.len() / 2],
-                    stats.sah_cost,
-                    stats.nodes,
-                    stats.leaves
-                );
-            }
-            continue;
-        }
         // The builds first, while the process holds little more than the
         // mesh (as Embree's commits are timed, in a process holding only the
         // mesh's arrays). Timed after the ray sets below were made, the 1 M
         // build on one thread took 0.26 s against 0.18–0.19 s here (two
         // alternating runs each on a virtual machine, where memory handed
         // back and taken again is slow to clear: docs/performance.md).
-        let mut builds = Vec::new();
-        for &threads in &args.threads {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-            builds.push(median(
-                (0..runs)
-                    .map(|_| pool.install(|| scene_of(mesh.clone())).map(|s| s.bvh_stats().build_time))
-                    .collect::<Result<_, _>>()?,
-            ));
+        let builds = args
+            .threads
+            .iter()
+            .map(|&threads| time_builds(threads, runs, &mesh, scene_of))
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        if args.build_only {
+            for (&threads, b) in args.threads.iter().zip(&builds) {
+                println!(
+                    "terrain {label}: {} triangles, {threads} thread(s): build {:.4} s, CPU of the scene set-up with it {:.4} s, of which the kernel's {:.4} s, {} page faults (medians of {runs}), SAH {:.2}, {} nodes, {} leaves",
+                    stats.primitives,
+                    b.build.as_secs_f64(),
+                    b.cpu.as_secs_f64(),
+                    b.system.as_secs_f64(),
+                    b.page_faults,
+                    stats.sah_cost,
+                    stats.nodes,
+                    stats.leaves
+                );
+            }
+            continue;
         }
         let settings = RenderSettings { image: ImageSize::new(WIDTH, HEIGHT)?, ..RenderSettings::default() };
         let renderer = Renderer::new(&scene, camera, &settings)?;
@@ -154,7 +136,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         write_rays(&args.out.join(format!("terrain_{label}.bounce")), &bounce, &bounce_ids)?;
         let hits = primary.iter().filter(|r| scene.cast(r).is_some()).count();
         let bounce_hits = bounce_ids.iter().filter(|&&id| id != u32::MAX).count();
-        for (&threads, &build) in args.threads.iter().zip(&builds) {
+        for (&threads, build) in args.threads.iter().zip(builds.iter().map(|b| b.build)) {
             eprintln!("terrain {label}: {threads} thread(s) ...");
             // A pool per measurement, dropped after it: idle workers of
             // another pool would compete for the cores.
@@ -220,6 +202,48 @@ fn process_cpu_time() -> Duration {
         .filter_map(|stat| stat.split_whitespace().next()?.parse::<u64>().ok())
         .sum();
     Duration::from_nanos(ns)
+}
+
+/// Medians over the builds of [`time_builds`].
+struct BuildTimes {
+    /// The BVH's own build time ([`rt_core::bvh::BvhStats::build_time`]).
+    build: Duration,
+    /// The CPU time of the whole scene set-up, all threads ([`process_cpu_time`]).
+    cpu: Duration,
+    /// The kernel's share of it, and its page faults ([`KernelUsage`]).
+    system: Duration,
+    page_faults: u64,
+}
+
+/// Makes `runs` scenes of `mesh` with `scene_of` on a pool of `threads`
+/// threads (made for these builds and dropped after them: idle workers of
+/// another pool would compete for the cores) and times each; the mesh is
+/// copied for each before the clocks start.
+fn time_builds<E: std::error::Error + Send + Sync + 'static>(
+    threads: usize,
+    runs: usize,
+    mesh: &Mesh,
+    scene_of: impl Fn(Mesh) -> Result<Scene, E> + Sync,
+) -> anyhow::Result<BuildTimes> {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+    let (mut build, mut cpu, mut system, mut page_faults) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..runs {
+        let mesh = mesh.clone();
+        let (before, usage) = (process_cpu_time(), KernelUsage::now());
+        let made = pool.install(|| scene_of(mesh))?;
+        cpu.push(process_cpu_time().saturating_sub(before));
+        let spent = KernelUsage::now().since(usage);
+        system.push(spent.system);
+        page_faults.push(spent.page_faults);
+        build.push(made.bvh_stats().build_time);
+    }
+    page_faults.sort_unstable();
+    Ok(BuildTimes {
+        build: median(build),
+        cpu: median(cpu),
+        system: median(system),
+        page_faults: page_faults[page_faults.len() / 2],
+    })
 }
 
 /// The kernel's share of this process's work so far (all threads): its
