@@ -110,6 +110,9 @@ pub struct Bvh {
     object_blocks: Vec<ObjectBlock>,
     /// Objects without bounds (planes), tested on every query.
     unbounded: Vec<u32>,
+    /// Whether any leaf can hold mesh triangles (the scene has a mesh): a
+    /// query prepares its ray for the triangle test only then.
+    triangles: bool,
     /// The box around every bounded object; `None` if there is none.
     bounds: Option<Aabb>,
     stats: BvhStats,
@@ -123,6 +126,13 @@ pub struct Bvh {
 /// 100 000-triangle terrain's: 1.4 MB in 5.4 MB of room) would pay for
 /// clearing a whole huge page it does not fill (docs/performance.md).
 const LARGE_NODES: usize = 16 << 20;
+
+/// Whether any of `objects` is a mesh, whose triangles the leaves test with
+/// the watertight test ([`Leaf::new`] puts every other primitive in a
+/// whole-object lane).
+fn has_meshes(objects: &[Object]) -> bool {
+    objects.iter().any(|o| matches!(o.primitive, Primitive::Mesh(_)))
+}
 
 /// One build item per bounded primitive of `objects`, in object order, a
 /// mesh's triangles one by one in index order, degenerate ones (zero normal)
@@ -285,7 +295,8 @@ impl Bvh {
             sah_cost,
             build_time: start.elapsed(),
         };
-        Self { nodes, leaves, object_blocks, stack_bound, unbounded, bounds, stats }
+        let triangles = has_meshes(objects);
+        Self { nodes, leaves, object_blocks, stack_bound, unbounded, triangles, bounds, stats }
     }
 
     /// The box around every bounded object; `None` if there is none.
@@ -343,7 +354,7 @@ impl Bvh {
         range: Interval,
         methods: Methods,
     ) -> Option<Hit> {
-        let mut query = Query::new(ray, range);
+        let mut query = Query::new(ray, range, self.triangles);
         query.test_unbounded(&self.unbounded, objects, methods);
         // Boxes entering beyond the best hit so far cannot improve on it (one
         // entering exactly there can still win a tie, and is visited).
@@ -374,7 +385,7 @@ impl Bvh {
     /// Whether anything is hit with `t` in `range` (shadow rays): stops at
     /// the first hit found.
     pub fn any_hit(&self, objects: &[Object], ray: &Ray, range: Interval, methods: Methods) -> bool {
-        let prepared = TriangleRay::new(ray);
+        let prepared = if self.triangles { TriangleRay::new(ray) } else { TriangleRay::unprepared(ray) };
         let hits =
             |object: u32| object_primitive(objects, object).intersect_with(ray, range, methods).is_some();
         if self.unbounded.iter().any(|&object| hits(object)) {

@@ -217,6 +217,7 @@ impl Bvh {
             object_blocks,
             stack_bound: stack.first().copied().unwrap_or(0),
             unbounded: a.unbounded.to_vec(),
+            triangles: super::has_meshes(objects),
             bounds: a.bounds,
             stats,
         })

@@ -34,9 +34,20 @@ pub(super) struct Query {
 }
 
 impl Query {
+    /// The query of `ray` over `range`; its triangle preparation made only
+    /// if the tree holds `triangles` (a tree without them never reads it).
     #[inline(always)]
-    pub fn new(ray: &Ray, range: Interval) -> Self {
-        Self { prepared: TriangleRay::new(ray), range, best: None }
+    pub fn new(ray: &Ray, range: Interval, triangles: bool) -> Self {
+        let prepared = if triangles { TriangleRay::new(ray) } else { TriangleRay::unprepared(ray) };
+        Self { prepared, range, best: None }
+    }
+
+    /// [`Query::new`] for one of a packet's coherent rays
+    /// ([`TriangleRay::new_coherent`]: the same query).
+    #[inline(always)]
+    pub fn coherent(ray: &Ray, range: Interval, triangles: bool) -> Self {
+        let prepared = if triangles { TriangleRay::new_coherent(ray) } else { TriangleRay::unprepared(ray) };
+        Self { prepared, range, best: None }
     }
 
     /// The `t` of the best hit so far.
