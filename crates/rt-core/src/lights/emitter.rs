@@ -13,6 +13,13 @@
 //!   twelve), then a uniform point on it; the density over area is
 //!   `1/A` for the whole object, and over solid angle `r²/(A·|cos θ_l|)`
 //!   (pbrt-v4 §4.2.3);
+//! - a **parallelogram** (a four-cornered polygon with `p₀ + p₂ = p₁ + p₃`
+//!   as computed, as a rectangular lamp has) by area too, but as one piece: the
+//!   point `p₀ + u·(p₁ − p₀) + v·(p₃ − p₀)` is uniform over it for (u, v)
+//!   uniform in [0,1)², a linear map with constant Jacobian `A`, so the
+//!   density is the same `1/A`; there is no triangle to choose, no square
+//!   root, and the sampler's stratification of (u, v) carries over to the
+//!   lamp unwarped;
 //! - an emissive **plane** has no finite area to sample: it lights the scene
 //!   only through rays that happen to hit it.
 
@@ -52,6 +59,11 @@ enum Shape {
     /// more than the triangles: triangle `i` spans `cumulative[i]` to
     /// `cumulative[i + 1]`, with no branch for the first), and the total.
     Triangles { corners: Vec<[Vec3; 3]>, normals: Vec<Vec3>, cumulative: Vec<Real>, area: Real },
+    /// A parallelogram, sampled by area as one piece: the corner `origin`,
+    /// the `edges` from it to its two neighbours, its unit `normal` (the
+    /// polygon's), its `area` `|e₁ × e₂|`, and its two triangles (for
+    /// [`Emitter::triangles`]).
+    Parallelogram { origin: Vec3, edges: [Vec3; 2], normal: Vec3, area: Real, corners: [[Vec3; 3]; 2] },
     /// An infinite plane: not sampled.
     Unbounded,
 }
@@ -79,7 +91,12 @@ impl Emitter {
             }
             Primitive::Plane(_) => return Ok(Self { object, radiance, shape: Shape::Unbounded }),
             Primitive::Triangle(t) => vec![t.corners()],
-            Primitive::Polygon(p) => p.triangulate().ok_or(EmitterError::SelfCrossingPolygon)?,
+            Primitive::Polygon(p) => {
+                if let Some(shape) = parallelogram(p) {
+                    return Ok(Self { object, radiance, shape });
+                }
+                p.triangulate().ok_or(EmitterError::SelfCrossingPolygon)?
+            }
             Primitive::Aabb(b) => box_triangles(b.min(), b.max()),
             Primitive::Mesh(m) => (0..m.triangle_count()).map(|i| m.triangle(i)).collect(),
         };
@@ -104,6 +121,7 @@ impl Emitter {
     pub fn triangles(&self) -> &[[Vec3; 3]] {
         match &self.shape {
             Shape::Triangles { corners, .. } => corners,
+            Shape::Parallelogram { corners, .. } => corners,
             _ => &[],
         }
     }
@@ -115,7 +133,7 @@ impl Emitter {
         let pi = std::f64::consts::PI as Real;
         match &self.shape {
             Shape::Sphere { radius, .. } => pi * l * 4.0 * pi * radius * radius,
-            Shape::Triangles { area, .. } => pi * l * area,
+            Shape::Triangles { area, .. } | Shape::Parallelogram { area, .. } => pi * l * area,
             Shape::Unbounded => 0.0,
         }
     }
@@ -151,18 +169,29 @@ impl Emitter {
                 let su = u.sqrt();
                 let (b0, b1) = (1.0 - su, v * su);
                 let x = a * b0 + b * b1 + c * (1.0 - b0 - b1);
-                let to = x - p;
-                let distance = to.length();
-                let wi = normalize_robust(to)?;
-                let cos_light = -wi.dot(normals[i]);
-                if cos_light <= 0.0 {
-                    return None; // The back of the emitter: no light towards p.
-                }
-                let pdf = distance * distance / (area * cos_light);
-                pdf.is_finite().then_some(EmitterSample { wi, distance, radiance: self.radiance, pdf })
+                self.towards(p, x, normals[i], *area)
+            }
+            Shape::Parallelogram { origin, edges, normal, area, .. } => {
+                self.towards(p, *origin + edges[0] * u + edges[1] * v, *normal, *area)
             }
             Shape::Unbounded => None,
         }
+    }
+
+    /// The sample towards the point `x` of an emitter sampled by area
+    /// (total `area`) whose unit normal there is `normal`: density
+    /// `r²/(A·cos θ_l)` over solid angle; `None` from behind it.
+    #[inline(always)]
+    fn towards(&self, p: Vec3, x: Vec3, normal: Vec3, area: Real) -> Option<EmitterSample> {
+        let to = x - p;
+        let distance = to.length();
+        let wi = normalize_robust(to)?;
+        let cos_light = -wi.dot(normal);
+        if cos_light <= 0.0 {
+            return None; // The back of the emitter: no light towards p.
+        }
+        let pdf = distance * distance / (area * cos_light);
+        pdf.is_finite().then_some(EmitterSample { wi, distance, radiance: self.radiance, pdf })
     }
 
     /// The density over solid angle with which [`Emitter::sample`] picks the
@@ -175,13 +204,35 @@ impl Emitter {
                 let d = (*center - p).length();
                 if d > *radius { SphereCone::new(d, *radius).pdf() } else { 0.0 }
             }
-            Shape::Triangles { area, .. } => {
+            Shape::Triangles { area, .. } | Shape::Parallelogram { area, .. } => {
                 let cos_light = wi.dot(normal).abs();
                 if cos_light > 0.0 { distance * distance / (area * cos_light) } else { 0.0 }
             }
             Shape::Unbounded => 0.0,
         }
     }
+}
+
+/// The polygon `p` as a [`Shape::Parallelogram`], if it is one: four
+/// corners whose sums `p₀ + p₂` and `p₁ + p₃` come out equal in every
+/// coordinate (so the map's far corner `p₀ + e₁ + e₂` is `p₂` to within the
+/// rounding of one addition), and a finite, non-zero area. No tolerance
+/// beyond that: a quadrilateral that is only nearly a parallelogram would
+/// be sampled a little outside itself, so it stays with the triangles.
+fn parallelogram(p: &crate::geometry::polygon::Polygon) -> Option<Shape> {
+    let &[p0, p1, p2, p3] = p.points() else { return None };
+    if p0 + p2 != p1 + p3 {
+        return None;
+    }
+    let edges = [p1 - p0, p3 - p0];
+    let area = edges[0].cross(edges[1]).length();
+    (area > 0.0 && area.is_finite()).then_some(Shape::Parallelogram {
+        origin: p0,
+        edges,
+        normal: p.normal(),
+        area,
+        corners: [[p0, p1, p2], [p0, p2, p3]],
+    })
 }
 
 /// The twelve triangles of a box's faces, each wound so its normal points out.
@@ -369,6 +420,62 @@ mod tests {
     }
 
     #[test]
+    fn only_an_exact_parallelogram_is_sampled_as_one_piece_of_the_same_area_and_normal() {
+        let polygon = |points: Vec<Vec3>| crate::geometry::polygon::Polygon::new(points).unwrap();
+        // The Cornell box's lamp: a rectangle, glowing downwards.
+        let lamp = polygon(vec![
+            Vec3::new(2.13, 5.48, 2.27),
+            Vec3::new(3.43, 5.48, 2.27),
+            Vec3::new(3.43, 5.48, 3.32),
+            Vec3::new(2.13, 5.48, 3.32),
+        ]);
+        let e = Emitter::new(0, &Primitive::Polygon(lamp.clone()), Color::ONE).unwrap();
+        let Shape::Parallelogram { normal, area, .. } = e.shape else { panic!("{:?}", e.shape) };
+        assert_eq!(normal, lamp.normal());
+        assert_eq!(normal, -Vec3::Y);
+        assert!((area - 1.3 * 1.05).abs() < 1e-5, "{area}");
+        let below = Vec3::new(2.5, 0.0, 2.5);
+        let s = e.sample(below, (0.25, 0.75)).unwrap();
+        let on = below + s.wi * s.distance;
+        assert!((on - Vec3::new(2.13 + 0.25 * 1.3, 5.48, 2.27 + 0.75 * 1.05)).length() < 1e-5, "{on}");
+        // Its triangles (for exports) cover it with the same winding.
+        assert_eq!(e.triangles().len(), 2);
+        for [a, b, c] in e.triangles() {
+            assert!(geometric_normal(*a, *b, *c).unwrap().dot(normal) > 0.999);
+        }
+        // A corner moved by a little: two triangles, as any polygon.
+        let mut points = lamp.points().to_vec();
+        points[3].x += 0.01;
+        let e = Emitter::new(0, &Primitive::Polygon(polygon(points)), Color::ONE).unwrap();
+        assert!(matches!(e.shape, Shape::Triangles { .. }), "{:?}", e.shape);
+        // Five corners: triangles.
+        let e = Emitter::new(0, &Primitive::Polygon(disk(5, 1.0, 1.0)), Color::ONE).unwrap();
+        assert!(matches!(e.shape, Shape::Triangles { .. }), "{:?}", e.shape);
+    }
+
+    #[test]
+    fn a_square_lamp_lights_a_point_below_its_centre_by_its_form_factor() {
+        // A square of side 2a at height h, radiance L, gives the point below its
+        // centre E = 4·L·(a/√(a² + h²))·atan(a/√(a² + h²)) (four right
+        // rectangles of sides a, a: the form factor of a rectangle seen from a
+        // point below its corner, Howell's catalogue C-11); a = h = 1 here.
+        let square = crate::geometry::polygon::Polygon::new(vec![
+            Vec3::new(-1.0, 1.0, -1.0),
+            Vec3::new(1.0, 1.0, -1.0),
+            Vec3::new(1.0, 1.0, 1.0),
+            Vec3::new(-1.0, 1.0, 1.0),
+        ])
+        .unwrap();
+        assert_eq!(square.normal(), -Vec3::Y);
+        let e = Emitter::new(0, &Primitive::Polygon(square), Color::ONE).unwrap();
+        assert!(matches!(e.shape, Shape::Parallelogram { .. }));
+        let s = 1.0 / 2f64.sqrt();
+        let expected = 4.0 * s * s.atan();
+        let got = irradiance(&e, Vec3::ZERO, 400_000);
+        assert!((got - expected).abs() < 0.01 * expected, "{got} vs {expected}");
+    }
+
+    #[test]
     fn a_self_crossing_emissive_polygon_is_refused() {
         assert_eq!(
             Emitter::new(0, &Primitive::Polygon(crate::geometry::polygon::tests::pentagram()), Color::ONE),
@@ -458,6 +565,21 @@ mod tests {
                 Vec3::new(-2.0, 3.0, 0.5),
             ),
         ];
+        // A slanted parallelogram (sampled as one piece) and a quadrilateral
+        // that misses being one by a little (sampled as two triangles).
+        let quad = |last: Vec3| {
+            Primitive::Polygon(
+                crate::geometry::polygon::Polygon::new(vec![
+                    Vec3::new(-1.0, 2.0, -1.0),
+                    Vec3::new(1.0, 2.0, -0.5),
+                    Vec3::new(1.5, 2.0, 1.0),
+                    last,
+                ])
+                .unwrap(),
+            )
+        };
+        shapes.push(("parallelogram", quad(Vec3::new(-0.5, 2.0, 0.5)), Vec3::new(0.1, 0.3, -0.2)));
+        shapes.push(("quadrilateral", quad(Vec3::new(-0.5, 2.0, 0.6)), Vec3::new(0.1, 0.3, -0.2)));
         // An octahedron wound outward: face (sx·x, sy·y, sz·z) faces out
         // when sx·sy·sz = +1, else its last two corners swap.
         let positions = vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
