@@ -441,7 +441,7 @@ struct PixelSequences {
     /// i's sequence is made for this one if `tags[i]` says so (0: none yet).
     generation: u32,
     tags: [u32; CACHED_SLOTS],
-    sequences: [sobol::Sequence; CACHED_SLOTS],
+    sequences: sobol::SequenceColumns<CACHED_SLOTS>,
     /// Whether eight slots' values can be made at once
     /// ([`sobol::values_8x2`]), asked once.
     wide: bool,
@@ -462,8 +462,8 @@ impl PixelSequences {
             index_rev: 0,
             generation: 0,
             tags: [0; CACHED_SLOTS],
-            sequences: [sobol::Sequence::default(); CACHED_SLOTS],
-            wide: sobol::values_8x2(&[sobol::Sequence::default(); 8], 0).is_some(),
+            sequences: sobol::SequenceColumns::EMPTY,
+            wide: sobol::SequenceColumns::<8>::EMPTY.values_8x2(0, 0).is_some(),
             batch: [[0.0; 8]; 2],
             batch_slot: 0,
             batched: false,
@@ -503,8 +503,7 @@ impl PixelSequences {
                 self.make(slot);
             }
         }
-        let sequences = self.sequences[range].try_into().expect("eight slots");
-        if let Some(values) = sobol::values_8x2(sequences, self.index_rev) {
+        if let Some(values) = self.sequences.values_8x2(range.start, self.index_rev) {
             (self.batch, self.batch_slot, self.batched) = (values, first, true);
         }
     }
@@ -513,7 +512,7 @@ impl PixelSequences {
     #[inline(always)]
     fn sequence(&mut self, slot: u32) -> sobol::Sequence {
         match self.tags.get(slot as usize) {
-            Some(&tag) if tag == self.generation => self.sequences[slot as usize],
+            Some(&tag) if tag == self.generation => self.sequences.get(slot as usize),
             _ => self.make(slot),
         }
     }
@@ -524,10 +523,9 @@ impl PixelSequences {
     #[inline(never)]
     fn make(&mut self, slot: u32) -> sobol::Sequence {
         let sequence = sobol::Sequence::new(self.pixel, slot, self.key.2);
-        if let (Some(tag), Some(cached)) =
-            (self.tags.get_mut(slot as usize), self.sequences.get_mut(slot as usize))
-        {
-            (*tag, *cached) = (self.generation, sequence);
+        if let Some(tag) = self.tags.get_mut(slot as usize) {
+            *tag = self.generation;
+            self.sequences.set(slot as usize, sequence);
         }
         sequence
     }

@@ -151,44 +151,77 @@ impl Sequence {
     }
 }
 
-/// Eight slots' values at once: for the sequences `sequences` (slots side
-/// by side) and the sample whose reversed index is `index_rev`, dimension 0
-/// and dimension 1 of each, the values [`Sequence::value_2d_rev`] gives,
-/// bit for bit (the same integer operations lane by lane, and the same
-/// float conversion). With AVX2; `None` without it.
-#[inline]
-pub fn values_8x2(sequences: &[Sequence; 8], index_rev: u32) -> Option<[[f32; 8]; 2]> {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: AVX2 is available, checked just above.
-        return Some(unsafe { values_8x2_avx2(sequences, index_rev) });
-    }
-    let _ = (sequences, index_rev);
-    None
+/// Sequences kept field by field (a struct of arrays): sequence `i`'s
+/// shuffle is `shuffle[i]`, its scrambles `scramble[0][i]` and
+/// `scramble[1][i]`, so that eight neighbouring sequences' fields are three
+/// eight-lane loads for [`SequenceColumns::values_8x2`] (as an array of
+/// [`Sequence`]s they were three gathers).
+#[derive(Clone, Copy, Debug)]
+pub struct SequenceColumns<const N: usize> {
+    shuffle: [u32; N],
+    scramble: [[u32; N]; 2],
 }
 
-/// [`values_8x2`] with AVX2: the index shuffle and both Owen scrambles on
-/// eight lanes (`vpmulld`), the byte tables read by gathers, the bits
-/// reversed by byte shuffles (bytes swapped, then each byte's nibbles
-/// looked up reversed).
+impl<const N: usize> SequenceColumns<N> {
+    /// `N` default sequences.
+    pub const EMPTY: Self = Self { shuffle: [0; N], scramble: [[0; N]; 2] };
+
+    /// Sequence `i`.
+    #[inline(always)]
+    pub fn get(&self, i: usize) -> Sequence {
+        Sequence { shuffle: self.shuffle[i], scramble: [self.scramble[0][i], self.scramble[1][i]] }
+    }
+
+    /// Sets sequence `i` to `sequence`.
+    #[inline(always)]
+    pub fn set(&mut self, i: usize, sequence: Sequence) {
+        self.shuffle[i] = sequence.shuffle;
+        self.scramble[0][i] = sequence.scramble[0];
+        self.scramble[1][i] = sequence.scramble[1];
+    }
+
+    /// Eight sequences' values at once: for sequences `first..first + 8`
+    /// and the sample whose reversed index is `index_rev`, dimension 0 and
+    /// dimension 1 of each, the values [`Sequence::value_2d_rev`] gives,
+    /// bit for bit (the same integer operations lane by lane, and the same
+    /// float conversion). With AVX2; `None` without it.
+    ///
+    /// # Panics
+    /// If `first + 8` is past `N`.
+    #[inline]
+    pub fn values_8x2(&self, first: usize, index_rev: u32) -> Option<[[f32; 8]; 2]> {
+        fn eight<const N: usize>(column: &[u32; N], first: usize) -> &[u32; 8] {
+            column[first..first + 8].try_into().expect("eight sequences")
+        }
+        let columns =
+            [eight(&self.shuffle, first), eight(&self.scramble[0], first), eight(&self.scramble[1], first)];
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: AVX2 is available, checked just above.
+            return Some(unsafe { values_8x2_avx2(columns, index_rev) });
+        }
+        let _ = (columns, index_rev);
+        None
+    }
+}
+
+/// [`SequenceColumns::values_8x2`] with AVX2, for the eight sequences'
+/// `[shuffle, scramble 0, scramble 1]` columns: the index shuffle and both
+/// Owen scrambles on eight lanes (`vpmulld`), [`sobol_rev_pair`]'s shifts
+/// and XORs, the bits reversed by byte shuffles (bytes swapped, then each
+/// byte's nibbles looked up reversed).
 ///
 /// # Safety
 /// The processor must have AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn values_8x2_avx2(sequences: &[Sequence; 8], index_rev: u32) -> [[f32; 8]; 2] {
+unsafe fn values_8x2_avx2(columns: [&[u32; 8]; 3], index_rev: u32) -> [[f32; 8]; 2] {
     use std::arch::x86_64::*;
-    // Each sequence is three u32s (shuffle, scramble 0, scramble 1), so
-    // lane i's fields are at 3i, 3i + 1 and 3i + 2.
-    const _: () = assert!(std::mem::size_of::<Sequence>() == 12);
-    let base = sequences.as_ptr() as *const i32;
-    let lanes = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
-    // SAFETY (all loads below): in bounds of `sequences` (8 × 3 u32s) and
-    // of the byte tables (2 × 256 × 2 u32s), AVX2 as the caller promises.
+    // SAFETY: each column is eight u32s, loaded whole; AVX2 as the caller
+    // promises.
     unsafe {
-        let shuffle = _mm256_i32gather_epi32::<4>(base, lanes);
-        let scramble0 = _mm256_i32gather_epi32::<4>(base.add(1), lanes);
-        let scramble1 = _mm256_i32gather_epi32::<4>(base.add(2), lanes);
+        let load = |c: &[u32; 8]| _mm256_loadu_si256(c.as_ptr().cast());
+        let (shuffle, scramble0, scramble1) = (load(columns[0]), load(columns[1]), load(columns[2]));
         let owen = |n: __m256i, scramble: __m256i| {
             let n = _mm256_xor_si256(n, _mm256_mullo_epi32(n, _mm256_set1_epi32(0x3d20adea)));
             let n = _mm256_add_epi32(n, scramble);
@@ -197,22 +230,6 @@ unsafe fn values_8x2_avx2(sequences: &[Sequence; 8], index_rev: u32) -> [[f32; 8
             let n = _mm256_xor_si256(n, _mm256_mullo_epi32(n, _mm256_set1_epi32(0x05526c56)));
             _mm256_xor_si256(n, _mm256_mullo_epi32(n, _mm256_set1_epi32(0x53a22864)))
         };
-        let rev = owen(_mm256_set1_epi32(index_rev as i32), shuffle);
-        // Table entries: [half][byte][dimension], u32s.
-        let tables = byte_tables().as_ptr() as *const i32;
-        let hi = _mm256_slli_epi32::<1>(_mm256_srli_epi32::<24>(rev));
-        let lo = _mm256_add_epi32(
-            _mm256_slli_epi32::<1>(_mm256_and_si256(_mm256_srli_epi32::<16>(rev), _mm256_set1_epi32(0xff))),
-            _mm256_set1_epi32(512),
-        );
-        let u = _mm256_xor_si256(
-            _mm256_i32gather_epi32::<4>(tables, hi),
-            _mm256_i32gather_epi32::<4>(tables, lo),
-        );
-        let v = _mm256_xor_si256(
-            _mm256_i32gather_epi32::<4>(tables.add(1), hi),
-            _mm256_i32gather_epi32::<4>(tables.add(1), lo),
-        );
         let reverse = |x: __m256i| {
             let swap = _mm256_setr_epi8(
                 3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12, 3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8,
@@ -230,6 +247,17 @@ unsafe fn values_8x2_avx2(sequences: &[Sequence; 8], index_rev: u32) -> [[f32; 8
             let high = _mm256_and_si256(_mm256_srli_epi16::<4>(x), nibble);
             _mm256_or_si256(_mm256_shuffle_epi8(rev_high, low), _mm256_shuffle_epi8(rev_low, high))
         };
+        let rev = owen(_mm256_set1_epi32(index_rev as i32), shuffle);
+        // `sobol_rev_pair` on eight lanes.
+        let u = reverse(_mm256_and_si256(rev, _mm256_set1_epi32(0xffff_0000_u32 as i32)));
+        // SUPERSET_STEPS, the shifts written out (they must be constants).
+        let step = |v: __m256i, down: __m256i, mask: u32| {
+            _mm256_xor_si256(v, _mm256_and_si256(down, _mm256_set1_epi32(mask as i32)))
+        };
+        let v = step(u, _mm256_srli_epi32::<1>(u), SUPERSET_STEPS[0].1);
+        let v = step(v, _mm256_srli_epi32::<2>(v), SUPERSET_STEPS[1].1);
+        let v = step(v, _mm256_srli_epi32::<4>(v), SUPERSET_STEPS[2].1);
+        let v = step(v, _mm256_srli_epi32::<8>(v), SUPERSET_STEPS[3].1);
         let to_unit = |x: __m256i| {
             let bits = _mm256_or_si256(_mm256_srli_epi32::<9>(x), _mm256_set1_epi32(0x3f80_0000));
             _mm256_sub_ps(_mm256_castsi256_ps(bits), _mm256_set1_ps(1.0))
@@ -249,35 +277,28 @@ fn to_unit(bits: u32) -> Real {
 }
 
 /// The first two dimensions' reversed Sobol values of the (reversed,
-/// shuffled) index `rev`, whose top 16 bits are the index
-/// (`sobol_burley::parts::sobol_rev`). A Sobol value is the XOR of the
-/// direction vectors of the index's set bits, so it is the XOR of the
-/// values of the index's two bytes: two look-ups in tables of 256 entries a
-/// byte (4 KiB), made once from `sobol_rev`, in place of a loop over the
-/// set bits (whose trip count the processor cannot predict).
+/// shuffled) index `rev`, whose top 16 bits are the index: what
+/// `sobol_burley::parts::sobol_rev` gives (a Sobol value is the XOR of the
+/// direction vectors of the index's set bits), worked out instead of
+/// looked up. In the crate's reversed form, index bit `31 − i` brings in
+/// direction vector `i`, which for dimension 0 (the identity matrix, van
+/// der Corput) is bit `i` alone, and for dimension 1 (Pascal's triangle
+/// mod 2, Joe and Kuo's second dimension) is every bit `j ⊆ i` (Lucas's
+/// theorem: C(i, j) is odd exactly then). So with `y` the index's top 16
+/// bits reversed, dimension 0's value is `y`, and dimension 1's gives each
+/// bit `j` the XOR of `y`'s bits over the supersets of `j`: the subset-sum
+/// transform over GF(2), four shift-and-XOR steps ([`SUPERSET_STEPS`]).
+/// Tested against the crate for all 2¹⁶ indices.
 #[inline]
 fn sobol_rev_pair(rev: u32) -> [u32; 2] {
-    let tables = byte_tables();
-    let (hi, lo) = (tables[0][(rev >> 24) as usize], tables[1][((rev >> 16) & 0xff) as usize]);
-    [hi[0] ^ lo[0], hi[1] ^ lo[1]]
+    let y = (rev & 0xffff_0000).reverse_bits();
+    let v = SUPERSET_STEPS.iter().fold(y, |v, &(shift, mask)| v ^ ((v >> shift) & mask));
+    [y, v]
 }
 
-/// For the index's high and low byte, each byte value's reversed Sobol
-/// values in dimensions 0 and 1.
-type ByteTables = [[[u32; 2]; 256]; 2];
-
-fn byte_tables() -> &'static ByteTables {
-    static TABLES: std::sync::LazyLock<Box<ByteTables>> = std::sync::LazyLock::new(|| {
-        let mut t = Box::new([[[0; 2]; 256]; 2]);
-        for byte in 0..256u32 {
-            for (half, shift) in [(0, 24), (1, 16)] {
-                t[half][byte as usize] = [0, 1].map(|d| sobol_burley::parts::sobol_rev(byte << shift, d));
-            }
-        }
-        t
-    });
-    &TABLES
-}
+/// The steps of [`sobol_rev_pair`]'s superset XOR: bit `j` takes bit
+/// `j + s` where `j` lacks the bit `s` (the mask), for `s` = 1, 2, 4, 8.
+const SUPERSET_STEPS: [(u32, u32); 4] = [(1, 0x5555), (2, 0x3333), (4, 0x0f0f), (8, 0x00ff)];
 
 /// What sets pixel seeds apart from the stratified sampler's hashes (any
 /// odd constant; these are the first digits of √3).
@@ -378,12 +399,28 @@ mod tests {
     }
 
     #[test]
+    fn the_first_two_dimensions_are_the_crates_for_every_index() {
+        for index in 0..SEQUENCE_LENGTH {
+            // Low bits set too: only the top 16 count.
+            let rev = index.reverse_bits() | 0x5a5a;
+            let expected = [0, 1].map(|d| sobol_burley::parts::sobol_rev(rev, d));
+            assert_eq!(sobol_rev_pair(rev), expected, "index {index}");
+        }
+    }
+
+    #[test]
     fn eight_slots_at_once_are_each_slots_values_bit_for_bit() {
         let pixel = pixel_seed(5, 6, 7);
         for first in [0, 10, 1000] {
             let sequences: [Sequence; 8] = std::array::from_fn(|i| Sequence::new(pixel, first + i as u32, 0));
+            // Kept from column 3 on, as a sampler keeps a bounce's slots.
+            let mut columns = SequenceColumns::<12>::EMPTY;
+            for (i, &sequence) in sequences.iter().enumerate() {
+                columns.set(3 + i, sequence);
+                assert_eq!(columns.get(3 + i), sequence);
+            }
             for index in (0..SEQUENCE_LENGTH).step_by(7).chain([SEQUENCE_LENGTH - 1]) {
-                let Some(values) = values_8x2(&sequences, index.reverse_bits()) else { return };
+                let Some(values) = columns.values_8x2(3, index.reverse_bits()) else { return };
                 for (i, sequence) in sequences.iter().enumerate() {
                     let (u, v) = sequence.value_2d(index);
                     assert_eq!(
