@@ -88,7 +88,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from common import cycles  # noqa: E402
 from common.cycles import read_exr, write_png  # noqa: E402
-from common.images import agreement, block_means, srgb  # noqa: E402
+from common.images import agreement, block_means, block_z, srgb  # noqa: E402
 
 
 def parse_args():
@@ -370,7 +370,7 @@ def main():
     rt_total_se = np.array([im.mean(axis=(0, 1)) for im in rt_images]).std(0, ddof=1) / math.sqrt(n)
     cy_total_se = np.array([im.mean(axis=(0, 1)) for im in cy_images]).std(0, ddof=1) / math.sqrt(n)
     total_z = (rt_total - cy_total) / np.maximum(np.sqrt(rt_total_se**2 + cy_total_se**2), 1e-30)
-    z_scores = (rt_mean - cy_mean) / np.maximum(np.sqrt(rt_se**2 + cy_se**2), 1e-30)
+    z_scores, z_line = block_z(rt_mean, rt_se, cy_mean, cy_se)
 
     distribution = "multiple-scattering GGX" if args.multiscatter else "single-scattering GGX"
     lines = [
@@ -380,8 +380,7 @@ def main():
         f" {args.threads} threads",
         f"- blocks of {args.block}×{args.block}: {agree.sum()} of {agree.size} agree"
         f" ({100 * fraction:.1f} %) within {args.z} standard errors + {100 * args.rel:g} %",
-        f"- |z| of the block means (all channels): median {np.median(np.abs(z_scores)):.2f},"
-        f" 99th percentile {np.percentile(np.abs(z_scores), 99):.2f}, max {np.abs(z_scores).max():.2f}",
+        f"- {z_line}",
         f"- whole-image mean, rt-view / Cycles: R {ratio[0]:.4f}, G {ratio[1]:.4f}, B {ratio[2]:.4f}"
         f" (rt-view {rt_total.round(5).tolist()}, Cycles {cy_total.round(5).tolist()};"
         f" z {total_z.round(1).tolist()})",

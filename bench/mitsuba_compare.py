@@ -61,7 +61,7 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from common.images import block_means, srgb  # noqa: E402,F401  (srgb: also used by importers)
+from common.images import block_means, block_z, srgb  # noqa: E402,F401  (srgb: also used by importers)
 
 
 def parse_args():
@@ -444,20 +444,7 @@ def main():
     rt_total_se = np.array([im.mean(axis=(0, 1)) for im in rt_images]).std(0, ddof=1) / math.sqrt(n)
     mi_total_se = np.array([im.mean(axis=(0, 1)) for im in mi_images]).std(0, ddof=1) / math.sqrt(n)
     total_z = (rt_total - mi_total) / np.maximum(np.sqrt(rt_total_se**2 + mi_total_se**2), 1e-30)
-    # A block channel with no noise in either image (bare background, the
-    # same value in every batch) has no z: a rounding difference over an
-    # error of 0 would be infinite. Such channels are counted apart, with
-    # their largest relative difference.
-    se = np.sqrt(rt_se**2 + mi_se**2)
-    noisy = se > 0
-    z_scores = np.where(noisy, (rt_mean - mi_mean) / np.where(noisy, se, 1.0), 0.0)
-    quiet = np.abs(rt_mean - mi_mean)[~noisy] / np.maximum(np.abs(mi_mean[~noisy]), 1e-30)
-    quiet_note = (
-        f"; {quiet.size} block channels without noise in either (bare background),"
-        f" largest relative difference {quiet.max():.1e}"
-        if quiet.size
-        else ""
-    )
+    z_scores, z_line = block_z(rt_mean, rt_se, mi_mean, mi_se)
 
     lines = [
         f"# {name}: rt-view against Mitsuba 3 ({args.variant})",
@@ -466,9 +453,7 @@ def main():
         f" {args.threads} threads",
         f"- blocks of {args.block}×{args.block}: {agree.sum()} of {agree.size} agree"
         f" ({100 * fraction:.1f} %) within {args.z} standard errors + {100 * args.rel:g} %",
-        f"- |z| of the block means (channels with noise): median {np.median(np.abs(z_scores[noisy])):.2f},"
-        f" 99th percentile {np.percentile(np.abs(z_scores[noisy]), 99):.2f},"
-        f" max {np.abs(z_scores[noisy]).max():.2f}{quiet_note}",
+        f"- {z_line}",
         f"- whole-image mean, rt-view / Mitsuba: R {ratio[0]:.4f}, G {ratio[1]:.4f}, B {ratio[2]:.4f}"
         f" (rt-view {rt_total.round(5).tolist()}, Mitsuba {mi_total.round(5).tolist()};"
         f" z {total_z.round(1).tolist()})",

@@ -33,6 +33,34 @@ def agreement(a, b, block, z, rel):
     return agree, ratio
 
 
+def block_z(mean_a, se_a, mean_b, se_b):
+    """z-scores of two renderers' block means, and a line describing their
+    spread: (|z| map, one value per block channel; the description). A
+    block channel with no noise in either (bare background: the same value
+    in every batch of both) has no z — a rounding difference over an error
+    of 0 would be infinite — so it gets z = 0 in the map and is left out of
+    the median, 99th percentile and maximum, and counted apart with its
+    largest relative difference."""
+    se = np.sqrt(se_a**2 + se_b**2)
+    noisy = se > 0
+    z = np.where(noisy, (mean_a - mean_b) / np.where(noisy, se, 1.0), 0.0)
+    line = "|z| of the block means (channels with noise): "
+    if noisy.any():
+        line += (
+            f"median {np.median(np.abs(z[noisy])):.2f}, 99th percentile"
+            f" {np.percentile(np.abs(z[noisy]), 99):.2f}, max {np.abs(z[noisy]).max():.2f}"
+        )
+    else:
+        line += "none"
+    quiet = np.abs(mean_a - mean_b)[~noisy] / np.maximum(np.abs(mean_b[~noisy]), 1e-30)
+    if quiet.size:
+        line += (
+            f"; {quiet.size} block channels without noise in either (bare background),"
+            f" largest relative difference {quiet.max():.1e}"
+        )
+    return z, line
+
+
 def srgb(image):
     """8-bit sRGB of linear `image` clamped to [0, 1]."""
     x = np.clip(image, 0, 1)
