@@ -309,6 +309,20 @@ impl Bvh {
         self.stats
     }
 
+    /// `ray` prepared for the leaves' triangle tests, where the tree holds
+    /// triangles ([`Bvh::triangles`]): by branches for one of a packet's
+    /// `COHERENT` rays ([`TriangleRay::new_coherent`]), else without
+    /// ([`TriangleRay::new`]); the same bits either way. Without triangles the
+    /// preparation is never read ([`TriangleRay::unprepared`]).
+    #[inline(always)]
+    fn prepared<const COHERENT: bool>(&self, ray: &Ray) -> TriangleRay {
+        match (self.triangles, COHERENT) {
+            (false, _) => TriangleRay::unprepared(ray),
+            (true, true) => TriangleRay::new_coherent(ray),
+            (true, false) => TriangleRay::new(ray),
+        }
+    }
+
     /// The closest hit with `t` in `range`, exactly as the in-order loop over
     /// all objects finds it.
     pub fn closest_hit(
@@ -354,7 +368,7 @@ impl Bvh {
         range: Interval,
         methods: Methods,
     ) -> Option<Hit> {
-        let mut query = Query::new(ray, range, self.triangles);
+        let mut query = Query::new(self.prepared::<false>(ray), range);
         query.test_unbounded(&self.unbounded, objects, methods);
         // Boxes entering beyond the best hit so far cannot improve on it (one
         // entering exactly there can still win a tie, and is visited).
@@ -385,7 +399,7 @@ impl Bvh {
     /// Whether anything is hit with `t` in `range` (shadow rays): stops at
     /// the first hit found.
     pub fn any_hit(&self, objects: &[Object], ray: &Ray, range: Interval, methods: Methods) -> bool {
-        let prepared = if self.triangles { TriangleRay::new(ray) } else { TriangleRay::unprepared(ray) };
+        let prepared = self.prepared::<false>(ray);
         let hits =
             |object: u32| object_primitive(objects, object).intersect_with(ray, range, methods).is_some();
         if self.unbounded.iter().any(|&object| hits(object)) {

@@ -431,7 +431,7 @@ impl Bvh {
             // Made in place: a query copied in after a call had written it
             // would be read back in wider pieces than it was written, which
             // stalls the store-to-load forwarding.
-            let query = queries[i].write(Query::coherent(&rays[i], ranges[i], self.triangles));
+            let query = queries[i].write(Query::new(self.prepared::<true>(&rays[i]), ranges[i]));
             if !self.unbounded.is_empty() {
                 query.test_unbounded(&self.unbounded, objects, methods);
             }

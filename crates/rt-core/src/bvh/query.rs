@@ -9,7 +9,7 @@ use crate::geometry::method::Methods;
 use crate::geometry::object::Object;
 use crate::geometry::primitive::Primitive;
 use crate::geometry::triangle::TriangleRay;
-use crate::math::ray::{Interval, Ray};
+use crate::math::ray::Interval;
 use crate::math::real::{Real, Vec3};
 
 /// What a leaf test did to the best hit.
@@ -34,19 +34,9 @@ pub(super) struct Query {
 }
 
 impl Query {
-    /// The query of `ray` over `range`; its triangle preparation made only
-    /// if the tree holds `triangles` (a tree without them never reads it).
+    /// The query of the ray `prepared` ([`super::Bvh::prepared`]) over `range`.
     #[inline(always)]
-    pub fn new(ray: &Ray, range: Interval, triangles: bool) -> Self {
-        let prepared = if triangles { TriangleRay::new(ray) } else { TriangleRay::unprepared(ray) };
-        Self { prepared, range, best: None }
-    }
-
-    /// [`Query::new`] for one of a packet's coherent rays
-    /// ([`TriangleRay::new_coherent`]: the same query).
-    #[inline(always)]
-    pub fn coherent(ray: &Ray, range: Interval, triangles: bool) -> Self {
-        let prepared = if triangles { TriangleRay::new_coherent(ray) } else { TriangleRay::unprepared(ray) };
+    pub fn new(prepared: TriangleRay, range: Interval) -> Self {
         Self { prepared, range, best: None }
     }
 
