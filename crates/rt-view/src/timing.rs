@@ -3,11 +3,11 @@
 
 use std::time::{Duration, Instant};
 
-/// The median of `times` (the upper one of the middle two for an even
-/// count); `times` must not be empty.
-pub fn median(mut times: Vec<Duration>) -> Duration {
-    times.sort();
-    times[times.len() / 2]
+/// The median of `values` (times, counts: the upper one of the middle two
+/// for an even count); `values` must not be empty.
+pub fn median<T: Ord + Copy>(mut values: Vec<T>) -> T {
+    values.sort_unstable();
+    values[values.len() / 2]
 }
 
 /// The median wall time of `runs` calls of `f` (at least one).

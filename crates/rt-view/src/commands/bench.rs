@@ -237,12 +237,11 @@ fn time_builds<E: std::error::Error + Send + Sync + 'static>(
         page_faults.push(spent.page_faults);
         build.push(made.bvh_stats().build_time);
     }
-    page_faults.sort_unstable();
     Ok(BuildTimes {
         build: median(build),
         cpu: median(cpu),
         system: median(system),
-        page_faults: page_faults[page_faults.len() / 2],
+        page_faults: median(page_faults),
     })
 }
 
