@@ -52,8 +52,9 @@ pub(super) type Arena = Vec<[BuildNode; 2]>;
 pub(super) enum BuildNode {
     /// `count` items at `first` in the final item order.
     Leaf { bounds: Aabb, first: u32, count: u32 },
-    /// Two subtrees: the pair at `children` in the arena.
-    Inner { bounds: Aabb, children: u32 },
+    /// Two subtrees over the `count` items at `first`: the pair at
+    /// `children` in the arena.
+    Inner { bounds: Aabb, children: u32, first: u32, count: u32 },
     /// A subtree built by another task: its root, and the arena its root's
     /// descendants are in.
     Subtree(Box<(BuildNode, Arena)>),
@@ -65,6 +66,14 @@ impl BuildNode {
         match self {
             Self::Leaf { bounds, .. } | Self::Inner { bounds, .. } => *bounds,
             Self::Subtree(tree) => tree.0.bounds(),
+        }
+    }
+
+    /// The items below: the first one's position and how many.
+    pub fn items(&self) -> (u32, u32) {
+        match self {
+            Self::Leaf { first, count, .. } | Self::Inner { first, count, .. } => (*first, *count),
+            Self::Subtree(tree) => tree.0.items(),
         }
     }
 
@@ -397,7 +406,9 @@ fn build_node(
         )
     };
     arena.push([l, r]);
-    (BuildNode::Inner { bounds, children: (arena.len() - 1) as u32 }, l_leaves + r_leaves)
+    let inner =
+        BuildNode::Inner { bounds, children: (arena.len() - 1) as u32, first: first as u32, count: n as u32 };
+    (inner, l_leaves + r_leaves)
 }
 
 /// Moves the items whose centroid `left` holds for to the front, as
@@ -623,9 +634,15 @@ mod tests {
                 }
                 1
             }
-            BuildNode::Inner { bounds, children } => {
+            BuildNode::Inner { bounds, children, first, count } => {
                 let pair = &arena[*children as usize];
                 pair.iter().for_each(|c| assert!(contains(*bounds, c.bounds()), "a box misses a child"));
+                let ((l_first, l_count), (r_first, r_count)) = (pair[0].items(), pair[1].items());
+                assert_eq!(
+                    (l_first, r_first, l_count + r_count),
+                    (*first, first + l_count, *count),
+                    "items below"
+                );
                 pair.iter().map(|c| check(c, arena, items, sizes, seen)).sum()
             }
             BuildNode::Subtree(tree) => {

@@ -46,6 +46,20 @@ impl Node {
         children: [Child::node(0); WIDTH],
     };
 
+    /// This node of a list of nodes of its own, with the list moved to
+    /// `offset` in another: its inner children's numbers raised by `offset`.
+    /// No child is node 0 of its list (that is the list's root, listed
+    /// before all of its descendants), so an empty slot, which holds node 0,
+    /// keeps it.
+    pub fn renumbered(mut self, offset: u32) -> Node {
+        for child in &mut self.children {
+            if !child.is_leaf() && child.index != 0 {
+                child.index += offset;
+            }
+        }
+        self
+    }
+
     /// Puts `child` with `bounds` into `slot`.
     pub fn set(&mut self, slot: usize, bounds: Aabb, child: Child) {
         for axis in 0..3 {
