@@ -31,6 +31,14 @@ It prints medians, the hit counts (compare them with rt-view's), how many
 bounce rays hit the same primitive in both, and, from bench-out/bench.csv,
 rt-view's figures over Embree's for the same mesh and thread count.
 
+Embree runs in its robust mode (RTC_SCENE_FLAG_ROBUST, which `embreex`
+sets unless told not to: it "avoids optimizations that reduce arithmetic
+accuracy", with a watertight triangle test), the accuracy rt-view's
+watertight test always has, so like is compared with like. With
+--no-robust the scenes are made without that flag, as Embree's C API
+makes them by default: faster, and it lets a few rays through the edges
+between triangles (its hit counts fall short of rt-view's).
+
 With --build-only it times the commits alone (no rays, no bounce files
 needed), the counterpart of `rt-view bench --build-only`: run the two in
 turn, several times, to compare builds on a machine whose speed drifts
@@ -121,7 +129,7 @@ def new_scene(verts, tris):
     first `run` commits the scene (`rtcCommitScene`: the BVH build) and casts
     one ray, which is the only part timed.
     """
-    scene = rtcs.EmbreeScene()
+    scene = rtcs.EmbreeScene(robust=DATA["robust"])
     TriangleMesh(scene, verts, tris)
     one = np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32)
     heap, resident = heap_in_use(), resident_bytes()
@@ -137,6 +145,8 @@ def new_scene(verts, tris):
 
 # Set in the parent before forking; the children read them.
 DATA = {}
+# How the header names Embree's mode.
+MODE = {True: "robust mode", False: "without RTC_SCENE_FLAG_ROBUST"}
 
 
 def build_worker(cpus, runs, out):
@@ -197,7 +207,8 @@ def measure(threads, runs):
 
 def build_only(out, threads, runs):
     """Embree's commit time per mesh and thread count (medians of `runs`)."""
-    print(f"Intel Embree 4 (embreex): the scene commit alone (rtcCommitScene), medians of {runs}")
+    print(f"Intel Embree 4 (embreex, {MODE[DATA['robust']]}): the scene commit alone (rtcCommitScene), "
+          f"medians of {runs}")
     objs = sorted(glob.glob(os.path.join(out, "terrain_*.obj")), key=os.path.getsize)
     if not objs:
         raise SystemExit(f"no terrain_*.obj in {out}: run `rt-view bench --out {out}` first")
@@ -221,7 +232,10 @@ def main():
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--threads", default="1,2", help="thread counts, comma-separated")
     ap.add_argument("--build-only", action="store_true", help="time the scene commits alone")
+    ap.add_argument("--no-robust", action="store_true",
+                    help="scenes without RTC_SCENE_FLAG_ROBUST (Embree's C API default; faster, not watertight)")
     args = ap.parse_args()
+    DATA["robust"] = not args.no_robust
     threads = [int(t) for t in args.threads.split(",")]
     if args.build_only:
         build_only(args.out, threads, args.runs)
@@ -231,7 +245,7 @@ def main():
     if os.path.exists(bench_csv):
         for row in csv.DictReader(open(bench_csv)):
             ours[(row["mesh"], int(row["threads"]))] = row
-    print(f"Intel Embree 4 (embreex, rtcIntersect1), medians of {args.runs} runs; Mrays/s; "
+    print(f"Intel Embree 4 (embreex, rtcIntersect1, {MODE[DATA['robust']]}), medians of {args.runs} runs; Mrays/s; "
           "build s: the scene commit alone (rtcCommitScene), not embreex's copying of the arrays; "
           "B/tri: the memory the commit added and kept (its BVH: the larger of the C heap's growth, "
           "glibc mallinfo2, and the resident size's) plus the mesh's "
