@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# Thread scaling: the renders, rays and builds of docs/performance.md
+# ("Past two cores") at each thread count, on the machine it runs on.
+#
+#   bench/thread_scaling.sh [THREADS [ROUNDS [OUT]]]      # THREADS e.g. 1,2,4,8,12,16
+#
+# RT_VIEW names the binary (default target/release/rt-view; build it with
+# `cargo build --release -p rt-view`). It runs
+#   - `rt-view bench --runs 7 --threads THREADS` twice (OUT/bench_a.csv, bench_b.csv),
+#   - `bench/embree_primary.py` on the same rays where Python has embreex and numpy,
+#   - ROUNDS rounds (default 5), the thread counts taking turns, of the Cornell box
+#     (384x384, 64 spp, path tracing) and of the 1 M terrain's flat 64-spp render
+#     (bench/mitsuba_flat.py's scene), each line its `tracing` time from --stats,
+# and prints the medians, speed-ups over one thread and the run-to-run spread
+# ((slowest - fastest) / median) of the renders. Everything lands in OUT
+# (default thread-scaling-out).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+threads=${1:-1,2,4,8,12,16}
+rounds=${2:-5}
+out=${3:-thread-scaling-out}
+rt=${RT_VIEW:-target/release/rt-view}
+mkdir -p "$out"
+for pass in a b; do
+  "$rt" bench --runs 7 --threads "$threads" --out "$out" > "$out/bench_$pass.log" 2>&1
+  cp "$out/bench.csv" "$out/bench_$pass.csv"
+  grep -E '^ +(mesh|10k|100k|1m) ' "$out/bench_$pass.log"
+done
+if python3 -c 'import embreex, numpy' 2>/dev/null; then
+  python3 bench/embree_primary.py "$out" --runs 7 --threads "$threads" | tee "$out/embree.log"
+else
+  echo "(no embreex/numpy for python3: Embree left out)"
+fi
+cat > "$out/flat_terrain_1m.ron" <<'RON'
+Scene(
+    camera: (position: (0, 6, -9), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 50, near: 1),
+    image: (width: 640, height: 480),
+    background: (0, 0, 0),
+    materials: { "ground": (color: (0.4, 0.6, 0.3)) },
+    objects: [ Mesh(file: "terrain_1m.obj", material: "ground") ],
+)
+RON
+: > "$out/renders.log"
+for r in $(seq "$rounds"); do
+  for t in ${threads//,/ }; do
+    for scene in cornell flat; do
+      if [ $scene = cornell ]; then
+        args=(scenes/cornell_box.ron --width 384 --height 384 --spp 64)
+      else
+        args=("$out/flat_terrain_1m.ron" --spp 64)
+      fi
+      line=$(RAYON_NUM_THREADS=$t "$rt" render "${args[@]}" -o "$out/$scene.exr" --stats 2>&1 | grep '^tracing')
+      echo "$scene $t $line" | tee -a "$out/renders.log"
+    done
+  done
+done
+python3 - "$out/renders.log" <<'PY'
+import collections, statistics, sys
+times = collections.defaultdict(list)
+for line in open(sys.argv[1]):
+    scene, t, _, seconds = line.split()[:4]
+    times[(scene, int(t))].append(float(seconds))
+for scene in ("cornell", "flat"):
+    counts = sorted(t for s, t in times if s == scene)
+    one = statistics.median(times[(scene, counts[0])]) * counts[0]
+    for t in counts:
+        x = times[(scene, t)]
+        m = statistics.median(x)
+        print(f"{scene:8} {t:3} threads: median {m:.3f} s, speed-up {one / m:5.2f}x, "
+              f"spread {(max(x) - min(x)) / m * 100:3.0f} % over {len(x)} rounds")
+PY
