@@ -1044,8 +1044,8 @@ mod tests {
 
     #[test]
     fn the_tree_is_the_same_node_for_node_on_one_thread_and_on_many() {
-        // 2·130² = 33 800 triangles on a bumpy grid: the collapse's top
-        // nodes collapse their children on several threads.
+        // 2·130² = 33 800 triangles on a bumpy grid: over the collapse's
+        // threshold, so the root's children are collapsed on several threads.
         let height = |i: u32, j: u32| ((i * 7919 + j * 104_729) % 1000) as Real / 400.0;
         let s = scene(vec![Primitive::Mesh(grid_mesh(130, |i, j| {
             Vec3::new(i as Real, height(i, j), j as Real)
