@@ -11,7 +11,7 @@
 #   - ROUNDS rounds (default 5), the thread counts taking turns, of the Cornell box
 #     (384x384, 64 spp, path tracing) and of the 1 M terrain's flat 64-spp render
 #     (bench/mitsuba_flat.py's scene), each line its `tracing` time from --stats,
-# and prints the medians, speed-ups over one thread and the run-to-run spread
+# and prints the medians, speed-ups over the first thread count and the run-to-run spread
 # ((slowest - fastest) / median) of the renders. Everything lands in OUT
 # (default thread-scaling-out).
 set -euo pipefail
@@ -62,10 +62,10 @@ for line in open(sys.argv[1]):
     times[(scene, int(t))].append(float(seconds))
 for scene in ("cornell", "flat"):
     counts = sorted(t for s, t in times if s == scene)
-    one = statistics.median(times[(scene, counts[0])]) * counts[0]
+    base = statistics.median(times[(scene, counts[0])])
     for t in counts:
         x = times[(scene, t)]
         m = statistics.median(x)
-        print(f"{scene:8} {t:3} threads: median {m:.3f} s, speed-up {one / m:5.2f}x, "
+        print(f"{scene:8} {t:3} threads: median {m:.3f} s, {base / m:5.2f}x the speed on {counts[0]}, "
               f"spread {(max(x) - min(x)) / m * 100:3.0f} % over {len(x)} rounds")
 PY
