@@ -691,7 +691,7 @@ fn plot_images(area: &Area, rows: &[Row]) -> anyhow::Result<Vec<(String, RGBACol
                 .map(|&(x, y, label)| ((x, y), label.split('=').nth(1).unwrap_or(label).to_string())),
         );
     }
-    draw_labels(&mut chart, &labels, 12)?;
+    draw_labels(&mut chart, &labels, 12, area.get_pixel_range().0.end)?;
     Ok(legend)
 }
 
@@ -738,23 +738,31 @@ fn plot_geometry(area: &Area, rows: &[Row]) -> anyhow::Result<()> {
     }))?;
     let labels: Vec<((f64, f64), String)> =
         points.iter().map(|(label, ns, wrong)| ((*ns, wrong.max(FLOOR)), label.clone())).collect();
-    draw_labels(&mut chart, &labels, 13)?;
+    draw_labels(&mut chart, &labels, 13, area.get_pixel_range().0.end)?;
     Ok(())
 }
 
 type LogChart<'a, 'b> = ChartContext<'a, BitMapBackend<'b>, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>;
 
 /// Draws each text beside its point where [`accuracy_labels::place`] puts
-/// it (no label over another, each box padded so neighbours keep a gap),
+/// it (right of the y axis, between the x axis and the top, left of
+/// `right`, the end of the chart's own column; no label over another or
+/// over a dot; each box padded so neighbours keep a gap),
 /// with a grey leader line to labels pushed away from their points.
-fn draw_labels(chart: &mut LogChart, labels: &[((f64, f64), String)], size: u32) -> anyhow::Result<()> {
+fn draw_labels(
+    chart: &mut LogChart,
+    labels: &[((f64, f64), String)],
+    size: u32,
+    right: i32,
+) -> anyhow::Result<()> {
     let font = ("sans-serif", size).into_text_style(chart.plotting_area());
     let pixels: Vec<(i32, i32)> = labels.iter().map(|(p, _)| chart.backend_coord(p)).collect();
     let sizes = labels
         .iter()
         .map(|(_, text)| chart.plotting_area().estimate_text_size(text, &font).map(|(w, h)| (w + 8, h + 2)))
         .collect::<Result<Vec<_>, _>>()?;
-    let placed = accuracy_labels::place(&pixels, &sizes);
+    let (x, y) = chart.plotting_area().get_pixel_range();
+    let placed = accuracy_labels::place(&pixels, &sizes, (x.start..right, y));
     let grey = RGBColor(150, 150, 150);
     chart.draw_series(labels.iter().zip(placed).map(|((p, text), l)| {
         let to = if l.leader { (l.offset.0, l.offset.1 + l.size.1 as i32 / 2) } else { (0, 0) };
