@@ -36,26 +36,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import mitsuba_compare  # noqa: E402  (LLVM selection)
-
-COLOR = (0.4, 0.6, 0.3)
-WIDTH, HEIGHT = 640, 480
-
-
-def rt_scene(folder, mesh, cam):
-    """A scene file for rt-view next to the mesh; returns its path."""
-    v = lambda p: "(" + ", ".join(str(x) for x in p) + ")"  # noqa: E731
-    text = f"""Scene(
-    camera: (position: {v(cam['position'])}, center_of_interest: {v(cam['center_of_interest'])}, up: {v(cam['up'])}, fov_y: {cam['fov_y']}, near: {cam['near']}),
-    image: (width: {WIDTH}, height: {HEIGHT}),
-    background: (0, 0, 0),
-    materials: {{ "ground": (color: {v(COLOR)}) }},
-    objects: [ Mesh(file: "{os.path.basename(mesh)}", material: "ground") ],
-)
-"""
-    path = os.path.join(folder, "flat_" + os.path.basename(mesh)[:-4] + ".ron")
-    with open(path, "w") as f:
-        f.write(text)
-    return path
+from common.flat_scene import COLOR, HEIGHT, WIDTH, rt_scene  # noqa: E402
 
 
 def rt_view_render(binary, scene, spp, threads, out):

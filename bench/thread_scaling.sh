@@ -10,7 +10,8 @@
 #   - `bench/embree_primary.py` on the same rays where Python has embreex and numpy,
 #   - ROUNDS rounds (default 5), the thread counts taking turns, of the Cornell box
 #     (384x384, 64 spp, path tracing) and of the 1 M terrain's flat 64-spp render
-#     (bench/mitsuba_flat.py's scene), each line its `tracing` time from --stats,
+#     (bench/common/flat_scene.py, as bench/mitsuba_flat.py renders it), each line its
+#     `tracing` time from --stats,
 # and prints the medians, speed-ups over the first thread count and the run-to-run spread
 # ((slowest - fastest) / median) of the renders. Everything lands in OUT
 # (default thread-scaling-out).
@@ -31,15 +32,7 @@ if python3 -c 'import embreex, numpy' 2>/dev/null; then
 else
   echo "(no embreex/numpy for python3: Embree left out)"
 fi
-cat > "$out/flat_terrain_1m.ron" <<'RON'
-Scene(
-    camera: (position: (0, 6, -9), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 50, near: 1),
-    image: (width: 640, height: 480),
-    background: (0, 0, 0),
-    materials: { "ground": (color: (0.4, 0.6, 0.3)) },
-    objects: [ Mesh(file: "terrain_1m.obj", material: "ground") ],
-)
-RON
+flat=$(python3 bench/common/flat_scene.py "$out" 1m)
 : > "$out/renders.log"
 for r in $(seq "$rounds"); do
   for t in ${threads//,/ }; do
@@ -47,7 +40,7 @@ for r in $(seq "$rounds"); do
       if [ $scene = cornell ]; then
         args=(scenes/cornell_box.ron --width 384 --height 384 --spp 64)
       else
-        args=("$out/flat_terrain_1m.ron" --spp 64)
+        args=("$flat" --spp 64)
       fi
       line=$(RAYON_NUM_THREADS=$t "$rt" render "${args[@]}" -o "$out/$scene.exr" --stats 2>&1 | grep '^tracing')
       echo "$scene $t $line" | tee -a "$out/renders.log"

@@ -1,2 +1,3 @@
-"""What the bench scripts share: image statistics (`images`) and the Cycles
-set-up of an rt-view export (`cycles`)."""
+"""What the bench scripts share: image statistics (`images`), the Cycles
+set-up of an rt-view export (`cycles`) and the flat terrain scene of the
+coherent-ray benchmarks (`flat_scene`)."""
