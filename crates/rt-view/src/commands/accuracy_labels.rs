@@ -37,8 +37,8 @@ const MAX_LINES: i32 = 12;
 /// (the four corners around it).
 const NEAR: usize = 4;
 
-/// Half the side of the box a point's dot takes, pixels (the dots have a
-/// radius of 4).
+/// Half the side of the box a point's dot takes, pixels (the charts' dots
+/// have a radius of 3 or 4).
 const DOT: i32 = 5;
 
 /// The places tried for a label of `size` beside its point, nearest first.
