@@ -14,9 +14,15 @@
 # toolchain's own LLVM, from rustup's `llvm-tools` component (added here
 # when rustup is there and it is missing). docs/performance.md has what it
 # buys; `scripts/ab_speed.sh target/release/rt-view DIR/rt-view` measures it.
+# RUSTFLAGS already set (say, -Ctarget-cpu=native) go into both builds.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 dir=$(realpath -m "${1:-target/pgo}")
+if [[ $dir =~ [[:space:]] ]]; then
+  # RUSTFLAGS is split at whitespace: the compiler would get half a path.
+  echo "build_pgo.sh: the folder's path has a space in it ($dir); give one without" >&2
+  exit 2
+fi
 sysroot=$(rustc --print sysroot)
 host=$(rustc -vV | sed -n 's/^host: //p')
 profdata="$sysroot/lib/rustlib/$host/bin/llvm-profdata"
@@ -32,7 +38,7 @@ rm -rf "$dir/counts" "$dir/train"
 mkdir -p "$dir/counts" "$dir/train"
 
 echo "== instrumented build ($dir/generate)"
-RUSTFLAGS="-Cprofile-generate=$dir/counts" \
+RUSTFLAGS="${RUSTFLAGS:-} -Cprofile-generate=$dir/counts" \
   cargo build --release --locked -p rt-view --target-dir "$dir/generate"
 trainee="$dir/generate/release/rt-view"
 
@@ -72,7 +78,7 @@ rm -f "$dir"/rt-view-*.profdata
 mv "$dir/counts.profdata" "$profile"
 
 echo "== optimised build ($dir/use)"
-RUSTFLAGS="-Cprofile-use=$profile" \
+RUSTFLAGS="${RUSTFLAGS:-} -Cprofile-use=$profile" \
   cargo build --release --locked -p rt-view --target-dir "$dir/use"
 cp "$dir/use/release/rt-view" "$dir/rt-view"
 echo "wrote $dir/rt-view"
