@@ -12,7 +12,8 @@
 # the two builds, the counts and the result, DIR/rt-view. Two release builds:
 # about 7½ minutes on a 2-core machine. Needs `llvm-profdata` of the
 # toolchain's own LLVM, from rustup's `llvm-tools` component (added here
-# when rustup is there and it is missing). docs/performance.md has what it
+# when rustup is there and it is missing), and python3 (standard library) for
+# bench/common/flat_scene.py. docs/performance.md has what it
 # buys; `scripts/ab_speed.sh target/release/rt-view DIR/rt-view` measures it.
 # RUSTFLAGS already set (say, -Ctarget-cpu=native) go into both builds.
 set -euo pipefail
@@ -56,17 +57,10 @@ done
 run render scenes/cornell_box.ron --width 128 --height 128 --spp 64 -o "$dir/train/cornell.png"
 run bench --quick --runs 1 --threads 1 --out "$dir/train" --showcase scenes/showcase.ron
 # The terrain the bench wrote, flat-coloured at 640×480 from the bench's
-# camera: a pixel's samples traced as packets.
-cat > "$dir/train/flat_terrain.ron" << 'EOF'
-Scene(
-    camera: (position: (0, 6, -9), center_of_interest: (0, 0, 0), up: (0, 1, 0), fov_y: 50, near: 1),
-    image: (width: 640, height: 480),
-    background: (0, 0, 0),
-    materials: { "ground": (color: (0.4, 0.6, 0.3)) },
-    objects: [ Mesh(file: "terrain_100k.obj", material: "ground") ],
-)
-EOF
-run render "$dir/train/flat_terrain.ron" --spp 16 -o "$dir/train/flat.png"
+# camera, as bench/mitsuba_flat.py renders it: a pixel's samples traced as
+# packets.
+flat=$(python3 bench/common/flat_scene.py "$dir/train" 100k)
+run render "$flat" --spp 16 -o "$dir/train/flat.png"
 
 echo "== merging the counts"
 "$profdata" merge -o "$dir/counts.profdata" "$dir/counts"
