@@ -166,6 +166,13 @@ pub struct BsdfSample {
     pub pdf: Real,
     /// The lobe it came from.
     pub lobe: Lobe,
+    /// For a sample through the surface (a transmission lobe), the relative
+    /// index `η = η_i/η_o` of the side `ω_i` is on over the side `ω_o` is on,
+    /// whose `1/η²` the weight carries (radiance compressed into a narrower
+    /// cone); 1 for a reflection. pbrt-v4's `BSDFSample::eta` (§9.5.2), which
+    /// a path tracer multiplies up to take that factor back out of its
+    /// Russian roulette (§14.1.5).
+    pub eta: Real,
 }
 
 /// The BSDF of one material at one hit, seen from one direction `ω_o`.
@@ -478,6 +485,7 @@ impl Bsdf {
             Chosen::Transmission => Lobe::Transmission,
         };
         let wi = self.world(s.wi);
+        let eta = if lobe.is_transmission() { p.eta() } else { 1.0 };
         if self.shaded && !lobe.is_delta() {
             // The terminator term and the facet's sides: as `eval` and `pdf` say.
             let pdf = self.pdf(wo, wi);
@@ -485,9 +493,9 @@ impl Bsdf {
                 return None;
             }
             let weight = self.eval(wo, wi) * to_f32(self.cosine(wi) / pdf);
-            return Some(BsdfSample { wi, weight, pdf, lobe });
+            return Some(BsdfSample { wi, weight, pdf, lobe, eta });
         }
-        Some(BsdfSample { wi, weight: s.weight, pdf: s.pdf, lobe })
+        Some(BsdfSample { wi, weight: s.weight, pdf: s.pdf, lobe, eta })
     }
 
     fn sample_lobes(&self, wo: Vec3, u: Real, u2: (Real, Real)) -> Option<BsdfSample> {
@@ -513,7 +521,7 @@ impl Bsdf {
             }
             let lobe = if u < p_diffuse { Lobe::Diffuse } else { Lobe::Glossy };
             let weight = self.eval(wo, wi) * to_f32(self.n.dot(wi) / pdf);
-            return Some(BsdfSample { wi, weight, pdf, lobe });
+            return Some(BsdfSample { wi, weight, pdf, lobe, eta: 1.0 });
         }
         u -= p_diffuse + p_glossy;
         // δ lobes: weight = lobe weight / probability of choosing it.
@@ -521,7 +529,7 @@ impl Bsdf {
         if u < p_mirror {
             let wi = reflect(-wo, self.n);
             let weight = self.specular_color * total;
-            return Some(BsdfSample { wi, weight, pdf: p_mirror, lobe: Lobe::Mirror });
+            return Some(BsdfSample { wi, weight, pdf: p_mirror, lobe: Lobe::Mirror, eta: 1.0 });
         }
         u -= p_mirror;
         if p_dielectric <= 0.0 {
@@ -534,15 +542,21 @@ impl Bsdf {
         if u < fresnel {
             let wi = reflect(-wo, self.n);
             let pdf = p_dielectric * fresnel;
-            return Some(BsdfSample { wi, weight: Color::splat(total), pdf, lobe: Lobe::Reflection });
+            return Some(BsdfSample {
+                wi,
+                weight: Color::splat(total),
+                pdf,
+                lobe: Lobe::Reflection,
+                eta: 1.0,
+            });
         }
         let wi = refract(-wo, self.n, eta_i, eta_t)?;
         // Radiance arriving from the far side (index eta_t) towards the viewer
         // (index eta_i) is scaled by (eta_i/eta_t)².
-        let eta = eta_i / eta_t;
-        let weight = self.tint * (total * to_f32(eta * eta));
+        let scale = eta_i / eta_t;
+        let weight = self.tint * (total * to_f32(scale * scale));
         let pdf = p_dielectric * (1.0 - fresnel);
-        Some(BsdfSample { wi, weight, pdf, lobe: Lobe::Transmission })
+        Some(BsdfSample { wi, weight, pdf, lobe: Lobe::Transmission, eta: eta_t / eta_i })
     }
 
     /// `w` in the local frame: (tangent, bitangent, normal) coordinates.
@@ -1157,10 +1171,14 @@ mod tests {
         assert_eq!(t.lobe, Lobe::Transmission);
         assert!((t.wi + Vec3::Y).length() < 1e-6);
         assert!((t.weight.x - 1.0 / 2.25).abs() < 1e-6, "1/1.5²: {}", t.weight);
+        // The sample names the index it passed into, whose 1/η² its weight
+        // carries; a reflection crosses nothing.
+        assert_eq!((t.eta, r.eta), (1.5, 1.0));
         // From inside the factor is inverted: entering and leaving cancel.
         let inside = Bsdf::new(&m, Vec3::Y, -Vec3::Y);
         let t = inside.sample(-Vec3::Y, 0.5, (0.5, 0.5)).unwrap();
         assert!((t.weight.x - 2.25).abs() < 1e-5, "{}", t.weight);
+        assert_eq!(t.eta, 1.0 / 1.5);
     }
 
     #[test]

@@ -551,6 +551,12 @@ impl Lobes {
         }
     }
 
+    /// η = (index of the side ω_o is not on)/(index of ω_o's side): the
+    /// relative index a transmitted sample passes into.
+    pub fn eta(&self) -> Real {
+        self.eta
+    }
+
     /// Draws `ω_i`: `u` chooses the lobe, `u2` the direction in it.
     pub fn sample(&self, wo: Vec3, u: Real, u2: (Real, Real)) -> Option<LocalSample> {
         let [d, r, t, _] = self.choose.map(Real::from);
@@ -747,6 +753,34 @@ mod tests {
             .sum::<f64>()
             / 200_000.0;
         assert!((f64::from(exact_weight_average(1.5)) - reference).abs() < 1e-4, "{reference}");
+    }
+
+    #[test]
+    fn transmitted_samples_name_the_index_they_pass_into_and_reflections_none() {
+        // Smooth and rough glass of index 1.5, seen from outside and from
+        // inside: every transmitted sample's `eta` is the index of the side
+        // it passes into over the side of ω_o (1.5 in, 1/1.5 out), the 1/η²
+        // that its radiance weight carries; every reflection's is 1.
+        let mut rng = SampleRng::new(11, 12, 13);
+        for roughness in [0.0, 0.3] {
+            let glass = pbr(Color::ONE, |p| (p.transmission, p.roughness) = (1.0, roughness));
+            for (wo, expected) in [(at(30.0), 1.5 as Real), (-at(20.0), 1.0 / 1.5)] {
+                let b = Bsdf::new(&glass, Vec3::Y, wo);
+                let (mut through, mut back) = (0, 0);
+                for _ in 0..2000 {
+                    let (u, _) = rng.next_pair();
+                    let Some(s) = b.sample(wo, u, rng.next_pair()) else { continue };
+                    if s.lobe.is_transmission() {
+                        assert_eq!(s.eta, expected, "roughness {roughness}, {wo}: {s:?}");
+                        through += 1;
+                    } else {
+                        assert_eq!(s.eta, 1.0, "roughness {roughness}, {wo}: {s:?}");
+                        back += 1;
+                    }
+                }
+                assert!(through > 100 && back > 10, "roughness {roughness}, {wo}: {through} {back}");
+            }
+        }
     }
 
     #[test]
