@@ -28,9 +28,13 @@ import os
 import re
 import statistics
 import subprocess
+import sys
 import tempfile
 
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import mitsuba_compare  # noqa: E402  (its EXR reader)
 
 
 def main():
@@ -69,8 +73,11 @@ def main():
                     done = subprocess.run(command, env=env, capture_output=True, text=True)
                     if done.returncode != 0:
                         raise SystemExit(f"{build} failed on {scene}: {done.stderr.strip()[-300:]}")
-                    times[build].append(float(re.search(r"tracing: ([0-9.]+) s", done.stderr).group(1)))
-                    images[build].append(np.array(mi.Bitmap(out), dtype=np.float64)[:, :, :3])
+                    tracing = re.search(r"tracing: ([0-9.]+) s", done.stderr)
+                    if not tracing:
+                        raise SystemExit(f"no tracing time in {build}'s --stats output:\n{done.stderr}")
+                    times[build].append(float(tracing.group(1)))
+                    images[build].append(mitsuba_compare.read_exr(mi, out))
             baseline = None
             for build in builds:
                 stack = np.stack(images[build])
