@@ -546,13 +546,18 @@ impl Bvh {
                 #[cfg(not(all(target_arch = "x86_64", not(feature = "f64"))))]
                 let (near, entered) = slabs.entries(node, range.min, t_max);
                 // Go on with the nearest entered child; the others wait on the
-                // stack (pushed in slot order: a node visit enters 1.2
-                // children on average, so a full sort buys little).
+                // stack, sorted so that the nearer pops first (Embree's
+                // closest-hit order). A visit enters 1.2–1.3 children on
+                // average, so the insertion sort rarely moves anything;
+                // where it does, a hit found in the nearer subtree prunes
+                // the farther ones (in slot order, a single ray on the 1 M
+                // terrain tested 8 % more leaves; docs/performance.md).
                 if entered != 0 {
                     let slot = entered.trailing_zeros() as usize;
                     let mut rest = entered & (entered - 1);
                     let mut nearest = (node.children[slot], near[slot]);
                     self.prefetch(nearest.0);
+                    let base = sp;
                     while rest != 0 {
                         let slot = rest.trailing_zeros() as usize;
                         rest &= rest - 1;
@@ -561,8 +566,7 @@ impl Bvh {
                         if entry.1 < nearest.1 {
                             std::mem::swap(&mut entry, &mut nearest);
                         }
-                        stack[sp].write(entry);
-                        sp += 1;
+                        push_sorted(stack, base, &mut sp, entry, |e| e.1);
                     }
                     current = nearest.0;
                     continue;
@@ -587,6 +591,32 @@ impl Bvh {
             }
         }
     }
+}
+
+/// Pushes `entry` onto the stack `stack[..sp]` (raising `sp` by one) so
+/// that the entries from `base` up, a node's waiting children, stay sorted
+/// by `near`: the nearest on top, popped first. An insertion sort: a visit
+/// leaves 0–1 children waiting as a rule, rarely more.
+#[inline(always)]
+fn push_sorted<T: Copy>(
+    stack: &mut [MaybeUninit<T>],
+    base: usize,
+    sp: &mut usize,
+    entry: T,
+    near: impl Fn(&T) -> Real,
+) {
+    let mut at = *sp;
+    while at > base {
+        // SAFETY: the caller wrote every entry below `sp`.
+        let below = unsafe { stack[at - 1].assume_init() };
+        if near(&below) >= near(&entry) {
+            break;
+        }
+        stack[at].write(below);
+        at -= 1;
+    }
+    stack[at].write(entry);
+    *sp += 1;
 }
 
 impl Bvh {
@@ -940,6 +970,41 @@ mod tests {
             let (near_sse, entered_sse) = slabs.entries_sse(&node, t_min, t_max);
             prop_assert_eq!(entered, entered_sse);
             prop_assert_eq!(near.map(Real::to_bits), near_sse.map(Real::to_bits));
+        }
+    }
+
+    #[test]
+    fn the_leaves_a_ray_enters_are_visited_nearest_first_whichever_way_it_goes() {
+        // Eight balls in a row along x, in leaves under the one root node.
+        // A leaf test that finds nothing lets the traversal go on to every
+        // leaf on the ray's line; they must come nearest first, so that a
+        // hit found early prunes the rest, for either direction along the
+        // row (the node's slots are in one order, the ray may go the other).
+        let balls: Vec<Primitive> = (0..8)
+            .map(|k| {
+                Primitive::Sphere(
+                    crate::geometry::sphere::Sphere::new(v([3.0 * k as f32, 0.0, 0.0]), 1.0).unwrap(),
+                )
+            })
+            .collect();
+        let s = scene(balls);
+        let bvh = Bvh::build(s.objects());
+        assert_eq!(bvh.stats().nodes, 1, "one root node over the leaves");
+        for (origin, dir) in [(-5.0, 1.0), (26.0, -1.0)] {
+            let ray = Ray::new(Vec3::new(origin, 0.0, 0.0), Vec3::new(dir, 0.0, 0.0));
+            // Each leaf visited, by the balls it holds (numbered along +x).
+            let mut visited = Vec::new();
+            bvh.traverse(&ray, Interval::new(0.0, Real::INFINITY), |blocks, lanes| {
+                let balls = (blocks.iter().enumerate())
+                    .flat_map(|(b, leaf)| lanes_of(lanes.block(b).objects()).map(|lane| leaf.object(lane)));
+                visited.push(balls.collect::<Vec<_>>());
+                None
+            });
+            assert!(visited.len() > 2, "{visited:?}");
+            assert_eq!(visited.iter().map(Vec::len).sum::<usize>(), 8, "{visited:?}");
+            let mut nearest_first = visited.clone();
+            nearest_first.sort_by_key(|balls| if dir > 0.0 { balls[0] as i64 } else { -(balls[0] as i64) });
+            assert_eq!(visited, nearest_first, "ray from x = {origin}");
         }
     }
 

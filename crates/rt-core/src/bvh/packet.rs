@@ -26,7 +26,7 @@ use std::mem::MaybeUninit;
 use super::leaf::lanes_of;
 use super::node::{Child, Node, WIDTH};
 use super::query::Query;
-use super::{Bvh, INLINE_STACK, PACKET_RAYS};
+use super::{Bvh, INLINE_STACK, PACKET_RAYS, push_sorted};
 use crate::geometry::hit::Hit;
 use crate::geometry::method::Methods;
 use crate::geometry::object::Object;
@@ -509,6 +509,7 @@ impl Bvh {
                     let slot = entered.trailing_zeros() as usize;
                     let mut rest = entered & (entered - 1);
                     let mut nearest = pending(slot);
+                    let base = sp;
                     while rest != 0 {
                         let slot = rest.trailing_zeros() as usize;
                         rest &= rest - 1;
@@ -516,8 +517,8 @@ impl Bvh {
                         if entry.near < nearest.near {
                             std::mem::swap(&mut entry, &mut nearest);
                         }
-                        stack[sp].write(entry);
-                        sp += 1;
+                        // Sorted, the nearest on top, as a single ray's.
+                        push_sorted(&mut stack, base, &mut sp, entry, |e| e.near);
                     }
                     current = nearest;
                     continue;
