@@ -66,6 +66,22 @@ const INLINE_STACK: usize = 96;
 /// of 64 pixels of a row at one sample each.
 pub const PACKET_RAYS: usize = 64;
 
+/// How a single ray's query comes, which decides where its hit's normal
+/// comes from ([`Bvh::closest_hit_among`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rays {
+    /// A ray on its own (a bounce): a mesh triangle's normal is read from
+    /// the mesh's list where the list stays in the cache (up to 4 MiB) and
+    /// made again from the leaf's corners where it does not, since the
+    /// normals of scattered hits are scattered over the list.
+    Alone,
+    /// One of a run of neighbouring rays (a row's primary rays, one after
+    /// the other): the normal is always read from the list, as a packet's
+    /// are, since the neighbour's hit has brought that part of the list
+    /// into the cache.
+    InARun,
+}
+
 /// What a build produced, for `--stats` and benchmarks.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct BvhStats {
@@ -323,7 +339,7 @@ impl Bvh {
     }
 
     /// The closest hit with `t` in `range`, exactly as the in-order loop over
-    /// all objects finds it.
+    /// all objects finds it, for a ray on its own ([`Rays::Alone`]).
     pub fn closest_hit(
         &self,
         objects: &[Object],
@@ -331,12 +347,29 @@ impl Bvh {
         range: Interval,
         methods: Methods,
     ) -> Option<Hit> {
+        self.closest_hit_among(objects, ray, range, methods, Rays::Alone)
+    }
+
+    /// [`Bvh::closest_hit`] for a ray that comes as `rays` say: the same
+    /// hit either way; where the hit's normal comes from differs.
+    pub fn closest_hit_among(
+        &self,
+        objects: &[Object],
+        ray: &Ray,
+        range: Interval,
+        methods: Methods,
+        rays: Rays,
+    ) -> Option<Hit> {
+        let read_up_to = match rays {
+            Rays::Alone => NORMALS_READ_UP_TO,
+            Rays::InARun => usize::MAX,
+        };
         #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2 (checked just above).
-            return unsafe { self.closest_hit_avx2(objects, ray, range, methods) };
+            return unsafe { self.closest_hit_avx2(objects, ray, range, methods, read_up_to) };
         }
-        self.closest_hit_with::<false>(objects, ray, range, methods)
+        self.closest_hit_with::<false>(objects, ray, range, methods, read_up_to)
     }
 
     /// [`Bvh::closest_hit`] compiled for AVX2 as a whole: the set-up, the
@@ -353,12 +386,14 @@ impl Bvh {
         ray: &Ray,
         range: Interval,
         methods: Methods,
+        read_up_to: usize,
     ) -> Option<Hit> {
-        self.closest_hit_with::<true>(objects, ray, range, methods)
+        self.closest_hit_with::<true>(objects, ray, range, methods, read_up_to)
     }
 
-    /// [`Bvh::closest_hit`] with the AVX2 traversal if `AVX2` (which the
-    /// caller has checked the CPU for).
+    /// [`Bvh::closest_hit_among`], reading normal lists up to `read_up_to`
+    /// bytes long, with the AVX2 traversal if `AVX2` (which the caller has
+    /// checked the CPU for).
     #[inline(always)]
     fn closest_hit_with<const AVX2: bool>(
         &self,
@@ -366,6 +401,7 @@ impl Bvh {
         ray: &Ray,
         range: Interval,
         methods: Methods,
+        read_up_to: usize,
     ) -> Option<Hit> {
         let mut query = Query::new(self.prepared::<false>(ray), range);
         query.test_unbounded(&self.unbounded, objects, methods);
@@ -380,6 +416,7 @@ impl Bvh {
             objects,
             object_blocks: &self.object_blocks,
             methods,
+            read_up_to,
             best_lane: None,
         };
         self.traverse_by::<AVX2, _>(ray, range, &mut closest);
@@ -680,21 +717,26 @@ struct Closest<'a, 'q, const AVX2: bool> {
     objects: &'a [Object],
     object_blocks: &'a [ObjectBlock],
     methods: Methods,
+    /// The longest normal list (bytes) the hit's normal is read from.
+    read_up_to: usize,
     /// The leaf and lane of the best hit so far if it is a triangle of a
-    /// mesh whose normals are made again from the leaf's corners
-    /// ([`NORMALS_READ_UP_TO`]).
+    /// mesh whose normals are made again from the leaf's corners (its list
+    /// is longer than `read_up_to`).
     best_lane: Option<(&'a Leaf, usize)>,
 }
 
-/// The longest normal list (bytes) a closest-hit query reads its hit's
-/// normal from; for a longer one it makes the normal again from the leaf's
-/// corners. Reading is the cheaper of the two while the list stays in the
-/// cache: making it is a chain of two divisions, a square root and a third
-/// division. `rt-view bench --threads 1` on the 2-core development machine
-/// (docs/performance.md): reading made single rays 23–29 % faster on the
-/// 10 k and 100 k meshes (120 KB and 1.2 MB of normals) and bounce rays
-/// 0–4 %; on the 1 M mesh (12 MB) single rays 9–12 % faster but bounce
-/// rays, whose normals are scattered over the list, 8 % slower.
+/// The longest normal list (bytes) a closest-hit query of a ray on its own
+/// ([`Rays::Alone`]) reads its hit's normal from; for a longer one it
+/// makes the normal again from the leaf's corners. Reading is the cheaper
+/// of the two while the list stays in the cache: making it is a chain of
+/// two divisions, a square root and a third division. `rt-view bench
+/// --threads 1` on the 2-core development machine (docs/performance.md):
+/// reading made single rays 23–29 % faster on the 10 k and 100 k meshes
+/// (120 KB and 1.2 MB of normals) and bounce rays 0–4 %; on the 1 M mesh
+/// (12 MB) single primary rays 8–12 % faster (a neighbour's hit has loaded
+/// the part of the list read: [`Rays::InARun`] always reads)
+/// but bounce rays, whose normals are scattered over the list, 4–8 %
+/// slower.
 const NORMALS_READ_UP_TO: usize = 4 << 20;
 
 impl<'a, const AVX2: bool> LeafTest<'a> for Closest<'a, '_, AVX2> {
@@ -706,7 +748,7 @@ impl<'a, const AVX2: bool> LeafTest<'a> for Closest<'a, '_, AVX2> {
             Best::Triangle(block, lane) => {
                 self.best_lane = None;
                 if let Primitive::Mesh(mesh) = &self.objects[blocks[block].object(lane) as usize].primitive {
-                    if mesh.normal_list_bytes() <= NORMALS_READ_UP_TO {
+                    if mesh.normal_list_bytes() <= self.read_up_to {
                         // Read when the traversal ends ([`Query::finish`]):
                         // started now, the load overlaps the rest of it.
                         mesh.prefetch_normal(blocks[block].index(lane) as usize);
@@ -1006,6 +1048,36 @@ mod tests {
             nearest_first.sort_by_key(|balls| if dir > 0.0 { balls[0] as i64 } else { -(balls[0] as i64) });
             assert_eq!(visited, nearest_first, "ray from x = {origin}");
         }
+    }
+
+    #[test]
+    fn a_coherent_query_reads_the_normal_an_incoherent_one_makes_again_and_they_agree() {
+        // A mesh whose normal list is past NORMALS_READ_UP_TO: a ray on its
+        // own makes its hit's normal from the leaf's corners, one of a run of
+        // neighbours reads it from the list. Same hit, same bits.
+        let n = 430;
+        let grid = grid_mesh(n, |i, j| {
+            Vec3::new(i as Real * 0.1, ((i * 7 + j * 13) % 11) as Real * 0.013, j as Real * 0.1)
+        });
+        let s = scene(vec![Primitive::Mesh(grid)]);
+        let Primitive::Mesh(mesh) = &s.objects()[0].primitive else { unreachable!() };
+        assert!(mesh.normal_list_bytes() > NORMALS_READ_UP_TO, "{} bytes", mesh.normal_list_bytes());
+        let bvh = Bvh::build(s.objects());
+        let (mut hits, mut normals_differ) = (0, 0);
+        for k in 0..400 {
+            let target = Vec3::new((k % 20) as Real * 2.1 + 0.37, 0.0, (k / 20) as Real * 2.1 + 0.61);
+            let ray = Ray::new(Vec3::new(21.0, 9.0, -4.0), target - Vec3::new(21.0, 9.0, -4.0));
+            let range = Interval::new(0.0, Real::INFINITY);
+            let alone = bvh.closest_hit(s.objects(), &ray, range, Methods::default());
+            let in_a_run = bvh.closest_hit_among(s.objects(), &ray, range, Methods::default(), Rays::InARun);
+            assert_eq!(alone, in_a_run, "ray {k}");
+            if let Some(hit) = alone {
+                hits += 1;
+                assert_eq!(hit.normal, mesh.normal(hit.primitive), "ray {k}");
+                normals_differ += usize::from(hit.normal != mesh.normal(0));
+            }
+        }
+        assert!(hits == 400 && normals_differ > 100, "{hits} hits, {normals_differ} tilted");
     }
 
     #[test]

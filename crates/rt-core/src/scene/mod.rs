@@ -19,7 +19,7 @@ use std::sync::Arc;
 
 use thiserror::Error;
 
-use crate::bvh::{Bvh, BvhStats, PACKET_RAYS};
+use crate::bvh::{Bvh, BvhStats, PACKET_RAYS, Rays};
 use crate::geometry::hit::Hit;
 use crate::geometry::method::Methods;
 use crate::geometry::object::Object;
@@ -471,15 +471,16 @@ impl Scene {
     /// first ([`Ray::rescaled`]).
     pub fn closest_hit(&self, ray: &Ray, range: Interval) -> Option<Hit> {
         let (unit, range, k) = rescaled_query(ray, range)?;
-        self.closest_hit_rescaled(&unit, range, k)
+        self.closest_hit_rescaled(&unit, range, k, Rays::Alone)
     }
 
-    /// The BVH query on a ray already rescaled by `2ᵏ`, with `t` mapped back.
-    /// Inlined into its callers, so that a single ray's set-up (rescaling, the
-    /// range) runs in one function up to the BVH's.
+    /// The BVH query on a ray already rescaled by `2ᵏ` that comes as `rays`
+    /// say, with `t` mapped back. Inlined into its callers, so that a single
+    /// ray's set-up (rescaling, the range) runs in one function up to the
+    /// BVH's.
     #[inline(always)]
-    fn closest_hit_rescaled(&self, unit: &Ray, range: Interval, k: i32) -> Option<Hit> {
-        let found = self.bvh.closest_hit(&self.objects, unit, range, self.methods)?;
+    fn closest_hit_rescaled(&self, unit: &Ray, range: Interval, k: i32, rays: Rays) -> Option<Hit> {
+        let found = self.bvh.closest_hit_among(&self.objects, unit, range, self.methods, rays)?;
         if self.cuts && self.cut_out(unit, &found) {
             let hit = self.closest_past_cut_outs(unit, Interval::new(found.t, range.max))?;
             return rescaled_hit(&hit, k);
@@ -618,11 +619,19 @@ impl Scene {
 
     /// The nearest hit of a ray whose history is unknown (a `cast` query or a
     /// primary ray): hits within `2⁻¹⁶·max(1, |origin|∞)` of the origin do not
-    /// count ([`crate::math::real::CAST_MIN_DISTANCE_FACTOR`]).
+    /// count ([`crate::math::real::CAST_MIN_DISTANCE_FACTOR`]). Such rays come
+    /// in runs of neighbours (a row's pixels), so a mesh triangle's normal is
+    /// read from the mesh's list ([`Rays::InARun`]), as a
+    /// packet's are ([`Scene::cast_all`]); the hit is the same either way.
     pub fn cast(&self, ray: &Ray) -> Option<Hit> {
         // Rescale once: the rule's minimum t is computed on the rescaled ray.
         let (unit, k) = ray.rescaled()?;
-        self.closest_hit_rescaled(&unit, Interval::new(cast_min_t(unit.origin, unit.dir), Real::INFINITY), k)
+        self.closest_hit_rescaled(
+            &unit,
+            Interval::new(cast_min_t(unit.origin, unit.dir), Real::INFINITY),
+            k,
+            Rays::InARun,
+        )
     }
 
     /// [`Scene::cast`] for each of `rays`, into `hits`, with the same
