@@ -734,9 +734,8 @@ struct Closest<'a, 'q, const AVX2: bool> {
 /// reading made single rays 23–29 % faster on the 10 k and 100 k meshes
 /// (120 KB and 1.2 MB of normals) and bounce rays 0–4 %; on the 1 M mesh
 /// (12 MB) single primary rays 8–12 % faster (a neighbour's hit has loaded
-/// the part of the list read: [`Rays::InARun`] always reads)
-/// but bounce rays, whose normals are scattered over the list, 4–8 %
-/// slower.
+/// the part of the list read: [`Rays::InARun`] always reads) but bounce
+/// rays, whose normals are scattered over the list, 4–8 % slower.
 const NORMALS_READ_UP_TO: usize = 4 << 20;
 
 impl<'a, const AVX2: bool> LeafTest<'a> for Closest<'a, '_, AVX2> {
