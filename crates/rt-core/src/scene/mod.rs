@@ -621,8 +621,8 @@ impl Scene {
     /// primary ray): hits within `2⁻¹⁶·max(1, |origin|∞)` of the origin do not
     /// count ([`crate::math::real::CAST_MIN_DISTANCE_FACTOR`]). Such rays come
     /// in runs of neighbours (a row's pixels), so a mesh triangle's normal is
-    /// read from the mesh's list ([`Rays::InARun`]), as a
-    /// packet's are ([`Scene::cast_all`]); the hit is the same either way.
+    /// read from the mesh's list ([`Rays::InARun`]), as a packet's are
+    /// ([`Scene::cast_all`]); the hit is the same either way.
     pub fn cast(&self, ray: &Ray) -> Option<Hit> {
         // Rescale once: the rule's minimum t is computed on the rescaled ray.
         let (unit, k) = ray.rescaled()?;
