@@ -375,6 +375,8 @@ fn stats_report_load_bvh_and_tracing_separately() {
     // mesh.ron: the icosphere (320 triangles) and the torus (288 quads → 576 triangles).
     assert!(err.contains("BVH: 896 primitives,"), "{err}");
     assert!(err.contains("scene load: ") && err.contains("(of which BVH build "), "{err}");
+    let steps = err.lines().find_map(|l| l.strip_prefix("BVH build steps: ")).expect("build steps line");
+    assert!(steps.starts_with("items ") && steps.contains(", collapse with the leaves "), "{steps}");
     // No lights: pure ray casting, one primary ray per pixel (320×240) and nothing else.
     assert!(err.contains("effects: none (no lights"), "{err}");
     assert!(

@@ -210,6 +210,7 @@ impl Bvh {
                 + object_blocks.len() * size_of::<super::object_block::ObjectBlock>(),
             sah_cost: a.sah_cost,
             build_time: std::time::Duration::ZERO,
+            build_steps: super::BuildSteps::default(),
         };
         Ok(Self {
             nodes: super::huge_pages::moved(nodes),
@@ -269,6 +270,9 @@ fn is_empty_slot(node: &Node, slot: usize) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::time::Duration;
+
+    use super::super::BuildSteps;
     use crate::geometry::sphere::Sphere;
     use crate::math::ray::{Interval, Ray};
     use crate::math::real::Vec3;
@@ -292,6 +296,9 @@ mod tests {
         let back = Bvh::from_arrays(arrays.as_ref(), &objects).unwrap();
         assert_eq!(back.stack_bound, built.stack_bound);
         let (a, b) = (back.stats(), built.stats());
+        // Read back, not built: no build time, no steps.
+        assert_eq!((a.build_time, a.build_steps), (Duration::ZERO, BuildSteps::default()));
+        assert!(b.build_steps.binary_tree > Duration::ZERO);
         assert_eq!(
             (a.nodes, a.leaves, a.leaf_blocks, a.depth, a.primitives),
             (b.nodes, b.leaves, b.leaf_blocks, b.depth, b.primitives)

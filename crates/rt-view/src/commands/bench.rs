@@ -17,6 +17,7 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use clap::Args;
 use rayon::prelude::*;
+use rt_core::bvh::BuildSteps;
 use rt_core::geometry::mesh::Mesh;
 use rt_core::math::real::to_f32;
 use rt_core::sampling::sampler::{SampleRng, cosine_hemisphere};
@@ -124,6 +125,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
                     stats.nodes,
                     stats.leaves
                 );
+                println!("  steps (medians): {}", b.steps);
             }
             continue;
         }
@@ -213,6 +215,8 @@ struct BuildTimes {
     /// The kernel's share of it, and its page faults ([`KernelUsage`]).
     system: Duration,
     page_faults: u64,
+    /// The medians of each of the build's steps.
+    steps: BuildSteps,
 }
 
 /// Makes `runs` scenes of `mesh` with `scene_of` on a pool of `threads`
@@ -227,6 +231,8 @@ fn time_builds<E: std::error::Error + Send + Sync + 'static>(
 ) -> anyhow::Result<BuildTimes> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     let (mut build, mut cpu, mut system, mut page_faults) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut steps: [Vec<Duration>; 5] = Default::default();
+    let step_times = |s: BuildSteps| [s.items, s.binary_tree, s.leaf_list, s.collapse, s.finish];
     for _ in 0..runs {
         let mesh = mesh.clone();
         let (before, usage) = (process_cpu_time(), KernelUsage::now());
@@ -235,13 +241,21 @@ fn time_builds<E: std::error::Error + Send + Sync + 'static>(
         let spent = KernelUsage::now().since(usage);
         system.push(spent.system);
         page_faults.push(spent.page_faults);
-        build.push(made.bvh_stats().build_time);
+        let stats = made.bvh_stats();
+        build.push(stats.build_time);
+        for (list, d) in steps.iter_mut().zip(step_times(stats.build_steps)) {
+            list.push(d);
+        }
     }
     Ok(BuildTimes {
         build: median(build),
         cpu: median(cpu),
         system: median(system),
         page_faults: median(page_faults),
+        steps: {
+            let [items, binary_tree, leaf_list, collapse, finish] = steps.map(median);
+            BuildSteps { items, binary_tree, leaf_list, collapse, finish }
+        },
     })
 }
 

@@ -273,6 +273,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         let bvh = scene.bvh_stats();
         let build = bvh.build_time.as_secs_f64();
         eprintln!("scene load: {:.3} s (of which BVH build {build:.3} s)", load_time.as_secs_f64());
+        if bvh.primitives > 0 {
+            eprintln!("BVH build steps: {}", bvh.build_steps);
+        }
         eprintln!(
             "BVH: {} primitives, {} nodes ({}-wide), depth {}, {:.1} KiB ({:.1} bytes per primitive)",
             bvh.primitives,
