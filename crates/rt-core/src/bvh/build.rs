@@ -415,19 +415,50 @@ fn build_node(
 /// [`partition`] does, and bins each side by its [`Binning`] (where given)
 /// on the way into `bins` (left, right; empty to begin with); returns how
 /// many went left.
+///
+/// As in [`bin_items`], neighbouring items tend to fall into the same bin,
+/// and each update of a bin waits for the one before it; so in a node over
+/// [`PARALLEL_ITEMS`] (on one thread, its children are binned here) each
+/// side's items go to two sets of bins by the parity of their position,
+/// merged at the end (exact in any order: the same bins). That took a
+/// twentieth off the one-thread binary tree of the 1 M-triangle terrain;
+/// on smaller nodes clearing and merging the second sets costs more than
+/// the shorter chain saves (docs/performance.md).
 fn partition_and_bin<const WHOLE: bool>(
+    items: &mut [Item],
+    left: impl Fn(Wide) -> bool,
+    binnings: [Option<Binning>; 2],
+    bins: &mut [[Bin; BINS]; 2],
+) -> usize {
+    if binnings.iter().all(Option::is_none) {
+        return partition(items, |i| left(i.centroid()));
+    }
+    if items.len() > PARALLEL_ITEMS {
+        partition_and_bin_in::<WHOLE, true>(items, left, binnings, bins)
+    } else {
+        partition_and_bin_in::<WHOLE, false>(items, left, binnings, bins)
+    }
+}
+
+/// [`partition_and_bin`] with a second set of bins for each side where
+/// `TWO_SETS`.
+fn partition_and_bin_in<const WHOLE: bool, const TWO_SETS: bool>(
     items: &mut [Item],
     left: impl Fn(Wide) -> bool,
     [left_binning, right_binning]: [Option<Binning>; 2],
     bins: &mut [[Bin; BINS]; 2],
 ) -> usize {
-    if left_binning.is_none() && right_binning.is_none() {
-        return partition(items, |i| left(i.centroid()));
-    }
-    let [left_bins, right_bins] = bins;
-    let add = |bins: &mut [Bin; BINS], binning: Option<Binning>, item: &Item, c: Wide| {
-        if let Some(b) = binning {
-            bins[b.bin(c)].add::<WHOLE>(item, c);
+    // The second set of each side, for the items at odd positions.
+    let mut odd = [[Bin::EMPTY; BINS]; 2];
+    let add = |bins: &mut [[Bin; BINS]; 2],
+               odd: &mut [[Bin; BINS]; 2],
+               side: usize,
+               at: usize,
+               item: &Item,
+               c: Wide| {
+        if let Some(b) = [left_binning, right_binning][side] {
+            let set = if TWO_SETS && at & 1 == 1 { &mut odd[side] } else { &mut bins[side] };
+            set[b.bin(c)].add::<WHOLE>(item, c);
         }
     };
     // Hoare's scheme as in `partition`; each item is binned once, when its
@@ -439,7 +470,7 @@ fn partition_and_bin<const WHOLE: bool>(
             if !left(c) {
                 break;
             }
-            add(left_bins, left_binning, &items[i], c);
+            add(bins, &mut odd, 0, i, &items[i], c);
             i += 1;
         }
         while i < j {
@@ -447,17 +478,22 @@ fn partition_and_bin<const WHOLE: bool>(
             if left(c) {
                 break;
             }
-            add(right_bins, right_binning, &items[j - 1], c);
+            add(bins, &mut odd, 1, j - 1, &items[j - 1], c);
             j -= 1;
         }
         if i + 1 >= j {
             break;
         }
         items.swap(i, j - 1);
-        add(left_bins, left_binning, &items[i], items[i].centroid());
-        add(right_bins, right_binning, &items[j - 1], items[j - 1].centroid());
+        add(bins, &mut odd, 0, i, &items[i], items[i].centroid());
+        add(bins, &mut odd, 1, j - 1, &items[j - 1], items[j - 1].centroid());
         i += 1;
         j -= 1;
+    }
+    if TWO_SETS {
+        for (set, other) in bins.iter_mut().zip(odd) {
+            *set = merge_bins(*set, other);
+        }
     }
     i
 }
@@ -606,6 +642,45 @@ mod tests {
         let order = |v: &[Item]| v.iter().map(|i| i.index()).collect::<Vec<_>>();
         assert_eq!(order(&a), order(&b));
         assert_eq!(sa, sb);
+    }
+
+    #[test]
+    fn two_sets_of_bins_by_parity_give_the_bins_of_one() {
+        let items = items(100); // 10 000 items, over PARALLEL_ITEMS.
+        assert!(items.len() > PARALLEL_ITEMS);
+        let all = Bin::of(&items, false);
+        let binning = Binning::of(&all, items.len(), 0).unwrap();
+        // The children's binnings, as `build_node` plans them, split near the middle.
+        let left = |c: Wide| binning.below(c, BINS / 2);
+        let plan = |side: Bin| Binning::of(&side, side.count, 1);
+        let (l, r) = items.iter().fold((Bin::EMPTY, Bin::EMPTY), |(mut l, mut r), item| {
+            let c = item.centroid();
+            if left(c) {
+                l.add::<false>(item, c)
+            } else {
+                r.add::<false>(item, c)
+            }
+            (l, r)
+        });
+        let binnings = [plan(l), plan(r)];
+        let (mut a, mut b) = (items.clone(), items.clone());
+        let (mut bins_a, mut bins_b) = ([[Bin::EMPTY; BINS]; 2], [[Bin::EMPTY; BINS]; 2]);
+        let mid_a = partition_and_bin_in::<false, true>(&mut a, left, binnings, &mut bins_a);
+        let mid_b = partition_and_bin_in::<false, false>(&mut b, left, binnings, &mut bins_b);
+        assert_eq!(mid_a, mid_b);
+        assert_eq!(mid_a, l.count);
+        let order = |v: &[Item]| v.iter().map(|i| i.index()).collect::<Vec<_>>();
+        assert_eq!(order(&a), order(&b));
+        let fields = |bins: &[[Bin; BINS]; 2]| {
+            bins.iter()
+                .flatten()
+                .map(|b| (b.min, b.max, b.centroid_min, b.centroid_max, b.count, b.whole))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(fields(&bins_a), fields(&bins_b));
+        // Every item was binned on its side.
+        assert_eq!(bins_a[0].iter().map(|b| b.count).sum::<usize>(), l.count);
+        assert_eq!(bins_a[1].iter().map(|b| b.count).sum::<usize>(), r.count);
     }
 
     /// Checks that `tree` over `items` (as `build` left them) is a valid
