@@ -8,6 +8,9 @@
 # `cargo build --release -p rt-view`). It runs
 #   - `rt-view bench --runs 7 --threads THREADS` twice (OUT/bench_a.csv, bench_b.csv),
 #   - `bench/embree_primary.py` on the same rays where Python has embreex and numpy,
+#   - the builds alone: `rt-view bench --build-only --runs 7 --threads THREADS`, each
+#     build's steps with it (items, binary tree, leaf list, collapse, finish), and
+#     Embree's commits alone (`bench/embree_primary.py --build-only`) where it can,
 #   - ROUNDS rounds (default 5), the thread counts taking turns, of the Cornell box
 #     (384x384, 64 spp, path tracing) and of the 1 M terrain's flat 64-spp render
 #     (bench/common/flat_scene.py, as bench/mitsuba_flat.py renders it), each line its
@@ -31,6 +34,10 @@ if python3 -c 'import embreex, numpy' 2>/dev/null; then
   python3 bench/embree_primary.py "$out" --runs 7 --threads "$threads" | tee "$out/embree.log"
 else
   echo "(no embreex/numpy for python3: Embree left out)"
+fi
+"$rt" bench --build-only --runs 7 --threads "$threads" --out "$out" 2>&1 | grep -v generating | tee "$out/builds.log"
+if python3 -c 'import embreex, numpy' 2>/dev/null; then
+  python3 bench/embree_primary.py "$out" --build-only --runs 7 --threads "$threads" | tee "$out/embree_builds.log"
 fi
 flat=$(python3 bench/common/flat_scene.py "$out" 1m)
 : > "$out/renders.log"
