@@ -83,3 +83,19 @@ fn a_damaged_or_truncated_cache_is_refused_with_a_message() {
     // The cache that was there is left as it was.
     assert_eq!(std::fs::read(&path).unwrap(), bytes);
 }
+
+#[test]
+fn stats_name_the_build_steps_of_a_tree_built_and_not_of_one_read_from_a_cache() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).display().to_string();
+    ok(&["prepare", &scene("mesh.ron"), "-o", &p("mesh.rtc")]);
+    let out = p("m.png");
+    let stats = |s: &str| {
+        let mut args = vec!["render", s, "-o", &out, "--stats"];
+        args.extend(SIZE);
+        stderr(&ok(&args))
+    };
+    let (built, read) = (stats(&scene("mesh.ron")), stats(&p("mesh.rtc")));
+    assert!(built.contains("BVH build steps: items "), "{built}");
+    assert!(read.contains("BVH: 896 primitives,") && !read.contains("BVH build steps"), "{read}");
+}

@@ -273,7 +273,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         let bvh = scene.bvh_stats();
         let build = bvh.build_time.as_secs_f64();
         eprintln!("scene load: {:.3} s (of which BVH build {build:.3} s)", load_time.as_secs_f64());
-        if bvh.primitives > 0 {
+        if bvh.build_steps != rt_core::bvh::BuildSteps::default() {
+            // Built here, not read back from a scene cache.
             eprintln!("BVH build steps: {}", bvh.build_steps);
         }
         eprintln!(
