@@ -113,15 +113,18 @@ pub struct BvhStats {
     pub build_steps: BuildSteps,
 }
 
-/// Wall time of each step of [`Bvh::build`], in order; together they make
-/// up its `build_time`. Zero for a tree read from a file.
+/// Wall time of each step of [`Bvh::build`], in order: laps of one clock,
+/// which together make up its `build_time` but for the few nanoseconds
+/// between the clock's reads. Zero for a tree read back from its arrays
+/// (a scene cache).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct BuildSteps {
     /// Listing the items (one per mesh triangle or other bounded object,
     /// with its box and centroid), on all threads.
     pub items: Duration,
-    /// The binary tree by the binned SAH (`bvh/build.rs`), on all threads
-    /// below the nodes that are split on one.
+    /// The binary tree by the binned SAH (`bvh/build.rs`): nodes over a
+    /// few thousand items are binned on all threads and their halves built
+    /// at the same time, smaller ones on one thread each.
     pub binary_tree: Duration,
     /// Listing the leaves' blocks and taking the memory for the nodes and
     /// leaves.
