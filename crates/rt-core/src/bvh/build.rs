@@ -421,9 +421,9 @@ fn build_node(
 /// [`PARALLEL_ITEMS`] (on one thread, its children are binned here) each
 /// side's items go to two sets of bins by the parity of their position,
 /// merged at the end (exact in any order: the same bins). That took 4 %
-/// off the one-thread binary tree of the 1 M-triangle terrain; on every
-/// node, clearing and merging the second sets cost more than the shorter
-/// chain saved (docs/performance.md).
+/// off the one-thread binary tree of the 1 M-triangle terrain; used on
+/// every node, the second sets (cleared and merged each time) made it 30 %
+/// slower instead, so only large nodes use them (docs/performance.md).
 fn partition_and_bin<const WHOLE: bool>(
     items: &mut [Item],
     left: impl Fn(Wide) -> bool,
