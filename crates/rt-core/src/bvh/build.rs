@@ -646,9 +646,20 @@ mod tests {
 
     #[test]
     fn two_sets_of_bins_by_parity_give_the_bins_of_one() {
-        let items = items(100); // 10 000 items, over PARALLEL_ITEMS.
-        assert!(items.len() > PARALLEL_ITEMS);
-        let all = Bin::of(&items, false);
+        // 10 000 items, over PARALLEL_ITEMS: mesh triangles only, then every
+        // third one a whole object (the count of whole objects binned too).
+        let triangles = items(100);
+        assert!(triangles.len() > PARALLEL_ITEMS);
+        let mixed: Vec<Item> = (triangles.iter().enumerate())
+            .map(|(k, item)| if k % 3 == 0 { Item::whole(item.bounds(), 1) } else { *item })
+            .collect();
+        check_two_sets::<false>(&triangles);
+        check_two_sets::<true>(&mixed);
+    }
+
+    fn check_two_sets<const WHOLE: bool>(items: &[Item]) {
+        let all = Bin::of(items, false);
+        assert_eq!(all.whole > 0, WHOLE);
         let binning = Binning::of(&all, items.len(), 0).unwrap();
         // The children's binnings, as `build_node` plans them, split near the middle.
         let left = |c: Wide| binning.below(c, BINS / 2);
@@ -656,20 +667,20 @@ mod tests {
         let (l, r) = items.iter().fold((Bin::EMPTY, Bin::EMPTY), |(mut l, mut r), item| {
             let c = item.centroid();
             if left(c) {
-                l.add::<false>(item, c)
+                l.add::<true>(item, c)
             } else {
-                r.add::<false>(item, c)
+                r.add::<true>(item, c)
             }
             (l, r)
         });
         let binnings = [plan(l), plan(r)];
-        let (mut a, mut b) = (items.clone(), items.clone());
+        let (mut a, mut b) = (items.to_vec(), items.to_vec());
         let (mut bins_a, mut bins_b) = ([[Bin::EMPTY; BINS]; 2], [[Bin::EMPTY; BINS]; 2]);
-        let mid_a = partition_and_bin_in::<false, true>(&mut a, left, binnings, &mut bins_a);
-        let mid_b = partition_and_bin_in::<false, false>(&mut b, left, binnings, &mut bins_b);
+        let mid_a = partition_and_bin_in::<WHOLE, true>(&mut a, left, binnings, &mut bins_a);
+        let mid_b = partition_and_bin_in::<WHOLE, false>(&mut b, left, binnings, &mut bins_b);
         assert_eq!(mid_a, mid_b);
         assert_eq!(mid_a, l.count);
-        let order = |v: &[Item]| v.iter().map(|i| i.index()).collect::<Vec<_>>();
+        let order = |v: &[Item]| v.iter().map(|i| (i.object(), i.index())).collect::<Vec<_>>();
         assert_eq!(order(&a), order(&b));
         let fields = |bins: &[[Bin; BINS]; 2]| {
             bins.iter()
@@ -678,9 +689,10 @@ mod tests {
                 .collect::<Vec<_>>()
         };
         assert_eq!(fields(&bins_a), fields(&bins_b));
-        // Every item was binned on its side.
-        assert_eq!(bins_a[0].iter().map(|b| b.count).sum::<usize>(), l.count);
-        assert_eq!(bins_a[1].iter().map(|b| b.count).sum::<usize>(), r.count);
+        // Every item was binned on its side, whole objects counted as such.
+        let sum = |bins: &[Bin; BINS], f: fn(&Bin) -> usize| bins.iter().map(f).sum::<usize>();
+        assert_eq!((sum(&bins_a[0], |b| b.count), sum(&bins_a[1], |b| b.count)), (l.count, r.count));
+        assert_eq!((sum(&bins_a[0], |b| b.whole), sum(&bins_a[1], |b| b.whole)), (l.whole, r.whole));
     }
 
     /// Checks that `tree` over `items` (as `build` left them) is a valid
