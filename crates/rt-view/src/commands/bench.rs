@@ -232,7 +232,6 @@ fn time_builds<E: std::error::Error + Send + Sync + 'static>(
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     let (mut build, mut cpu, mut system, mut page_faults) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut steps: [Vec<Duration>; 5] = Default::default();
-    let step_times = |s: BuildSteps| [s.items, s.binary_tree, s.leaf_list, s.collapse, s.finish];
     for _ in 0..runs {
         let mesh = mesh.clone();
         let (before, usage) = (process_cpu_time(), KernelUsage::now());
@@ -243,7 +242,7 @@ fn time_builds<E: std::error::Error + Send + Sync + 'static>(
         page_faults.push(spent.page_faults);
         let stats = made.bvh_stats();
         build.push(stats.build_time);
-        for (list, d) in steps.iter_mut().zip(step_times(stats.build_steps)) {
+        for (list, (_, d)) in steps.iter_mut().zip(stats.build_steps.named()) {
             list.push(d);
         }
     }
