@@ -1621,7 +1621,9 @@ mod tests {
             .unwrap();
         let ray = crate::math::ray::Ray::new(Vec3::new(0.25, 0.25, -1.0), Vec3::Z);
         let hit = scene.cast(&ray).unwrap();
-        let si = crate::integrators::interaction::SurfaceInteraction::new(&scene, &ray, &hit).unwrap();
+        let mut scratch = std::mem::MaybeUninit::uninit();
+        let si = crate::integrators::interaction::SurfaceInteraction::new(&scene, &ray, &hit, &mut scratch)
+            .unwrap();
         si.shading_normal.unwrap()
     }
 

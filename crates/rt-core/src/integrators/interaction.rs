@@ -14,7 +14,7 @@
 //! shades with it and keeps the geometric normal for the sides of the
 //! surface and for spawning rays.
 
-use std::borrow::Cow;
+use std::mem::MaybeUninit;
 
 use crate::geometry::hit::Hit;
 use crate::geometry::object::Object;
@@ -49,36 +49,63 @@ pub struct SurfaceInteraction<'s> {
     /// it bent (the interpolated one, or `None` for the geometric one), for
     /// the normal-map rules of [`Bsdf::mapped`].
     pub unmapped_normal: Option<Option<Vec3>>,
-    /// The object's material at the point, its texture applied.
-    pub material: Cow<'s, Material>,
+    /// The object's material at the point, its textures applied: the
+    /// scene's own where no texture changes it, else the copy written into
+    /// the caller's scratch slot (so the interaction stays small: a
+    /// material is 380 bytes, and moving it with every interaction cost a
+    /// `memcpy` per hit).
+    pub material: &'s Material,
     /// The object hit.
     shape: &'s Object,
 }
 
 impl<'s> SurfaceInteraction<'s> {
     /// The interaction where `ray` met the scene at `hit`; `None` for a ray
-    /// with no direction.
+    /// with no direction. `scratch` holds the material where a texture
+    /// changes it ([`Scene::textured_material`]); the interaction borrows
+    /// it, so the caller keeps it for as long as the interaction.
     #[inline]
-    pub fn new(scene: &'s Scene, ray: &Ray, hit: &Hit) -> Option<Self> {
-        Some(Self::along(scene, ray, normalize_robust(ray.dir)?, hit))
+    pub fn new(
+        scene: &'s Scene,
+        ray: &Ray,
+        hit: &Hit,
+        scratch: &'s mut MaybeUninit<Material>,
+    ) -> Option<Self> {
+        Some(Self::along(scene, ray, normalize_robust(ray.dir)?, hit, scratch))
     }
 
     /// [`SurfaceInteraction::new`] for a ray whose unit direction `d` is
     /// known already (an integrator's loop has it).
     #[inline]
-    pub fn along(scene: &'s Scene, ray: &Ray, d: Vec3, hit: &Hit) -> Self {
-        Self::along_cone(scene, ray, d, hit, 0.0)
+    pub fn along(
+        scene: &'s Scene,
+        ray: &Ray,
+        d: Vec3,
+        hit: &Hit,
+        scratch: &'s mut MaybeUninit<Material>,
+    ) -> Self {
+        Self::along_cone(scene, ray, d, hit, 0.0, scratch)
     }
 
     /// [`SurfaceInteraction::along`] for a ray whose cone is `cone_width`
     /// wide at the hit ([`crate::materials::texture_lod`]): its textures are
     /// read at the mip-map level the footprint asks for.
     #[inline]
-    pub fn along_cone(scene: &'s Scene, ray: &Ray, d: Vec3, hit: &Hit, cone_width: f32) -> Self {
+    pub fn along_cone(
+        scene: &'s Scene,
+        ray: &Ray,
+        d: Vec3,
+        hit: &Hit,
+        cone_width: f32,
+        scratch: &'s mut MaybeUninit<Material>,
+    ) -> Self {
         let shape = &scene.objects()[hit.object];
         let point = shape.primitive.surface_point(hit.primitive, hit.normal, ray.at(hit.t));
         let footprint = Footprint::new(cone_width, d.dot(point.normal));
-        let material = scene.material_at_footprint(hit.object, hit.primitive, point.p, footprint);
+        let material = match scene.textured_material(hit.object, hit.primitive, point.p, footprint) {
+            Some(textured) => &*scratch.write(textured),
+            None => scene.object_material(hit.object),
+        };
         let mut shading_normal = shape.primitive.shading_normal(hit.primitive, point.p);
         let mut unmapped_normal = None;
         if let Some((texel, scale)) = scene.normal_texel_at(hit.object, hit.primitive, point.p, footprint)
@@ -123,7 +150,7 @@ impl<'s> SurfaceInteraction<'s> {
     /// is one ([`Bsdf::shaded`]).
     #[inline]
     pub fn bsdf(&self) -> Bsdf {
-        self.bsdf_of(&self.material, self.shading_normal)
+        self.bsdf_of(self.material, self.shading_normal)
     }
 
     /// The BSDF of `material` here, about `shading` (or the geometric
@@ -223,8 +250,11 @@ mod tests {
         let s = &loaded.scene;
         let ray = Ray::new(Vec3::new(0.5, -0.25, -4.0), Vec3::new(0.0, 0.0, 2.0));
         let hit = s.closest_hit(&ray, Interval::new(0.0, Real::INFINITY)).unwrap();
-        let si = SurfaceInteraction::new(s, &ray, &hit).unwrap();
+        let mut scratch = MaybeUninit::uninit();
+        let si = SurfaceInteraction::new(s, &ray, &hit, &mut scratch).unwrap();
         assert_eq!((si.object, si.point.p), (0, Vec3::new(0.5, -0.25, 0.0)));
+        // An untextured material is the scene's own, not a copy.
+        assert!(std::ptr::eq(si.material, s.object_material(0)));
         assert_eq!(si.wo, -Vec3::Z);
         assert!(si.front() && si.facing_normal() == si.point.normal && si.point.normal == -Vec3::Z);
         assert_eq!(si.emitted(), Color::new(1.0, 2.0, 3.0));
@@ -243,16 +273,39 @@ mod tests {
         // sphere has no coordinates and an orthonormal frame about its normal.
         let ray = Ray::new(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z);
         let hit = s.closest_hit(&ray, Interval::new(0.0, Real::INFINITY)).unwrap();
-        let si = SurfaceInteraction::new(s, &ray, &hit).unwrap();
+        let si = SurfaceInteraction::new(s, &ray, &hit, &mut scratch).unwrap();
         assert!(!si.front() && si.emitted() == Color::ZERO && si.facing_normal() == Vec3::Z);
         let ray = Ray::new(Vec3::new(0.3, 0.2, 0.0), Vec3::Z);
         let hit = s.closest_hit(&ray, Interval::new(0.0, Real::INFINITY)).unwrap();
-        let si = SurfaceInteraction::new(s, &ray, &hit).unwrap();
+        let si = SurfaceInteraction::new(s, &ray, &hit, &mut scratch).unwrap();
         assert_eq!((si.object, si.uv()), (1, None));
         let (t, b) = si.tangents();
         let n = si.point.normal;
         assert!(t.dot(n).abs() < 1e-6 && b.dot(n).abs() < 1e-6 && t.dot(b).abs() < 1e-6);
         assert!((t.length() - 1.0).abs() < 1e-6 && (t.cross(b) - n).length() < 1e-5);
+    }
+
+    #[test]
+    fn a_textured_hit_shades_with_the_textured_material_in_the_scratch_slot() {
+        use crate::geometry::primitive::Primitive;
+        use crate::materials::texture::Texture;
+        use crate::testing::test_support::textured_square;
+        use std::sync::Arc;
+        let textured =
+            Material { base_color_texture: Some(TextureSlot::new(0)), ..Material::flat(Color::ONE) };
+        let scene = crate::scene::SceneBuilder::new()
+            .texture(Arc::new(Texture::new(1, 1, vec![Color::new(1.0, 0.5, 0.25)]).unwrap()))
+            .material("t", textured)
+            .object(Primitive::Mesh(textured_square(0.0)), "t")
+            .build()
+            .unwrap();
+        let ray = Ray::new(Vec3::new(0.25, 0.25, -1.0), Vec3::Z);
+        let hit = scene.cast(&ray).unwrap();
+        let mut scratch = MaybeUninit::uninit();
+        let si = SurfaceInteraction::new(&scene, &ray, &hit, &mut scratch).unwrap();
+        assert_eq!(si.material.color, Color::new(1.0, 0.5, 0.25));
+        assert_eq!(*si.material, *scene.material_at(0, 0, si.point.p));
+        assert!(!std::ptr::eq(si.material, scene.object_material(0)));
     }
 
     /// A square in z = 0 facing −z, u along +x, with a one-texel normal
@@ -298,7 +351,8 @@ mod tests {
                 let wo = Vec3::new(wo.x, wo.y, -wo.z.abs().max(1e-3)).normalize();
                 let ray = Ray::new(Vec3::new(0.1, -0.2, 0.0) + wo * 3.0, -wo);
                 let hit = scene.cast(&ray).unwrap();
-                let si = SurfaceInteraction::new(&scene, &ray, &hit).unwrap();
+                let mut scratch = MaybeUninit::uninit();
+                let si = SurfaceInteraction::new(&scene, &ray, &hit, &mut scratch).unwrap();
                 let ns = si.shading_normal.unwrap();
                 assert!(ns.dot(ng) < 0.2 && ns.x > 0.9, "the map tilts the normal: {ns}");
                 let bsdf = si.bsdf();

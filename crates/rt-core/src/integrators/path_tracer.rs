@@ -43,6 +43,8 @@
 //! light through itself and focuses it into caustics by this transport alone:
 //! there is no special case for it.
 
+use std::mem::MaybeUninit;
+
 use crate::explain::record::{ContributionKind, Event, SegmentKind};
 use crate::explain::recorder::Recorder;
 use crate::geometry::hit::Hit;
@@ -153,7 +155,15 @@ impl<'s> PathTracer<'s> {
                 break;
             };
             travelled += h.t * ray.dir.length();
-            let si = SurfaceInteraction::along_cone(scene, &ray, d, &h, self.cone.width_at(travelled));
+            let mut scratch = MaybeUninit::uninit();
+            let si = SurfaceInteraction::along_cone(
+                scene,
+                &ray,
+                d,
+                &h,
+                self.cone.width_at(travelled),
+                &mut scratch,
+            );
             let (sp, wo) = (si.point, si.wo);
             // A translucent object's surface is its dielectric boundary; the
             // medium inside does the rest (step 6).
@@ -163,7 +173,7 @@ impl<'s> PathTracer<'s> {
                 boundary = si.material.boundary();
                 &boundary
             } else {
-                &*si.material
+                si.material
             };
 
             // A path inside a physically based object with an absorbing

@@ -34,6 +34,8 @@
 //! object as opaque, glass too. Secondary rays start at the hit point pushed
 //! off the surface by its error bound ([`crate::geometry::surface`]).
 
+use std::mem::MaybeUninit;
+
 use crate::explain::record::{ContributionKind, SegmentKind};
 use crate::explain::recorder::Recorder;
 use crate::geometry::hit::Hit;
@@ -144,15 +146,23 @@ impl<'s> Tracer<'s> {
         rec: &mut R,
     ) -> Color {
         let travelled = path.travelled + hit.t * ray.dir.length();
-        let Some(si) = normalize_robust(ray.dir)
-            .map(|d| SurfaceInteraction::along_cone(self.scene, ray, d, hit, self.cone.width_at(travelled)))
-        else {
+        let mut scratch = MaybeUninit::uninit();
+        let Some(si) = normalize_robust(ray.dir).map(|d| {
+            SurfaceInteraction::along_cone(
+                self.scene,
+                ray,
+                d,
+                hit,
+                self.cone.width_at(travelled),
+                &mut scratch,
+            )
+        }) else {
             let background = self.scene.environment().radiance(ray.dir);
             rec.contribution(ContributionKind::Environment, background);
             return background;
         };
         let path = Path { travelled, ..path };
-        let (sp, m, wo, d) = (&si.point, &*si.material, si.wo, -si.wo);
+        let (sp, m, wo, d) = (&si.point, si.material, si.wo, -si.wo);
         let front = si.front();
         let n = si.facing_normal();
 

@@ -15,6 +15,8 @@
 //! ([`crate::render::Renderer::accumulate_region_with_features`]); a
 //! render without them does no work for them.
 
+use std::mem::MaybeUninit;
+
 use crate::geometry::hit::Hit;
 use crate::integrators::interaction::SurfaceInteraction;
 use crate::math::color::Color;
@@ -70,7 +72,8 @@ impl SampleFeatures {
         let (mut ray, mut hit, mut throughput) = (*ray, Some(first), Color::ONE);
         for _ in 0..=MAX_SPECULAR_CHAIN {
             let (Some(h), Some(d)) = (hit, normalize_robust(ray.dir)) else { break };
-            let si = SurfaceInteraction::along(scene, &ray, d, &h);
+            let mut scratch = MaybeUninit::uninit();
+            let si = SurfaceInteraction::along(scene, &ray, d, &h, &mut scratch);
             let bsdf = si.bsdf();
             let Some(s) = bsdf.sample(si.wo, rng.next_pair().0, rng.next_pair()) else {
                 // No direction leaves (black, or seen from below its

@@ -719,12 +719,28 @@ impl Scene {
         p: Vec3,
         footprint: Footprint,
     ) -> Cow<'_, Material> {
+        match self.textured_material(object, primitive, p, footprint) {
+            Some(textured) => Cow::Owned(textured),
+            None => Cow::Borrowed(self.object_material(object)),
+        }
+    }
+
+    /// [`Scene::material_at_footprint`] where a texture changes the
+    /// material; `None` where the object's own material is the answer (no
+    /// texture, or none read here).
+    pub fn textured_material(
+        &self,
+        object: usize,
+        primitive: usize,
+        p: Vec3,
+        footprint: Footprint,
+    ) -> Option<Material> {
         let o = &self.objects[object];
         let m = &self.materials[o.material];
         if !m.is_textured() {
-            return Cow::Borrowed(m);
+            return None;
         }
-        let Primitive::Mesh(mesh) = &o.primitive else { return Cow::Borrowed(m) };
+        let Primitive::Mesh(mesh) = &o.primitive else { return None };
         let read = |slot: &Option<TextureSlot>| {
             self.slot_read(mesh, primitive, slot.as_ref()?, p, footprint, |t, u, v, lod, s| {
                 t.lookup(u, v, lod, s)
@@ -733,7 +749,7 @@ impl Scene {
         let (base, metal_rough, emissive) =
             (read(&m.base_color_texture), read(&m.metallic_roughness_texture), read(&m.emissive_texture));
         if base.is_none() && metal_rough.is_none() && emissive.is_none() {
-            return Cow::Borrowed(m);
+            return None;
         }
         let mut out = *m;
         if let Some(c) = base {
@@ -746,7 +762,7 @@ impl Scene {
         if let Some(c) = emissive {
             out.emission *= c;
         }
-        Cow::Owned(out)
+        Some(out)
     }
 
     /// How many textures the scene holds, and their bytes.
@@ -990,8 +1006,10 @@ mod tests {
         // Blue → metallic, green → roughness; red (occlusion's channel) unused.
         assert!((q.metallic - 0.2).abs() < 1e-6 && (q.roughness - 0.3).abs() < 1e-6, "{q:?}");
         assert_eq!(m.emission, Color::new(1.0, 2.0, 0.0));
+        assert_eq!(scene.textured_material(0, 0, at, Footprint::new(0.01, 1.0)), Some(*m));
         // The occlusion texture (all black) changes nothing.
         assert!(matches!(scene.material_at(1, 0, at), Cow::Borrowed(_)));
+        assert_eq!(scene.textured_material(1, 0, at, Footprint::POINT), None);
     }
 
     proptest! {
