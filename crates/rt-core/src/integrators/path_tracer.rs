@@ -155,6 +155,8 @@ impl<'s> PathTracer<'s> {
                 break;
             };
             travelled += h.t * ray.dir.length();
+            // Where a texture changes the material, the interaction's copy
+            // of it lives here (the scene's own is borrowed otherwise).
             let mut scratch = MaybeUninit::uninit();
             let si = SurfaceInteraction::along_cone(
                 scene,
