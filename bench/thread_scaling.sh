@@ -30,13 +30,15 @@ for pass in a b; do
   cp "$out/bench.csv" "$out/bench_$pass.csv"
   grep -E '^ +(mesh|10k|100k|1m) ' "$out/bench_$pass.log"
 done
-if python3 -c 'import embreex, numpy' 2>/dev/null; then
+# Whether python3 can run Embree (embreex and numpy), asked once.
+if python3 -c 'import embreex, numpy' 2>/dev/null; then embree=1; else embree=0; fi
+if [[ $embree == 1 ]]; then
   python3 bench/embree_primary.py "$out" --runs 7 --threads "$threads" | tee "$out/embree.log"
 else
   echo "(no embreex/numpy for python3: Embree left out)"
 fi
 "$rt" bench --build-only --runs 7 --threads "$threads" --out "$out" 2>&1 | grep -v generating | tee "$out/builds.log"
-if python3 -c 'import embreex, numpy' 2>/dev/null; then
+if [[ $embree == 1 ]]; then
   python3 bench/embree_primary.py "$out" --build-only --runs 7 --threads "$threads" | tee "$out/embree_builds.log"
 fi
 flat=$(python3 bench/common/flat_scene.py "$out" 1m)
