@@ -191,8 +191,9 @@ pub fn narrow(v: glam::DVec3) -> Vec3 {
     Vec3::new(v.x as Real, v.y as Real, v.z as Real)
 }
 
-/// `2ⁿ` for |n| ≤ 75 (f32) or ≤ 540 (f64), exactly: a normal number built
-/// from its exponent bits.
+/// `2ⁿ` for a normal power of two (−126 ≤ n ≤ 127 for f32, −1022 ≤ n ≤
+/// 1023 for f64), exactly: built from its exponent bits.
+#[inline]
 fn pow2_small(n: i32) -> Real {
     let biased = n + Real::MAX_EXP - 1;
     debug_assert!(biased > 0 && biased < 2 * Real::MAX_EXP - 1, "2^{n} is not a normal number");
@@ -208,7 +209,14 @@ fn pow2_small(n: i32) -> Real {
 
 /// `x · 2ⁿ`, exact unless the result overflows or underflows; `n` may be
 /// as large as a subnormal's exponent (applied in two exact halves).
+#[inline]
 pub fn scale_pow2(x: Real, n: i32) -> Real {
+    // Where 2ⁿ is normal and n ≥ −1, one multiplication gives the halves'
+    // bits: scaling up is exact (or overflows alike), and for n = −1 the
+    // first half is 2⁰. Rays and hits nearly always take this way.
+    if (-1..Real::MAX_EXP).contains(&n) {
+        return x * pow2_small(n);
+    }
     let half = n / 2;
     x * pow2_small(half) * pow2_small(n - half)
 }
@@ -308,6 +316,32 @@ mod tests {
         assert_eq!(exponent_of(1.0), 0);
         assert_eq!(exponent_of(0.75), -1);
         assert_eq!(exponent_of(1024.5), 10);
+    }
+
+    #[test]
+    fn one_multiplication_scales_by_the_bits_of_two_halves_wherever_it_is_taken() {
+        // The two exact halves, as `scale_pow2` applies every other n.
+        let halves = |x: Real, n: i32| x * pow2_small(n / 2) * pow2_small(n - n / 2);
+        let mut xs = vec![0.0, -0.0, Real::MIN_POSITIVE, Real::MAX, -Real::MAX, 1.0, -3.75];
+        // Subnormals, whose scaling up must stay exact too.
+        xs.extend([Real::MIN_POSITIVE / 3.0, -Real::MIN_POSITIVE / 1024.0, Real::from_bits(1)]);
+        let mut bits: u64 = 0x9E37_79B9_7F4A_7C15;
+        for _ in 0..2000 {
+            bits = crate::sampling::sampler::mix(bits.wrapping_add(0x9E37_79B9_7F4A_7C15));
+            #[cfg(not(feature = "f64"))]
+            let x = f32::from_bits(bits as u32);
+            #[cfg(feature = "f64")]
+            let x = f64::from_bits(bits);
+            if x.is_finite() {
+                xs.push(x);
+            }
+        }
+        for &x in &xs {
+            for n in -1..Real::MAX_EXP {
+                let (fast, slow) = (scale_pow2(x, n), halves(x, n));
+                assert_eq!(fast.to_bits(), slow.to_bits(), "{x:e} · 2^{n}: {fast:e} against {slow:e}");
+            }
+        }
     }
 
     #[test]

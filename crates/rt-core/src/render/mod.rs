@@ -31,7 +31,7 @@ use crate::math::ray::Ray;
 use crate::math::real::Vec3;
 use crate::render::passes::{FEATURE_SALT, FeatureFrame, FeatureSums, SampleFeatures};
 use crate::render::settings::RenderSettings;
-use crate::sampling::sampler::{SampleRng, Sampler};
+use crate::sampling::sampler::{PixelSample, SampleRng, Sampler};
 use crate::scene::Scene;
 use crate::scene::effects::{EffectPlan, RayCounts};
 
@@ -155,7 +155,8 @@ impl<'s> Renderer<'s> {
     pub fn sample(&self, x: u32, y: u32, k: u32, counts: &mut RayCounts) -> Color {
         let mut sampler = self.sampler;
         let ray = self.primary_ray(&mut sampler, x, y, k);
-        self.shade_sample(&mut sampler, x, y, k, &ray, self.scene.cast(&ray), counts)
+        let start = sampler.pixel_sample();
+        self.shade_sample(&mut sampler, start, &ray, self.scene.cast(&ray), counts)
     }
 
     /// The primary ray of sample `k` of pixel (x, y), its film and lens
@@ -172,21 +173,19 @@ impl<'s> Renderer<'s> {
         self.view.camera_ray(x, y, film, lens)
     }
 
-    /// The colour of sample `k` of pixel (x, y), whose primary ray `ray` was
-    /// cast already and gave `hit`, its random numbers from `sampler` (a
-    /// copy of this renderer's, as for [`Renderer::primary_ray`]).
-    #[allow(clippy::too_many_arguments)]
+    /// The colour of the pixel sample `start` (as the sampler that made its
+    /// primary ray started it), whose primary ray `ray` was cast already and
+    /// gave `hit`, its random numbers from `sampler` (a copy of this
+    /// renderer's, as for [`Renderer::primary_ray`]).
     fn shade_sample(
         &self,
         sampler: &mut Sampler,
-        x: u32,
-        y: u32,
-        k: u32,
+        start: PixelSample,
         ray: &Ray,
         hit: Option<Hit>,
         counts: &mut RayCounts,
     ) -> Color {
-        sampler.start_pixel_sample(x, y, k);
+        sampler.resume_pixel_sample(start);
         self.integrator.radiance(ray, hit, sampler, counts)
     }
 
@@ -408,7 +407,7 @@ impl<'s> Renderer<'s> {
         let per_pixel = rows.len() * samples.len();
         let tile = (PACKET_RAYS / per_pixel.max(1)).clamp(1, width.max(1)) as u32;
         let mut counts = RayCounts::default();
-        let mut packet = [(0, 0, 0); PACKET_RAYS];
+        let mut packet = [PixelSample::default(); PACKET_RAYS];
         let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET_RAYS];
         let mut hits = [None; PACKET_RAYS];
         let mut n = 0;
@@ -416,12 +415,12 @@ impl<'s> Renderer<'s> {
         // over the region: a pixel's samples follow one another, and a
         // Sobol sampler makes the pixel's sequences once.
         let (mut camera, mut shading) = (self.sampler, self.sampler);
-        let mut flush = |n: usize, packet: &[(u32, u32, u32)], rays: &[Ray]| {
+        let mut flush = |n: usize, packet: &[PixelSample], rays: &[Ray]| {
             self.scene.cast_all(&rays[..n], &mut hits[..n]);
             for i in 0..n {
-                let (x, y, k) = packet[i];
+                let PixelSample { x, y, sample: k, .. } = packet[i];
                 let at = (y - rows.start) as usize * width + (x - columns.start) as usize;
-                add(at, k, self.shade_sample(&mut shading, x, y, k, &rays[i], hits[i], &mut counts));
+                add(at, k, self.shade_sample(&mut shading, packet[i], &rays[i], hits[i], &mut counts));
                 features.add(at, || self.sample_features(x, y, k, &rays[i], hits[i]));
             }
         };
@@ -432,8 +431,8 @@ impl<'s> Renderer<'s> {
                         continue;
                     }
                     for k in samples.clone() {
-                        packet[n] = (x, y, k);
                         rays[n] = self.primary_ray(&mut camera, x, y, k);
+                        packet[n] = camera.pixel_sample();
                         n += 1;
                         if n == PACKET_RAYS {
                             flush(n, &packet, &rays);

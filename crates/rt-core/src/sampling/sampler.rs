@@ -156,27 +156,62 @@ impl CellOrder {
     fn cell(self, k: u32, n: u32, shift: u32) -> u32 {
         match self {
             Self::Morton { bits: 0, .. } => 0,
-            Self::Morton { bits, wide } => {
-                // The index's bits reversed: its lowest bit is now the top one.
-                let mut r = k.reverse_bits() >> (32 - bits);
-                let last_column_bit = if wide { r & 1 } else { 0 };
-                if wide {
-                    r >>= 1;
-                }
-                // Even bits of r are the row's, odd bits the column's.
-                let (row, column) = (compact_even_bits(r), compact_even_bits(r >> 1));
-                let column = if wide { column << 1 | last_column_bit } else { column };
-                row << shift | column
+            Self::Morton { bits, wide } if bits <= MORTON_TABLE_BITS => {
+                MORTON_CELLS[wide as usize][bits as usize][k as usize] as u32
             }
+            Self::Morton { bits, wide } => morton_cell(k, bits, wide, shift),
             Self::Stride(stride) => ((k as u64 * stride as u64) % n as u64) as u32,
         }
     }
 }
 
+/// [`CellOrder::cell`] of the Morton order of `2^bits` cells (`bits` ≥ 1)
+/// in rows of `2^shift`.
+const fn morton_cell(k: u32, bits: u32, wide: bool, shift: u32) -> u32 {
+    // The index's bits reversed: its lowest bit is now the top one.
+    let mut r = k.reverse_bits() >> (32 - bits);
+    let last_column_bit = if wide { r & 1 } else { 0 };
+    if wide {
+        r >>= 1;
+    }
+    // Even bits of r are the row's, odd bits the column's.
+    let (row, column) = (compact_even_bits(r), compact_even_bits(r >> 1));
+    let column = if wide { column << 1 | last_column_bit } else { column };
+    row << shift | column
+}
+
+/// Up to `2^MORTON_TABLE_BITS` cells, the Morton order's cells are looked
+/// up in [`MORTON_CELLS`] rather than made by reversing and compacting
+/// the index's bits at every sample (60 instructions of a flat sample).
+const MORTON_TABLE_BITS: u32 = 8;
+
+/// [`morton_cell`] of every point of `2^bits` cells, `bits` ≤
+/// [`MORTON_TABLE_BITS`], made at compile time: `[wide][bits][k]`, each
+/// row `2^(bits/2)` cells long, twice that for the wide grid (as
+/// [`Strata::new`] lays out a power of two: odd `bits` give the wide grid).
+static MORTON_CELLS: [[[u8; 1 << MORTON_TABLE_BITS]; MORTON_TABLE_BITS as usize + 1]; 2] = {
+    let mut table = [[[0; 1 << MORTON_TABLE_BITS]; MORTON_TABLE_BITS as usize + 1]; 2];
+    let mut wide = 0;
+    while wide < 2 {
+        let mut bits = 1;
+        while bits <= MORTON_TABLE_BITS {
+            let shift = if wide == 1 { bits.div_ceil(2) } else { bits / 2 };
+            let mut k = 0;
+            while k < 1 << bits {
+                table[wide][bits as usize][k as usize] = morton_cell(k, bits, wide == 1, shift) as u8;
+                k += 1;
+            }
+            bits += 1;
+        }
+        wide += 1;
+    }
+    table
+};
+
 /// The even-numbered bits of `x` (bits 0, 2, 4, …) packed together: the
 /// inverse of spreading a number's bits for a Morton code.
 #[inline]
-fn compact_even_bits(mut x: u32) -> u32 {
+const fn compact_even_bits(mut x: u32) -> u32 {
     x &= 0x5555_5555;
     x = (x | x >> 1) & 0x3333_3333;
     x = (x | x >> 2) & 0x0f0f_0f0f;
@@ -265,7 +300,12 @@ impl Strata {
 /// `seed` inside its stratum, in [0,1)².
 #[inline]
 fn pixel_jitter(x: u32, y: u32, sample: u32, seed: u64) -> (Real, Real) {
-    let h = hash(x, y, sample) ^ seed_bits(seed);
+    jitter_of(hash(x, y, sample) ^ seed_bits(seed))
+}
+
+/// [`pixel_jitter`] from its hash `h`.
+#[inline(always)]
+fn jitter_of(h: u64) -> (Real, Real) {
     (unit_float(h as u32), unit_float((h >> 32) as u32))
 }
 
@@ -412,6 +452,10 @@ pub struct Sampler {
     seed: u64,
     /// [`seed_bits`] of `seed`, made once.
     seed_bits: u64,
+    /// The stratified method's hash of the current sample, `hash(x, y,
+    /// sample) ^ seed_bits`: its film jitter, and with salts its stream and
+    /// lens position, so that a sample hashes its pixel once.
+    pixel_bits: u64,
     stream: SampleRng,
     /// The current sample: its pixel and index.
     x: u32,
@@ -561,6 +605,7 @@ impl Sampler {
             open_ended: false,
             seed,
             seed_bits: seed_bits(seed),
+            pixel_bits: hash(0, 0, 0) ^ seed_bits(seed),
             stream: SampleRng::seeded(0, 0, 0, seed),
             x: 0,
             y: 0,
@@ -607,11 +652,36 @@ impl Sampler {
     /// Starts sample `k` of pixel (`x`, `y`): the values handed out next are that sample's.
     #[inline]
     pub fn start_pixel_sample(&mut self, x: u32, y: u32, k: u32) {
-        (self.x, self.y, self.sample) = (x, y, k);
+        let bits = match self.kind {
+            SamplerKind::Stratified => hash(x, y, k) ^ self.seed_bits,
+            SamplerKind::Sobol => 0,
+        };
+        self.resume_pixel_sample(PixelSample { x, y, sample: k, bits });
+    }
+
+    /// The current sample ([`Sampler::start_pixel_sample`]), for another
+    /// copy of this sampler to go on with ([`Sampler::resume_pixel_sample`]).
+    #[inline]
+    pub fn pixel_sample(&self) -> PixelSample {
+        PixelSample { x: self.x, y: self.y, sample: self.sample, bits: self.pixel_bits }
+    }
+
+    /// Starts the sample `start` that a copy of this sampler started
+    /// ([`Sampler::pixel_sample`]): the same values as
+    /// [`Sampler::start_pixel_sample`] with its pixel and sample, without
+    /// hashing them again (the packet loop starts each sample twice, for
+    /// its camera ray and for its path).
+    #[inline]
+    pub fn resume_pixel_sample(&mut self, start: PixelSample) {
+        let PixelSample { x, y, sample, bits } = start;
+        (self.x, self.y, self.sample) = (x, y, sample);
         match self.kind {
-            SamplerKind::Stratified => self.stream = SampleRng::with_seed_bits(x, y, k, self.seed_bits),
+            SamplerKind::Stratified => {
+                self.pixel_bits = bits;
+                self.stream = SampleRng(bits ^ STREAM_SALT);
+            }
             SamplerKind::Sobol => {
-                self.sobol.start(x, y, k);
+                self.sobol.start(x, y, sample);
                 self.slot = PATH_SLOTS;
             }
         }
@@ -653,7 +723,7 @@ impl Sampler {
             }
             return sobol::value_2d(sobol::pixel_seed_in(x, y, self.sobol.image), FILM_SLOT, k);
         }
-        self.stratified_film_position(x, y, k)
+        self.stratified_film_position(k, hash(x, y, k) ^ self.seed_bits)
     }
 
     /// [`Sampler::film_position`] of the current sample
@@ -668,20 +738,22 @@ impl Sampler {
             }
             return self.sobol.value_2d(FILM_SLOT);
         }
-        self.stratified_film_position(self.x, self.y, self.sample)
+        self.stratified_film_position(self.sample, self.pixel_bits)
     }
 
-    /// The stratified method's [`Sampler::film_position`].
+    /// The stratified method's [`Sampler::film_position`] of sample `k`
+    /// whose hash is `bits` (`hash(x, y, k) ^ seed_bits`): the cell's point
+    /// jittered by [`pixel_jitter`]'s bits.
     #[inline(always)]
-    fn stratified_film_position(&self, x: u32, y: u32, k: u32) -> (Real, Real) {
+    fn stratified_film_position(&self, k: u32, bits: u64) -> (Real, Real) {
         if self.open_ended {
             let block = open_ended_block(k);
             let strata = Strata::new(block.end - block.start);
-            strata.point(k - block.start, pixel_jitter(x, y, k, self.seed))
+            strata.point(k - block.start, jitter_of(bits))
         } else if self.spp == 1 {
             (0.5, 0.5)
         } else {
-            self.strata.subpixel_offset(x, y, k, self.seed)
+            self.strata.point(k, jitter_of(bits))
         }
     }
 
@@ -699,7 +771,7 @@ impl Sampler {
         if self.kind == SamplerKind::Sobol {
             return sobol::value_2d(sobol::pixel_seed_in(x, y, self.sobol.image), LENS_SLOT, k);
         }
-        self.stratified_lens_position(x, y, k)
+        stratified_lens_position(hash(x, y, k) ^ self.seed_bits)
     }
 
     /// [`Sampler::lens_position`] of the current sample
@@ -710,14 +782,7 @@ impl Sampler {
         if self.kind == SamplerKind::Sobol {
             return self.sobol.value_2d(LENS_SLOT);
         }
-        self.stratified_lens_position(self.x, self.y, self.sample)
-    }
-
-    /// The stratified method's [`Sampler::lens_position`].
-    #[inline(always)]
-    fn stratified_lens_position(&self, x: u32, y: u32, k: u32) -> (Real, Real) {
-        let h = mix(hash(x, y, k) ^ LENS_SALT ^ self.seed_bits);
-        (unit_float(h as u32), unit_float((h >> 32) as u32))
+        stratified_lens_position(self.pixel_bits)
     }
 
     /// The next dimension's value in [0, 1).
@@ -755,6 +820,21 @@ impl Sampler {
     }
 }
 
+/// One sample of one pixel as a [`Sampler`] started it
+/// ([`Sampler::pixel_sample`]), to be taken up by a copy of the same sampler
+/// ([`Sampler::resume_pixel_sample`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PixelSample {
+    /// The pixel's column.
+    pub x: u32,
+    /// The pixel's row.
+    pub y: u32,
+    /// The sample's index in the pixel.
+    pub sample: u32,
+    /// The stratified method's hash of the sample (0 for Sobol points).
+    bits: u64,
+}
+
 /// The random numbers of one sample of one pixel: a SplitMix64 stream seeded
 /// by (x, y, sample). Draw order within a sample is fixed by the tracer.
 #[derive(Clone, Copy, Debug)]
@@ -776,7 +856,7 @@ impl SampleRng {
     /// [`SampleRng::seeded`] from the seed's [`seed_bits`], made once.
     #[inline]
     fn with_seed_bits(x: u32, y: u32, sample: u32, bits: u64) -> Self {
-        Self(hash(x, y, sample) ^ 0x5851_F42D_4C95_7F2D ^ bits)
+        Self(hash(x, y, sample) ^ STREAM_SALT ^ bits)
     }
 
     /// The next pair of numbers in [0, 1).
@@ -786,6 +866,17 @@ impl SampleRng {
         let h = mix(self.0);
         (unit_float(h as u32), unit_float((h >> 32) as u32))
     }
+}
+
+/// What sets a sample's stream apart from its film jitter's hash.
+const STREAM_SALT: u64 = 0x5851_F42D_4C95_7F2D;
+
+/// The stratified method's lens position of the sample whose hash is
+/// `bits` (`hash(x, y, k) ^ seed_bits`).
+#[inline(always)]
+fn stratified_lens_position(bits: u64) -> (Real, Real) {
+    let h = mix(bits ^ LENS_SALT);
+    (unit_float(h as u32), unit_float((h >> 32) as u32))
 }
 
 /// What sets the lens position's hash apart from the film jitter's and the
@@ -848,6 +939,57 @@ mod tests {
         a.start_pixel_sample(5, 6, 2);
         let _ = a.film_position(5, 6, 2);
         assert_eq!(a.get_1d(), first.0);
+    }
+
+    #[test]
+    fn a_copy_that_resumes_a_started_sample_hands_out_the_values_of_starting_it_afresh() {
+        // The packet loop makes a sample's camera ray with one sampler and
+        // its path with another, which takes the sample up from the first
+        // rather than hashing its pixel again: film, lens and every path
+        // value must be those of `start_pixel_sample`, for every method,
+        // open-ended or not.
+        let kinds = [SamplerKind::Stratified, SamplerKind::Sobol];
+        for base in kinds.map(|k| Sampler::new(16, 7).with_kind(k)) {
+            for sampler in [base, base.to_open_ended()] {
+                for (x, y, k) in [(0, 0, 0), (5, 6, 2), (1023, 77, 15)] {
+                    let values = |s: &mut Sampler| (s.film(), s.lens(), s.get_1d(), s.get_2d(), s.get_1d());
+                    let mut fresh = sampler;
+                    fresh.start_pixel_sample(x, y, k);
+                    let start = fresh.pixel_sample();
+                    assert_eq!((start.x, start.y, start.sample), (x, y, k));
+                    let expected = values(&mut fresh);
+                    assert_eq!(expected.0, sampler.film_position(x, y, k));
+                    assert_eq!(expected.1, sampler.lens_position(x, y, k));
+                    let mut other = sampler;
+                    other.start_pixel_sample(x + 1, y, k);
+                    let _ = values(&mut other);
+                    other.resume_pixel_sample(start);
+                    assert_eq!(values(&mut other), expected, "{:?} ({x}, {y}, {k})", sampler.kind());
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_morton_table_holds_the_cells_the_bit_formula_gives_for_every_power_of_two_it_covers() {
+        // Powers of two whose rows are not a power of two (32, 128) take
+        // the stride order instead.
+        let mut checked = Vec::new();
+        for bits in 1..=MORTON_TABLE_BITS {
+            let n = 1u32 << bits;
+            let strata = Strata::new(n);
+            let CellOrder::Morton { bits: b, wide } = strata.order else { continue };
+            checked.push(n);
+            assert_eq!((b, wide), (bits, bits % 2 == 1), "{n}");
+            let shift = strata.base.trailing_zeros();
+            let cells: Vec<u32> = (0..n).map(|k| strata.order.cell(k, n, shift)).collect();
+            let formula: Vec<u32> = (0..n).map(|k| morton_cell(k, bits, wide, shift)).collect();
+            assert_eq!(cells, formula, "{n} cells");
+            let mut sorted = cells;
+            sorted.sort_unstable();
+            assert!(sorted.iter().copied().eq(0..n), "{n}: every cell once");
+        }
+        assert_eq!(checked, [2, 4, 8, 16, 64, 256]);
     }
 
     /// Sobol sampler `spp` samples per pixel, seed `seed`.

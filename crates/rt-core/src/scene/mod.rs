@@ -548,6 +548,7 @@ impl Scene {
     /// `footprint` (linear, not yet a normal: [`crate::materials::normal_map`]),
     /// with the slot's scale; `None` without a normal map or texture
     /// coordinates in the slot's set.
+    #[inline]
     pub fn normal_texel_at(
         &self,
         object: usize,
@@ -555,8 +556,22 @@ impl Scene {
         p: Vec3,
         footprint: Footprint,
     ) -> Option<(Color, f32)> {
+        // The test inline at every hit, the read out of line.
         let o = &self.objects[object];
         let slot = self.materials[o.material].normal_texture.as_ref()?;
+        self.read_normal_texel(o, slot, primitive, p, footprint)
+    }
+
+    /// [`Scene::normal_texel_at`] for a material with a normal map.
+    #[inline(never)]
+    fn read_normal_texel(
+        &self,
+        o: &Object,
+        slot: &TextureSlot,
+        primitive: usize,
+        p: Vec3,
+        footprint: Footprint,
+    ) -> Option<(Color, f32)> {
         let Primitive::Mesh(mesh) = &o.primitive else { return None };
         let texel =
             self.slot_read(mesh, primitive, slot, p, footprint, |t, u, v, lod, s| t.lookup(u, v, lod, s))?;
@@ -728,6 +743,7 @@ impl Scene {
     /// [`Scene::material_at_footprint`] where a texture changes the
     /// material; `None` where the object's own material is the answer (no
     /// texture, or none read here).
+    #[inline]
     pub fn textured_material(
         &self,
         object: usize,
@@ -735,11 +751,26 @@ impl Scene {
         p: Vec3,
         footprint: Footprint,
     ) -> Option<Material> {
+        // The test inline at every hit, the reads out of line: most
+        // materials have no texture.
         let o = &self.objects[object];
         let m = &self.materials[o.material];
         if !m.is_textured() {
             return None;
         }
+        self.read_material_textures(o, m, primitive, p, footprint)
+    }
+
+    /// [`Scene::textured_material`] for a material with a texture.
+    #[inline(never)]
+    fn read_material_textures(
+        &self,
+        o: &Object,
+        m: &Material,
+        primitive: usize,
+        p: Vec3,
+        footprint: Footprint,
+    ) -> Option<Material> {
         let Primitive::Mesh(mesh) = &o.primitive else { return None };
         let read = |slot: &Option<TextureSlot>| {
             self.slot_read(mesh, primitive, slot.as_ref()?, p, footprint, |t, u, v, lod, s| {
