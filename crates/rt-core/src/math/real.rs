@@ -143,12 +143,14 @@ pub const VALID_REFLECTION_SHARE: Real = 0.9;
 /// `v / |v|`, or `None` for a zero or non-finite `v`, for any finite `v`:
 /// `v` is first divided by its largest absolute component, so `|v|²` can
 /// neither overflow (components near 10³⁸ in f32) nor underflow (near 10⁻²⁰).
+#[inline]
 pub fn normalize_robust(v: Vec3) -> Option<Vec3> {
     let m = v.abs().max_element();
     if !(m > 0.0 && m.is_finite()) {
         return None;
     }
-    (v / m).try_normalize()
+    // The three quotients as one SIMD division (the same bits).
+    divide(v, Vec3::splat(m)).try_normalize()
 }
 
 /// A geometric scalar as the `f32` that colours are computed in.
