@@ -289,21 +289,22 @@ impl Strata {
     /// sample, else the sample's cell jittered by the pixel's random stream.
     #[inline]
     pub fn subpixel_offset(&self, x: u32, y: u32, sample: u32, seed: u64) -> (Real, Real) {
+        self.subpixel_offset_of(sample, hash(x, y, sample) ^ seed_bits(seed))
+    }
+
+    /// [`Strata::subpixel_offset`] of the sample whose hash is `bits`
+    /// (`hash(x, y, sample) ^ seed_bits(seed)`, which a sampler keeps).
+    #[inline]
+    fn subpixel_offset_of(&self, sample: u32, bits: u64) -> (Real, Real) {
         if self.n <= 1 {
             return (0.5, 0.5);
         }
-        self.point(sample, pixel_jitter(x, y, sample, seed))
+        self.point(sample, jitter_of(bits))
     }
 }
 
-/// The jitter of sample `sample` of pixel (`x`, `y`) in the image of seed
-/// `seed` inside its stratum, in [0,1)².
-#[inline]
-fn pixel_jitter(x: u32, y: u32, sample: u32, seed: u64) -> (Real, Real) {
-    jitter_of(hash(x, y, sample) ^ seed_bits(seed))
-}
-
-/// [`pixel_jitter`] from its hash `h`.
+/// The jitter inside its stratum, in [0,1)², of the pixel sample whose
+/// hash is `h` (`hash(x, y, sample) ^ seed_bits(seed)`).
 #[inline(always)]
 fn jitter_of(h: u64) -> (Real, Real) {
     (unit_float(h as u32), unit_float((h >> 32) as u32))
@@ -653,10 +654,17 @@ impl Sampler {
     #[inline]
     pub fn start_pixel_sample(&mut self, x: u32, y: u32, k: u32) {
         let bits = match self.kind {
-            SamplerKind::Stratified => hash(x, y, k) ^ self.seed_bits,
+            SamplerKind::Stratified => self.sample_bits(x, y, k),
             SamplerKind::Sobol => 0,
         };
         self.resume_pixel_sample(PixelSample { x, y, sample: k, bits });
+    }
+
+    /// The stratified method's hash of sample `k` of pixel (`x`, `y`) in
+    /// this sampler's image (what [`Sampler::pixel_sample`] carries).
+    #[inline(always)]
+    fn sample_bits(&self, x: u32, y: u32, k: u32) -> u64 {
+        hash(x, y, k) ^ self.seed_bits
     }
 
     /// The current sample ([`Sampler::start_pixel_sample`]), for another
@@ -723,7 +731,7 @@ impl Sampler {
             }
             return sobol::value_2d(sobol::pixel_seed_in(x, y, self.sobol.image), FILM_SLOT, k);
         }
-        self.stratified_film_position(k, hash(x, y, k) ^ self.seed_bits)
+        self.stratified_film_position(k, self.sample_bits(x, y, k))
     }
 
     /// [`Sampler::film_position`] of the current sample
@@ -743,7 +751,7 @@ impl Sampler {
 
     /// The stratified method's [`Sampler::film_position`] of sample `k`
     /// whose hash is `bits` (`hash(x, y, k) ^ seed_bits`): the cell's point
-    /// jittered by [`pixel_jitter`]'s bits.
+    /// jittered by those bits ([`Strata::subpixel_offset`]'s jitter).
     #[inline(always)]
     fn stratified_film_position(&self, k: u32, bits: u64) -> (Real, Real) {
         if self.open_ended {
@@ -753,6 +761,7 @@ impl Sampler {
         } else if self.spp == 1 {
             (0.5, 0.5)
         } else {
+            // spp ≥ 2 here, so never the one cell `subpixel_offset` centres.
             self.strata.point(k, jitter_of(bits))
         }
     }
@@ -771,7 +780,7 @@ impl Sampler {
         if self.kind == SamplerKind::Sobol {
             return sobol::value_2d(sobol::pixel_seed_in(x, y, self.sobol.image), LENS_SLOT, k);
         }
-        stratified_lens_position(hash(x, y, k) ^ self.seed_bits)
+        stratified_lens_position(self.sample_bits(x, y, k))
     }
 
     /// [`Sampler::lens_position`] of the current sample
