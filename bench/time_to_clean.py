@@ -202,7 +202,10 @@ class Mitsuba:
 
 class Cycles:
     def __init__(self, args, desc, folder, width, height):
-        import bpy
+        try:
+            import bpy
+        except ImportError:
+            raise Skip("the bpy module is not installed (pip install bpy==5.0.1, Python 3.11)") from None
 
         self.bpy, self.folder = bpy, folder
         self.scene = convert(cycles_scene.scene_from_export, bpy, desc, folder, width, height, args.threads)
@@ -300,13 +303,14 @@ def run_scene(args, scene_path, width, height, counts):
     print(f"  reference in {reference_s:.0f} s; its own RMSE ≈ {math.sqrt(ref_noise2):.5f}", flush=True)
 
     notes = []
-    try:
-        cycles = Cycles(args, desc, folder, width, height)
-    except Skip as e:
-        cycles = None
-        notes.append(f"Cycles left out: {e}")
     all_methods, threshold = methods(args)
     wanted = set(args.methods.split(",")) if args.methods else None
+    cycles = None
+    if any(engine == "cy" and (wanted is None or label in wanted) for label, engine, _ in all_methods):
+        try:
+            cycles = Cycles(args, desc, folder, width, height)
+        except Skip as e:
+            notes.append(f"Cycles left out: {e}")
     chosen = [m for m in all_methods if (wanted is None or m[0] in wanted) and not (m[1] == "cy" and cycles is None)]
     for label, engine, how in chosen:
         if engine == "mi":
