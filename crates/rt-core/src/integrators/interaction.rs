@@ -21,6 +21,7 @@ use crate::geometry::object::Object;
 use crate::geometry::primitive::Primitive;
 use crate::geometry::surface::SurfacePoint;
 use crate::materials::bsdf::Bsdf;
+use crate::materials::hit_bsdf::HitBsdf;
 use crate::materials::material::Material;
 use crate::materials::normal_map;
 use crate::materials::texture_lod::Footprint;
@@ -162,6 +163,19 @@ impl<'s> SurfaceInteraction<'s> {
         match (shading, self.unmapped_normal) {
             (Some(mapped), Some(smooth)) => Bsdf::mapped(material, n, smooth.unwrap_or(n), mapped, self.wo),
             _ => Bsdf::shaded(material, n, shading.unwrap_or(n), self.wo),
+        }
+    }
+
+    /// [`SurfaceInteraction::bsdf_of`] as the path tracer takes it: the
+    /// Lambert lobe alone where that is all `material` has ([`HitBsdf`]).
+    #[inline]
+    pub fn hit_bsdf_of(&self, material: &Material, shading: Option<Vec3>) -> HitBsdf {
+        let n = self.point.normal;
+        match (shading, self.unmapped_normal) {
+            (Some(mapped), Some(smooth)) => {
+                HitBsdf::Full(Bsdf::mapped(material, n, smooth.unwrap_or(n), mapped, self.wo))
+            }
+            _ => HitBsdf::shaded(material, n, shading.unwrap_or(n), self.wo),
         }
     }
 

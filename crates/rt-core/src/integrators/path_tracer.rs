@@ -20,8 +20,11 @@
 //!    directional and sphere lights of the `lights` list cannot be hit by
 //!    rays, so their samples get w = 1.
 //! 4. **BSDF sampling.** A direction is drawn from the BSDF
-//!    ([`Bsdf::sample`]) and β multiplied by `f·|cos θ|/pdf`; the path goes on
-//!    along it (a *bounce* ray).
+//!    ([`HitBsdf::sample`]) and β multiplied by `f·|cos θ|/pdf`; the path goes on
+//!    along it (a *bounce* ray). The BSDF is built once per surface, as the
+//!    Lambert lobe alone where the material has nothing else (most of a
+//!    room), else as the whole model ([`crate::materials::bsdf::Bsdf`]):
+//!    the same bits either way, less set-up for the first.
 //! 5. **Russian roulette** from the [`ROULETTE_FROM`]th bounce on that
 //!    sampled a smooth lobe (δ bounces, mirrors and clear glass, do not
 //!    count): the path ends with probability `q = 1 − max(β)·η²` when
@@ -53,7 +56,8 @@ use crate::integrators::interaction::SurfaceInteraction;
 use crate::integrators::random_walk::{RandomWalk, WalkEnd};
 use crate::lights::light_sampler::{LightSampler, Source};
 use crate::lights::light_source::LightSample;
-use crate::materials::bsdf::{self, Bsdf};
+use crate::materials::bsdf;
+use crate::materials::hit_bsdf::HitBsdf;
 use crate::materials::texture_lod::RayCone;
 use crate::math::color::Color;
 use crate::math::ray::{Interval, Ray};
@@ -211,7 +215,7 @@ impl<'s> PathTracer<'s> {
             sampler.start_bounce(bounce);
             // A translucent object's boundary stays flat: the walk's inside
             // and outside are the facets' (step 6).
-            let bsdf = si.bsdf_of(m, si.shading_normal.filter(|_| medium.is_none()));
+            let bsdf = si.hit_bsdf_of(m, si.shading_normal.filter(|_| medium.is_none()));
 
             // 3. Next-event estimation, and 4. BSDF sampling. Both samples
             // are drawn before the shadow ray is cast (the sampler's values in
@@ -338,7 +342,7 @@ impl<'s> PathTracer<'s> {
     fn next_event<R: Recorder>(
         &self,
         sp: &SurfacePoint,
-        bsdf: &Bsdf,
+        bsdf: &HitBsdf,
         wo: Vec3,
         light: Option<(Source, Real, LightSample)>,
         counts: &mut RayCounts,

@@ -382,9 +382,7 @@ impl Bsdf {
     /// Chiang, Li and Burley's shadowing term for `ω_i` above the surface
     /// (see "Shading normals"): 1 where the facet does not turn away.
     fn terminator(&self, wi: Vec3) -> f32 {
-        let g = to_f32(self.ng.dot(wi) / (self.n.dot(wi) * self.ng.dot(self.n)));
-        let g = if g.is_finite() { g.clamp(0.0, 1.0) } else { 1.0 };
-        -g * g * g + g * g + g
+        terminator(self.n, self.ng, wi)
     }
 
     /// `f` (all smooth lobes, of which `diffuse` is the diffuse base) for
@@ -606,6 +604,17 @@ impl Bsdf {
     fn ggx_sample_normal(&self, wo: Vec3, u: (Real, Real)) -> Vec3 {
         sample_visible_normal(wo, self.alpha, u)
     }
+}
+
+/// Chiang, Li and Burley's shadowing term for `ω_i` above a surface whose
+/// lobes lie about the shading normal `n`, with geometric normal `ng` (see
+/// "Shading normals"): `G = min(1, (n_g·ω_i)/((n·ω_i)(n_g·n)))`,
+/// `−G³ + G² + G`; 1 where `G` is not finite.
+#[inline]
+pub(crate) fn terminator(n: Vec3, ng: Vec3, wi: Vec3) -> f32 {
+    let g = to_f32(ng.dot(wi) / (n.dot(wi) * ng.dot(n)));
+    let g = if g.is_finite() { g.clamp(0.0, 1.0) } else { 1.0 };
+    -g * g * g + g * g + g
 }
 
 /// The normal `n` (a normal map's, turned to `ω_o`'s side of the geometric

@@ -8,6 +8,7 @@
 
 pub mod alpha;
 pub mod bsdf;
+pub mod hit_bsdf;
 pub mod material;
 pub mod medium;
 pub mod normal_map;
