@@ -300,6 +300,32 @@ mod tests {
     }
 
     #[test]
+    fn the_path_tracer_gets_the_lambert_lobe_alone_except_under_a_normal_map() {
+        use crate::materials::hit_bsdf::HitBsdf;
+        let loaded = scene();
+        let s = &loaded.scene;
+        let mut scratch = MaybeUninit::uninit();
+        // The plain grey sphere, and the glowing quad (emission is not a lobe).
+        for ray in
+            [Ray::new(Vec3::new(0.3, 0.2, 0.0), Vec3::Z), Ray::new(Vec3::new(0.5, -0.25, -4.0), Vec3::Z)]
+        {
+            let hit = s.closest_hit(&ray, Interval::new(0.0, Real::INFINITY)).unwrap();
+            let si = SurfaceInteraction::new(s, &ray, &hit, &mut scratch).unwrap();
+            let lean = si.hit_bsdf_of(si.material, si.shading_normal);
+            assert!(matches!(lean, HitBsdf::Lambert(_)), "object {}", si.object);
+            let wi = Vec3::new(0.3, -0.2, -1.0).normalize();
+            assert_eq!(lean.eval(si.wo, wi), si.bsdf().eval(si.wo, wi));
+        }
+        // A normal map keeps the whole model, whose rules for it the lone
+        // lobe does not have.
+        let scene = normal_mapped_square(Material::flat(Color::ONE), [1.0, 0.5, 0.55]);
+        let ray = Ray::new(Vec3::new(0.1, -0.2, -3.0), Vec3::Z);
+        let hit = scene.cast(&ray).unwrap();
+        let si = SurfaceInteraction::new(&scene, &ray, &hit, &mut scratch).unwrap();
+        assert!(matches!(si.hit_bsdf_of(si.material, si.shading_normal), HitBsdf::Full(_)));
+    }
+
+    #[test]
     fn a_textured_hit_shades_with_the_textured_material_in_the_scratch_slot() {
         use crate::geometry::primitive::Primitive;
         use crate::materials::texture::Texture;
