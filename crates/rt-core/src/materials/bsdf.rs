@@ -402,9 +402,7 @@ impl Bsdf {
         if self.ns == self.ng {
             return f;
         }
-        let g = to_f32(self.ng.dot(wi) / (self.ns.dot(wi) * self.ng.dot(self.ns)));
-        let g = if g.is_finite() { g.clamp(0.0, 1.0) } else { 1.0 };
-        f * (-g * g * g + g * g + g)
+        f * terminator(self.ns, self.ng, wi)
     }
 
     /// Conty Estevez, Lecocq and Stein's shadowing term for a normal map
