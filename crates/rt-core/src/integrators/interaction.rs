@@ -172,9 +172,8 @@ impl<'s> SurfaceInteraction<'s> {
     pub fn hit_bsdf_of(&self, material: &Material, shading: Option<Vec3>) -> HitBsdf {
         let n = self.point.normal;
         match (shading, self.unmapped_normal) {
-            (Some(mapped), Some(smooth)) => {
-                HitBsdf::Full(Bsdf::mapped(material, n, smooth.unwrap_or(n), mapped, self.wo))
-            }
+            // A normal map's rules are the whole model's.
+            (Some(_), Some(_)) => HitBsdf::Full(self.bsdf_of(material, shading)),
             _ => HitBsdf::shaded(material, n, shading.unwrap_or(n), self.wo),
         }
     }

@@ -237,14 +237,7 @@ impl Bsdf {
     /// geometric one points to.
     #[inline]
     pub fn shaded(m: &Material, geometric: Vec3, shading: Vec3, wo: Vec3) -> Self {
-        if shading == geometric {
-            return Self::new(m, geometric, wo);
-        }
-        let outside = wo.dot(geometric) >= 0.0;
-        let ng = if outside { geometric } else { -geometric };
-        let ns = if shading.dot(ng) < 0.0 { -shading } else { shading };
-        // ω_o below the shading hemisphere: fall back to the facet.
-        let n = if ns.dot(wo) > 0.0 { ns } else { ng };
+        let (n, ng, outside) = facing_normals(geometric, shading, wo);
         Self::with_normals(m, n, ng, outside, wo)
     }
 
@@ -353,8 +346,7 @@ impl Bsdf {
             }
             return if self.shaded && self.n.dot(wi) > 0.0 { f * self.terminator(wi) } else { f };
         }
-        let (cos_o, cos_i) = (self.n.dot(wo), self.n.dot(wi));
-        if cos_i <= 0.0 || cos_o <= 0.0 || (self.shaded && self.ng.dot(wi) <= 0.0) {
+        if reflected_cosine(self.n, self.ng, self.shaded, wo, wi).is_none() {
             return Color::ZERO;
         }
         // On four lanes, so that the three products are made, and kept, as
@@ -431,10 +423,7 @@ impl Bsdf {
             }
             return p.pdf(self.local(wo), self.local(wi));
         }
-        let (cos_o, cos_i) = (self.n.dot(wo), self.n.dot(wi));
-        if cos_i <= 0.0 || cos_o <= 0.0 || (self.shaded && self.ng.dot(wi) <= 0.0) {
-            return 0.0;
-        }
+        let Some(cos_i) = reflected_cosine(self.n, self.ng, self.shaded, wo, wi) else { return 0.0 };
         let mut pdf = self.choose[0] as Real * cos_i * std::f64::consts::FRAC_1_PI as Real;
         if self.choose[1] > 0.0 {
             pdf += self.choose[1] as Real * self.ggx_pdf(self.local(wo), self.local(wi));
@@ -602,6 +591,36 @@ impl Bsdf {
     fn ggx_sample_normal(&self, wo: Vec3, u: (Real, Real)) -> Vec3 {
         sample_visible_normal(wo, self.alpha, u)
     }
+}
+
+/// The lobes' normal, the geometric normal (both turned to `ω_o`'s side of
+/// the geometric one) and whether `ω_o` is outside, for unit `geometric`
+/// and `shading` normals seen from `wo` (see "Shading normals"): the
+/// shading normal falls back to the facet's where `ω_o` lies below it.
+#[inline(always)]
+pub(crate) fn facing_normals(geometric: Vec3, shading: Vec3, wo: Vec3) -> (Vec3, Vec3, bool) {
+    let outside = wo.dot(geometric) >= 0.0;
+    let ng = if outside { geometric } else { -geometric };
+    if shading == geometric {
+        return (ng, ng, outside);
+    }
+    let ns = if shading.dot(ng) < 0.0 { -shading } else { shading };
+    // ω_o below the shading hemisphere: fall back to the facet.
+    let n = if ns.dot(wo) > 0.0 { ns } else { ng };
+    (n, ng, outside)
+}
+
+/// `n·ω_i` where the reflection lobes about `n` carry light from `wi` to
+/// `wo` — both above `n`, and with a shading normal (`shaded`) `wi` on
+/// `ω_o`'s side of the facet `ng` too (see "Shading normals", no leaks) —
+/// else `None`.
+#[inline(always)]
+pub(crate) fn reflected_cosine(n: Vec3, ng: Vec3, shaded: bool, wo: Vec3, wi: Vec3) -> Option<Real> {
+    let (cos_o, cos_i) = (n.dot(wo), n.dot(wi));
+    if cos_i <= 0.0 || cos_o <= 0.0 || (shaded && ng.dot(wi) <= 0.0) {
+        return None;
+    }
+    Some(cos_i)
 }
 
 /// Chiang, Li and Burley's shadowing term for `ω_i` above a surface whose

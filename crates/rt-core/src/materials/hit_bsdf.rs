@@ -19,7 +19,7 @@
 //! Chiang et al.'s term about a shading normal). A black or non-finite
 //! albedo keeps the whole model.
 
-use crate::materials::bsdf::{Bsdf, BsdfSample, Lobe, terminator};
+use crate::materials::bsdf::{Bsdf, BsdfSample, Lobe, facing_normals, reflected_cosine, terminator};
 use crate::materials::material::Material;
 use crate::math::color::Color;
 use crate::math::real::{Real, Vec3, to_f32};
@@ -59,23 +59,14 @@ impl LambertBsdf {
         if !(mean > 0.0 && mean < f32::INFINITY) {
             return None;
         }
-        let outside = wo.dot(geometric) >= 0.0;
-        let ng = if outside { geometric } else { -geometric };
-        let n = if shading == geometric {
-            ng
-        } else {
-            let ns = if shading.dot(ng) < 0.0 { -shading } else { shading };
-            // ω_o below the shading hemisphere: fall back to the facet.
-            if ns.dot(wo) > 0.0 { ns } else { ng }
-        };
+        let (n, ng, _) = facing_normals(geometric, shading, wo);
         Some(Self { n, ng, shaded: n != ng, frame: n.any_orthonormal_pair(), diffuse })
     }
 
     /// `f(ω_o, ω_i)`: [`Bsdf::eval`].
     #[inline(always)]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Color {
-        let (cos_o, cos_i) = (self.n.dot(wo), self.n.dot(wi));
-        if cos_i <= 0.0 || cos_o <= 0.0 || (self.shaded && self.ng.dot(wi) <= 0.0) {
+        if reflected_cosine(self.n, self.ng, self.shaded, wo, wi).is_none() {
             return Color::ZERO;
         }
         let f = Color::from(glam::Vec3A::from(self.diffuse) * std::f32::consts::FRAC_1_PI);
@@ -85,10 +76,7 @@ impl LambertBsdf {
     /// The density of [`LambertBsdf::sample`]'s directions: [`Bsdf::pdf`].
     #[inline(always)]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> Real {
-        let (cos_o, cos_i) = (self.n.dot(wo), self.n.dot(wi));
-        if cos_i <= 0.0 || cos_o <= 0.0 || (self.shaded && self.ng.dot(wi) <= 0.0) {
-            return 0.0;
-        }
+        let Some(cos_i) = reflected_cosine(self.n, self.ng, self.shaded, wo, wi) else { return 0.0 };
         // `Bsdf::pdf` multiplies by the lobe's choice probability, 1 here.
         1.0 * cos_i * std::f64::consts::FRAC_1_PI as Real
     }
