@@ -226,8 +226,7 @@ impl Bsdf {
     /// primitive's own orientation), seen from the unit direction `wo`.
     #[inline]
     pub fn new(m: &Material, normal: Vec3, wo: Vec3) -> Self {
-        let outside = wo.dot(normal) >= 0.0;
-        let n = if outside { normal } else { -normal };
+        let (n, outside) = facing_facet(normal, wo);
         Self::with_normals(m, n, n, outside, wo)
     }
 
@@ -247,8 +246,7 @@ impl Bsdf {
     /// `wo` (see "Normal maps" above).
     #[inline]
     pub fn mapped(m: &Material, geometric: Vec3, smooth: Vec3, mapped: Vec3, wo: Vec3) -> Self {
-        let outside = wo.dot(geometric) >= 0.0;
-        let ng = if outside { geometric } else { -geometric };
+        let (ng, outside) = facing_facet(geometric, wo);
         let ns = if smooth.dot(ng) < 0.0 { -smooth } else { smooth };
         let n = if mapped.dot(ng) < 0.0 { -mapped } else { mapped };
         let nd = n;
@@ -599,8 +597,7 @@ impl Bsdf {
 /// shading normal falls back to the facet's where `ω_o` lies below it.
 #[inline(always)]
 pub(crate) fn facing_normals(geometric: Vec3, shading: Vec3, wo: Vec3) -> (Vec3, Vec3, bool) {
-    let outside = wo.dot(geometric) >= 0.0;
-    let ng = if outside { geometric } else { -geometric };
+    let (ng, outside) = facing_facet(geometric, wo);
     if shading == geometric {
         return (ng, ng, outside);
     }
@@ -608,6 +605,14 @@ pub(crate) fn facing_normals(geometric: Vec3, shading: Vec3, wo: Vec3) -> (Vec3,
     // ω_o below the shading hemisphere: fall back to the facet.
     let n = if ns.dot(wo) > 0.0 { ns } else { ng };
     (n, ng, outside)
+}
+
+/// The unit geometric normal `geometric` turned to `ω_o`'s side, and
+/// whether `ω_o` is outside (on the side it points to, or in its plane).
+#[inline(always)]
+fn facing_facet(geometric: Vec3, wo: Vec3) -> (Vec3, bool) {
+    let outside = wo.dot(geometric) >= 0.0;
+    (if outside { geometric } else { -geometric }, outside)
 }
 
 /// `n·ω_i` where the reflection lobes about `n` carry light from `wi` to
