@@ -31,7 +31,7 @@ use crate::geometry::hit::Hit;
 use crate::geometry::method::Methods;
 use crate::geometry::object::Object;
 use crate::math::ray::{Interval, Ray};
-use crate::math::real::{Real, Vec3, divide, gamma};
+use crate::math::real::{CONE_PAD, CONE_SLOPE_MARGIN, Real, Vec3, divide, gamma};
 
 /// Bounds on a packet's rays, per axis: origins in `[origin_lo, origin_hi]`,
 /// inverse directions in `[inv_lo, inv_hi]` (all of one sign, finite), and
@@ -176,7 +176,7 @@ impl Cone {
             sign,
             u,
             v,
-            margin: 1e-6 * (1.0 + reach),
+            margin: CONE_SLOPE_MARGIN * (1.0 + reach),
         })
     }
 
@@ -199,7 +199,7 @@ impl Cone {
             );
             let reach =
                 pi.0.abs().max(pi.1.abs()).max(pj.0.abs()).max(pj.1.abs()).max(pk.0.abs()).max(pk.1.abs());
-            let pad = 1e-4 * reach;
+            let pad = CONE_PAD * reach;
             for p in [&mut pi, &mut pj, &mut pk] {
                 *p = (p.0 - pad, p.1 + pad);
             }

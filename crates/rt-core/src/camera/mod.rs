@@ -17,7 +17,7 @@ pub mod view_plane;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::math::real::{Real, Vec3, normalize_robust};
+use crate::math::real::{MIN_UP_SINE, Real, Vec3, normalize_robust};
 
 /// How primary rays leave the view plane.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -72,10 +72,6 @@ pub enum CameraError {
         height: Real,
     },
 }
-
-/// `|normalize(up) × cam_z|` below this means `up` is parallel to the view
-/// direction: sin 0.0057°. Past that the roll is still well defined in f32.
-const MIN_UP_SINE: Real = 1e-4;
 
 /// An orthonormal camera frame (left-handed: `cam_y = cam_z × cam_x`).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

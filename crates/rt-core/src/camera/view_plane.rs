@@ -17,7 +17,7 @@ use thiserror::Error;
 
 use crate::camera::{Camera, Projection};
 use crate::math::ray::Ray;
-use crate::math::real::{Real, Vec3};
+use crate::math::real::{MIN_PIXEL_ULPS, Real, Vec3};
 use crate::sampling::sampler::concentric_disk;
 
 /// Largest accepted image side, in pixels.
@@ -65,11 +65,6 @@ pub enum ViewPlaneError {
         plane_h: Real,
     },
 }
-
-/// A pixel must be at least this many ulps of the magnitudes its ray is built
-/// from (`near` for perspective directions, also `|C|∞` for orthographic
-/// origins), so that neighbouring pixels get different rays.
-const MIN_PIXEL_ULPS: Real = 16.0;
 
 /// Checks an image size against [`MAX_IMAGE_SIDE`] and [`MAX_PIXELS`].
 pub fn check_image_size(width: u32, height: u32) -> Result<(), ViewPlaneError> {

@@ -11,7 +11,7 @@
 //!   face the ray entered or left by;
 //! - triangle: the barycentric coordinates of the hit point and the
 //!   course's area-ratio test `w_a + w_b + w_c ≤ 1 + ε`
-//!   ([`crate::geometry::triangle::AREA_RATIO_EPSILON`]);
+//!   ([`crate::math::real::AREA_RATIO_EPSILON`]);
 //! - polygon: its plane, the two axes it is projected on, the crossing-number
 //!   test on them, and the triangle of its fan that holds the point.
 //!

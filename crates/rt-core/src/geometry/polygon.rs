@@ -7,11 +7,7 @@ use crate::geometry::hit_test::PolygonTest;
 use crate::geometry::surface::{SurfacePoint, project_onto_plane};
 use crate::geometry::triangle::Triangle;
 use crate::math::ray::{Interval, Ray};
-use crate::math::real::{Real, Vec3, magnitude_scale, normalize_robust};
-
-/// Relative planarity tolerance: a corner may be off the best-fit plane by
-/// this fraction of the polygon's diagonal (plus rounding at its magnitude).
-pub const PLANARITY_TOLERANCE: Real = 1e-4;
+use crate::math::real::{PLANARITY_TOLERANCE, Real, Vec3, magnitude_scale, normalize_robust};
 
 /// A simple or self-intersecting planar polygon with ≥ 3 corners (even–odd
 /// rule for what is inside). Its normal comes from the winding of the corners

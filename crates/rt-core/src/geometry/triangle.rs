@@ -8,7 +8,9 @@ use crate::geometry::hit_test::TriangleTest;
 use crate::geometry::method::TriangleMethod;
 use crate::geometry::surface::{SurfacePoint, project_onto_plane};
 use crate::math::ray::{Interval, Ray};
-use crate::math::real::{Real, Vec3, difference_of_products, divide, gamma, normalize_robust};
+use crate::math::real::{
+    AREA_RATIO_EPSILON, Real, Vec3, difference_of_products, divide, gamma, normalize_robust,
+};
 
 /// A hit on a triangle: the ray parameter and the barycentric weights of its
 /// corners `(a, b, c)`, which sum to 1; the hit point is `w_a·a + w_b·b + w_c·c`.
@@ -358,13 +360,6 @@ pub fn intersect_moller_trumbore(
     let t = e2.dot(q) * inv_det;
     range.contains(t).then_some(TriangleHit { t, barycentric: [1.0 - u - v, u, v] })
 }
-
-/// The area-ratio test's tolerance: a point counts as inside when the three
-/// sub-triangle areas sum to at most `(1 + ε)` times the triangle's area.
-/// Just outside an edge the excess is about twice the point's distance from
-/// the edge over the triangle's height there, so points up to `ε/2` heights
-/// outside are (wrongly) hit.
-pub const AREA_RATIO_EPSILON: Real = 1e-4;
 
 /// The course's test: intersect the triangle's plane `n·p = n·a` (with
 /// `n = (b−a)×(c−a)`) at `t = n·(a − o) / n·d`, form `p = o + t·d`, and take

@@ -45,14 +45,10 @@ use crate::materials::shading::{fresnel_dielectric, reflect, refract};
 use crate::materials::texture_lod::RayCone;
 use crate::math::color::Color;
 use crate::math::ray::{Interval, Ray};
-use crate::math::real::{Real, Vec3, normalize_robust, to_f32};
+use crate::math::real::{MIN_WEIGHT, Real, Vec3, normalize_robust, to_f32};
 use crate::sampling::sampler::{Sampler, Strata, cosine_hemisphere_in};
 use crate::scene::Scene;
 use crate::scene::effects::{EffectPlan, RayCounts};
-
-/// Smallest weight a secondary ray may have in its pixel: under half an
-/// 8-bit step of a full-intensity colour.
-pub const MIN_WEIGHT: f32 = 1.0 / 512.0;
 
 /// Traces rays through one scene under one effect plan.
 #[derive(Clone, Copy, Debug)]

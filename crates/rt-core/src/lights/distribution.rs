@@ -128,6 +128,8 @@ impl Distribution2D {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampling::sampler::SampleRng;
+    use crate::testing::chi_square::{self, Draw, Interval, Rectangle};
 
     #[test]
     fn a_one_dimensional_density_is_its_values_over_their_mean() {
@@ -171,5 +173,33 @@ mod tests {
             let (uv, p) = d.sample(s);
             assert!((p - d.pdf(uv)).abs() < 1e-12 && p > 0.0, "{uv:?}");
         }
+    }
+
+    #[test]
+    fn one_dimensional_samples_follow_the_density() {
+        // χ² on two bins per cell (the density is constant in each, so the
+        // bins' probabilities are exact); a cell of value 0 must get nothing.
+        let d = Distribution1D::new(&[1.0, 3.0, 0.0, 4.0, 0.5, 2.0, 6.0, 1.5]);
+        let draw = |rng: &mut SampleRng| Draw::At(d.sample(to_f64(rng.next_pair().0)).0);
+        let pdf = |x: f64| d.density(d.cell(x));
+        chi_square::line("piecewise-constant 1D", Interval { lo: 0.0, hi: 1.0, n: 16 }, 200_000, draw, &pdf);
+    }
+
+    #[test]
+    fn two_dimensional_samples_follow_the_density() {
+        // The same on two bins per cell each way, rows of different totals,
+        // a row of zeros and single cells of zero.
+        let (nu, nv) = (6, 4);
+        let values: Vec<f64> = (0..nu * nv)
+            .map(|k| if k / nu == 2 { 0.0 } else { ((k * 7) % 5) as f64 + (k / nu) as f64 })
+            .collect();
+        let d = Distribution2D::new(&values, nu, nv);
+        let grid = Rectangle {
+            s: Interval { lo: 0.0, hi: 1.0, n: 2 * nu },
+            t: Interval { lo: 0.0, hi: 1.0, n: 2 * nv },
+        };
+        let draw = |rng: &mut SampleRng| Draw::At(d.sample(rng.next_pair()).0);
+        let pdf = |u: f64, v: f64| d.pdf((u, v));
+        chi_square::plane("piecewise-constant 2D", grid, 200_000, draw, &pdf);
     }
 }

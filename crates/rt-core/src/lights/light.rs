@@ -16,7 +16,7 @@
 //! defines it ([`spot_falloff`]).
 
 use crate::math::color::Color;
-use crate::math::real::{Real, SPOT_CONE_MIN_WIDTH, Vec3, to_f32};
+use crate::math::real::{Real, SMALL_CONE_SIN2, SPOT_CONE_MIN_WIDTH, Vec3, to_f32};
 use crate::sampling::sampler::Strata;
 
 /// One light of a scene.
@@ -217,7 +217,7 @@ impl SphereCone {
         let sin2_max = (r / d) * (r / d);
         // 1 − √(1 − s) loses s to rounding when it is small; its series
         // s/2 + s²/8 is exact to f32 there (pbrt-v4 uses the same switch).
-        let one_minus_cos_max = if sin2_max < 0.00068523 {
+        let one_minus_cos_max = if sin2_max < SMALL_CONE_SIN2 {
             sin2_max / 2.0 + sin2_max * sin2_max / 8.0
         } else {
             1.0 - (1.0 - sin2_max).sqrt()

@@ -33,7 +33,7 @@
 use glam::DVec3;
 
 use crate::math::color::Color;
-use crate::math::real::{Real, Vec3, to_f32, to_f64};
+use crate::math::real::{HG_ISOTROPIC_G, Real, Vec3, WALK_RESCALE_ABOVE, WALK_RESCALE_BELOW, to_f32, to_f64};
 
 /// A homogeneous medium's coefficients, as the material gives them.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -125,7 +125,7 @@ impl WalkWeight {
     /// does not matter: both vectors are divided by the same number).
     fn rescale(&mut self) {
         let m = self.density.max_element();
-        if m > 1e100 || (m < 1e-100 && m > 0.0) {
+        if m > WALK_RESCALE_ABOVE || (m < WALK_RESCALE_BELOW && m > 0.0) {
             self.density /= m;
             self.contribution /= m;
         }
@@ -147,7 +147,7 @@ pub fn henyey_greenstein(cos_theta: Real, g: Real) -> Real {
 /// distribution of cos θ (pbrt-v4 §11.3.1): the sample's weight
 /// `phase/pdf` is exactly 1.
 pub fn sample_henyey_greenstein(w: Vec3, g: Real, (u, v): (Real, Real)) -> Vec3 {
-    let cos_theta = if g.abs() < 1e-3 {
+    let cos_theta = if g.abs() < HG_ISOTROPIC_G {
         1.0 - 2.0 * u
     } else {
         let s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u);

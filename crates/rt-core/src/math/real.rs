@@ -140,6 +140,99 @@ pub const VALID_REFLECTION_MARGIN: Real = 0.01;
 /// See [`VALID_REFLECTION_MARGIN`].
 pub const VALID_REFLECTION_SHARE: Real = 0.9;
 
+/// The area-ratio triangle test's tolerance
+/// ([`crate::geometry::triangle::intersect_area_ratio`], the course's test):
+/// a point counts as inside when the three sub-triangle areas sum to at
+/// most `(1 + ε)` times the triangle's area. The sum is exactly 1 inside,
+/// but it is computed with rounding (cross products and lengths, relative
+/// errors of a few 10⁻⁷ in f32), so without slack the test would lose
+/// points inside; 10⁻⁴ is some 800 f32 ulps of the sum, far above that
+/// rounding. Just outside an edge the excess is about twice the point's
+/// distance from the edge over the triangle's height there, so points up
+/// to `ε/2` heights outside are (wrongly) hit: the price of this test,
+/// which `rt-view accuracy` shows beside the watertight one.
+pub const AREA_RATIO_EPSILON: Real = 1e-4;
+
+/// How planar a polygon must be ([`crate::geometry::polygon::Polygon::new`]):
+/// a corner may be off the best-fit plane by this fraction of the
+/// polygon's diagonal, plus 16 ulps of the corners' magnitude for
+/// rounding. The plane the polygon is then drawn in lies within 10⁻⁴ of
+/// its size of every corner, far below what a pixel resolves of it; a
+/// polygon bent by more is refused rather than drawn as if it were flat.
+pub const PLANARITY_TOLERANCE: Real = 1e-4;
+
+/// The least `|normalize(up) × cam_z|` a camera accepts
+/// ([`crate::camera::Camera`]): below it `up` is parallel to the view
+/// direction (sin 0.0057°) and the camera's roll undefined. Above it the
+/// cross product's direction is well defined in f32 (its components are
+/// at least 10⁻⁴ against a rounding of 10⁻⁷).
+pub const MIN_UP_SINE: Real = 1e-4;
+
+/// A pixel must be at least this many ulps of the magnitudes its ray is
+/// built from (`near` for perspective directions, also `|C|∞` for
+/// orthographic origins) ([`crate::camera::view_plane::ViewPlane`]), so
+/// that neighbouring pixels get different rays: a pixel's point on the
+/// view plane is computed to within a few ulps, well inside 16.
+pub const MIN_PIXEL_ULPS: Real = 16.0;
+
+/// The smallest weight a secondary ray of the direct-lighting tracer may
+/// have in its pixel ([`crate::integrators::tracer`], adaptive depth
+/// control): under half an 8-bit step of a full-intensity colour, so what
+/// it would add cannot change the pixel's 8-bit value.
+pub const MIN_WEIGHT: f32 = 1.0 / 512.0;
+
+/// Added to the square root of the intensity in adaptive sampling's
+/// relative error ([`crate::render::adaptive`]), so a black pixel's error is
+/// finite (0 if its halves agree): Blender Cycles' value.
+pub const ADAPTIVE_DARK: f32 = 1e-4;
+
+/// The margin of a packet's cone test on slopes ([`crate::bvh`]'s packets),
+/// times `1 + max|slope|`. The slopes are computed from the rays' inverse
+/// directions with three roundings (a relative error under 2·10⁻⁷), and a
+/// ray's own rounded slab or watertight test can accept a box or triangle
+/// the exact ray misses by a relative 5γ₃ ≈ 10⁻⁶ of the distance: the cone
+/// must never cull what a ray would enter. 10⁻⁶ on the slopes and
+/// [`CONE_PAD`] on the boxes are a hundred times the rounding they cover,
+/// and still far below a pixel's footprint (10⁻³ of the distance at
+/// 640×480).
+pub const CONE_SLOPE_MARGIN: Real = 1e-6;
+
+/// How much a box is widened on every side, relative to its reach from
+/// the packet's origin, before a packet's cone test culls it (see
+/// [`CONE_SLOPE_MARGIN`]).
+pub const CONE_PAD: Real = 1e-4;
+
+/// Below this `|g|` a Henyey–Greenstein direction is drawn as an isotropic
+/// one ([`crate::materials::medium::sample_henyey_greenstein`], pbrt-v4's
+/// switch, §11.3.1): the inverted distribution divides by `2g` and loses
+/// all precision as `g → 0`, while the phase function differs from the
+/// isotropic one by under `3|g|` = 0.3 % there.
+pub const HG_ISOTROPIC_G: Real = 1e-3;
+
+/// Below this `sin²θ_max` (sin² 1.5°) the cone of a sphere light is
+/// computed from the series `1 − cos θ_max = s/2 + s²/8`
+/// ([`crate::lights::light`]), pbrt-v4's switch: `1 − √(1 − s)` loses `s`
+/// to cancellation when it is small, and the series' next term, `s³/16`,
+/// is under an f32 ulp of the sum there.
+pub const SMALL_CONE_SIN2: Real = 0.00068523;
+
+/// A random walk's spectral densities are divided by their largest once
+/// it leaves `[WALK_RESCALE_BELOW, WALK_RESCALE_ABOVE]`
+/// ([`crate::materials::medium`]): they multiply at every step and would
+/// overflow or underflow an f64 after some thousands of steps; the
+/// contribution is divided by the same number, so its ratio to the density
+/// does not change. 10¹⁰⁰ leaves two hundred orders of magnitude to the
+/// ends of the f64 range.
+pub const WALK_RESCALE_ABOVE: f64 = 1e100;
+
+/// See [`WALK_RESCALE_ABOVE`].
+pub const WALK_RESCALE_BELOW: f64 = 1e-100;
+
+/// The shortest mean free path a translucent material may have
+/// ([`crate::files`]' subsurface settings): `σt = 1/ℓ` stays a normal f32
+/// (at most 10³⁰, below f32's 3.4·10³⁸) however small the file's ℓ is.
+pub const MIN_MEAN_FREE_PATH: f32 = 1e-30;
+
 /// `v / |v|`, or `None` for a zero or non-finite `v`, for any finite `v`:
 /// `v` is first divided by its largest absolute component, so `|v|²` can
 /// neither overflow (components near 10³⁸ in f32) nor underflow (near 10⁻²⁰).

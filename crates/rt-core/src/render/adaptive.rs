@@ -64,14 +64,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use rayon::prelude::*;
 
 use crate::math::color::Color;
+use crate::math::real::ADAPTIVE_DARK;
 use crate::render::settings::AdaptiveSampling;
 use crate::render::{Frame, NoFeatures, Renderer, band_rows};
 use crate::scene::effects::RayCounts;
-
-/// Added to the square root of the intensity in [`relative_error`]
-/// (Cycles' value), so a black pixel's error is finite: 0 if its halves
-/// agree.
-const DARK: f32 = 1e-4;
 
 /// How a pixel's samples become its value once adaptive sampling stops it
 /// (the module's "Stopping rules").
@@ -155,7 +151,7 @@ pub fn passes(min_samples: u32, samples: u32) -> Vec<Range<u32>> {
 /// at `intensity` (Σ_c (E_c + O_c) / n): difference / (10⁻⁴ + √intensity)
 /// (the module's formula).
 fn error_of(difference: f32, intensity: f32) -> f32 {
-    difference / (DARK + intensity.max(0.0).sqrt())
+    difference / (ADAPTIVE_DARK + intensity.max(0.0).sqrt())
 }
 
 /// The relative error estimate of a single pixel from the sums of its
@@ -378,11 +374,11 @@ mod tests {
         assert_eq!(relative_error(Color::ZERO, Color::ZERO, 8), 0.0);
         assert_eq!(relative_error(Color::splat(0.3), Color::splat(0.3), 8), 0.0);
         let e = relative_error(Color::splat(2.0), Color::ONE, 4);
-        assert!((e - 0.75 / (1.5 + DARK)).abs() < 1e-6, "{e}");
+        assert!((e - 0.75 / (1.5 + ADAPTIVE_DARK)).abs() < 1e-6, "{e}");
         // Four times the light with the same relative spread: twice the
         // error (a bright pixel's noise is allowed to grow as its root only).
         let bright = relative_error(Color::splat(8.0), Color::splat(4.0), 4);
-        assert!((bright - 3.0 / (3.0 + DARK)).abs() < 1e-6, "{bright}");
+        assert!((bright - 3.0 / (3.0 + ADAPTIVE_DARK)).abs() < 1e-6, "{bright}");
     }
 
     #[test]
@@ -390,12 +386,12 @@ mod tests {
         // 3 × 2 pixels; only the middle top one is noisy.
         let noise = [(0.0, 1.0), (0.9, 1.0), (0.0, 1.0), (0.0, 1.0), (0.0, 1.0), (0.0, 1.0)];
         // Every window holds the noisy pixel: 0.9 over 4 or 6 pixels.
-        assert!((window_error(&noise, 3, 0, 0) - 0.9 / 4.0 / (1.0 + DARK)).abs() < 1e-6);
-        assert!((window_error(&noise, 3, 1, 1) - 0.9 / 6.0 / (1.0 + DARK)).abs() < 1e-6);
+        assert!((window_error(&noise, 3, 0, 0) - 0.9 / 4.0 / (1.0 + ADAPTIVE_DARK)).abs() < 1e-6);
+        assert!((window_error(&noise, 3, 1, 1) - 0.9 / 6.0 / (1.0 + ADAPTIVE_DARK)).abs() < 1e-6);
         // Intensity is averaged before its root: a black pixel beside
         // bright ones is judged on the window's light.
         let dark = [(0.1, 0.0), (0.0, 4.0)];
-        assert!((window_error(&dark, 2, 0, 0) - 0.05 / (2f32.sqrt() + DARK)).abs() < 1e-6);
+        assert!((window_error(&dark, 2, 0, 0) - 0.05 / (2f32.sqrt() + ADAPTIVE_DARK)).abs() < 1e-6);
     }
 
     /// A uniform number in [0, 1) from (x, y, k) (SplitMix64's finaliser).

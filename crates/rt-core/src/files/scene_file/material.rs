@@ -10,7 +10,7 @@ use crate::materials::principled::Principled;
 use crate::materials::texture_slot::Wrap;
 use crate::materials::texture_slot::{Encoding, Filter, Sampler, TextureSlot, UvTransform};
 use crate::math::color::Color;
-use crate::math::real::{Real, to_f32};
+use crate::math::real::{MIN_MEAN_FREE_PATH, Real, to_f32};
 
 /// A material as written, in one of two models. With `base_color` it is
 /// physically based (glTF 2.0's metallic-roughness BSDF,
@@ -296,7 +296,7 @@ impl TryFrom<SubsurfaceFields> for SubsurfaceDesc {
         }
         let color = |v: [Real; 3]| Color::new(to_f32(v[0]), to_f32(v[1]), to_f32(v[2]));
         // At most 1e9 units: σt = 1/ℓ stays a normal f32, however small ℓ is.
-        let mean_free_path = color(mfp).max(Color::splat(1e-30));
+        let mean_free_path = color(mfp).max(Color::splat(MIN_MEAN_FREE_PATH));
         Ok(Self(Subsurface { albedo: color(albedo), mean_free_path, anisotropy: to_f32(g) }))
     }
 }
