@@ -1356,6 +1356,19 @@ mod tests {
     }
 
     #[test]
+    fn uniform_sphere_directions_follow_the_density_one_over_four_pi() {
+        // χ² of 2·10⁵ directions on a 16 × 32 equal-area grid of the sphere
+        // about a tilted axis, against `uniform_sphere_pdf` everywhere (the
+        // density of a constant environment's samples and of a walk's first
+        // step out of a boundary).
+        let axis = widen(Vec3::new(0.3, -0.5, 0.8).normalize());
+        let draw = |rng: &mut SampleRng| Draw::At(widen(uniform_sphere(rng.next_pair())));
+        let grid = SphereGrid::sphere(axis, 16, 32);
+        let density = to_f64(uniform_sphere_pdf());
+        chi_square::directions("uniform sphere", &grid, 200_000, draw, &|_| density);
+    }
+
+    #[test]
     fn the_concentric_map_is_uniform_on_the_disk() {
         // χ² of 2·10⁵ points on a 20 × 20 grid of [−1, 1]², against 1/π
         // inside the unit disk and 0 outside (α ≈ 10⁻⁴).

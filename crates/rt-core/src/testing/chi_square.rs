@@ -38,7 +38,7 @@
 //! the suite with probability below 1 % whatever its seeds, and a single
 //! check with probability 10⁻⁴ (≈ a 3.9σ two-sided bound). The seeds are
 //! fixed ([`SampleRng`]), so a run is reproducible; the bound does not rely
-//! on them. Keep the count of checks in the crate below [`CHECKS`] (75 in
+//! on them. Keep the count of checks in the crate below [`CHECKS`] (76 in
 //! use, the `χ² =` lines of `cargo test -p rt-core --lib -- --nocapture`,
 //! when this was written). Pearson's statistic with expected counts near
 //! 5 has a slightly heavier tail than χ² (its variance is about
