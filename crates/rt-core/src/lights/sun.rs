@@ -110,7 +110,7 @@ mod tests {
     use super::*;
     use crate::math::real::widen;
     use crate::sampling::sampler::SampleRng;
-    use crate::testing::chi_square::{self, Draw, Interval, Rectangle};
+    use crate::testing::chi_square::{self, Draw, Frame, Interval, Rectangle};
 
     #[test]
     fn the_sun_gives_its_stated_irradiance_on_a_surface_facing_it() {
@@ -149,15 +149,11 @@ mod tests {
         for degrees in [SUN_ANGULAR_RADIUS_DEGREES, 5.0, 40.0] {
             let sun = Sun::new(dir, degrees, Color::ONE);
             let disc = to_f64(sun.one_minus_cos);
-            let axis = widen(dir);
-            let (t1, t2) = axis.any_orthonormal_pair();
+            let frame = Frame::new(widen(dir));
             let draw = |rng: &mut SampleRng| {
-                let d = widen(sun.sample(rng.next_pair())).normalize();
-                let (x, y, z) = (d.dot(t1), d.dot(t2), d.dot(axis));
-                // 1 − cos θ without cancellation near the axis.
-                let u = (x * x + y * y) / (1.0 + z) / disc;
+                let (u, phi) = frame.coordinates(widen(sun.sample(rng.next_pair())));
+                let (u, phi) = (u / disc, phi / std::f64::consts::TAU);
                 assert!(u < 1.0 + 1e-4, "sun of {degrees}°: a sample {u} of the way out");
-                let phi = y.atan2(x).rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU;
                 Draw::At((u.min(1.0 - 1e-12), phi.min(1.0 - 1e-12)))
             };
             let grid =

@@ -390,6 +390,17 @@ impl Frame {
         let (t1, t2) = axis.any_orthonormal_pair();
         Self { axis, t1, t2 }
     }
+
+    /// The coordinates `(1 − cos θ, φ)` of direction `d` (normalised here)
+    /// about the axis, `φ` in [0, 2π), `1 − cos θ` computed without
+    /// cancellation near the axis.
+    pub(crate) fn coordinates(&self, d: DVec3) -> (f64, f64) {
+        let d = d.normalize();
+        let (x, y, z) = (d.dot(self.t1), d.dot(self.t2), d.dot(self.axis));
+        let u = if z > 0.0 { (x * x + y * y) / (1.0 + z) } else { 1.0 - z };
+        let phi = y.atan2(x).rem_euclid(std::f64::consts::TAU);
+        (u, phi)
+    }
 }
 
 /// An equal-area grid over the directions within `1 − cos θ ≤ u_max` of an
@@ -416,14 +427,9 @@ impl SphereGrid {
         Self { frame: Frame::new(axis), u_max, n_u, n_phi }
     }
 
-    /// Grid coordinates `(1 − cos θ, φ)` of a unit direction, computed
-    /// without cancellation near the axis.
+    /// Grid coordinates `(1 − cos θ, φ)` of a direction ([`Frame::coordinates`]).
     fn coordinates(&self, d: DVec3) -> (f64, f64) {
-        let d = d.normalize();
-        let (x, y, z) = (d.dot(self.frame.t1), d.dot(self.frame.t2), d.dot(self.frame.axis));
-        let u = if z > 0.0 { (x * x + y * y) / (1.0 + z) } else { 1.0 - z };
-        let phi = y.atan2(x).rem_euclid(std::f64::consts::TAU);
-        (u, phi)
+        self.frame.coordinates(d)
     }
 
     /// The unit direction at grid coordinates `(u, φ)`.
