@@ -50,6 +50,7 @@ channel tests fail at Z = 3. The whole-image means are compared too.
 """
 
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -355,6 +356,47 @@ def use_llvm19():
         os.environ["DRJIT_LIBLLVM_PATH"] = llvm
 
 
+def set_llvm_lanes(dr, mi, lanes):
+    """Makes Dr.Jit's LLVM backend compile `lanes`-wide kernels from now on.
+
+    By default it compiles for the host CPU at its widest vectors: on a CPU
+    with AVX-512, 16 lanes (`<16 x float>` in the kernels that
+    `dr.set_log_level(dr.LogLevel.Trace)` prints), and Mitsuba then hands its
+    rays to Embree 16 at a time. With `lanes` = 8 the AVX-512 features are
+    switched off (the host CPU otherwise) and kernels and ray packets are
+    8 wide, as AVX2 has them. Dr.Jit's Python module does not expose the
+    setting, so this calls its C++ library (`jit_llvm_set_target`) through
+    ctypes. Call it after `mi.set_variant` of an `llvm_` variant."""
+    import ctypes
+    lib = _drjit_core(dr)
+    cpu = ctypes.CFUNCTYPE(ctypes.c_char_p)(("_Z19jit_llvm_target_cpuv", lib))
+    features = ctypes.CFUNCTYPE(ctypes.c_char_p)(("_Z24jit_llvm_target_featuresv", lib))
+    set_target = ctypes.CFUNCTYPE(None, ctypes.c_char_p, ctypes.c_char_p, ctypes.c_uint32)(
+        ("_Z19jit_llvm_set_targetPKcS0_j", lib))
+    dr.eval(dr.arange(mi.Float, 1))  # starts the backend, which sets the host's target
+    if lanes == llvm_lanes(dr):
+        return
+    if lanes != 8:
+        raise SystemExit(f"--llvm-lanes: only 8 (AVX2) can be chosen, not {lanes}")
+    wide = ("+avx512", "+evex512")
+    narrowed = ",".join("-" + f[1:] if f.startswith(wide) else f for f in features().decode().split(","))
+    set_target(cpu(), narrowed.encode(), 8)
+    if llvm_lanes(dr) != 8:
+        raise SystemExit("Dr.Jit did not take the 8-lane target")
+
+
+def _drjit_core(dr):
+    """Dr.Jit's C++ library, for the settings its Python module leaves out."""
+    import ctypes
+    return ctypes.CDLL(os.path.join(os.path.dirname(dr.__file__), "libdrjit-core.so"))
+
+
+def llvm_lanes(dr):
+    """How many lanes wide Dr.Jit's LLVM backend compiles kernels now."""
+    import ctypes
+    return ctypes.CFUNCTYPE(ctypes.c_uint32)(("_Z21jit_llvm_vector_widthv", _drjit_core(dr)))()
+
+
 def export_scene(rt_view, scene, folder):
     """Empties `folder` and exports `scene` into it with `rt-view export`;
     returns the scene's description."""
@@ -366,8 +408,26 @@ def export_scene(rt_view, scene, folder):
         return json.load(f)
 
 
+@contextlib.contextmanager
+def bitmap_io():
+    """Runs Mitsuba's image reading and writing (`mi.Bitmap`) with at least
+    two threads in Dr.Jit's pool, and sets the pool back after: with one
+    thread (`--threads 1`), reading or writing an EXR file never returns
+    (Mitsuba 3.9.1, Dr.Jit 1.5.0)."""
+    import drjit as dr
+    threads = dr.thread_count()
+    if threads < 2:
+        dr.set_thread_count(2)
+    try:
+        yield
+    finally:
+        if threads < 2:
+            dr.set_thread_count(threads)
+
+
 def read_exr(mi, path):
-    return np.array(mi.Bitmap(path), dtype=np.float64)[:, :, :3]
+    with bitmap_io():
+        return np.array(mi.Bitmap(path), dtype=np.float64)[:, :, :3]
 
 
 def main():
@@ -493,9 +553,10 @@ def main():
     full = np.zeros_like(marks)
     full[: heat.shape[0], : heat.shape[1]] = heat
     picture = np.concatenate([side, marks, full], axis=1)
-    mi.Bitmap(picture).write(os.path.join(folder, "compare.png"))
-    mi.Bitmap(rt_image.astype(np.float32)).write(os.path.join(folder, "rt-view.exr"))
-    mi.Bitmap(mi_image.astype(np.float32)).write(os.path.join(folder, "mitsuba.exr"))
+    with bitmap_io():
+        mi.Bitmap(picture).write(os.path.join(folder, "compare.png"))
+        mi.Bitmap(rt_image.astype(np.float32)).write(os.path.join(folder, "rt-view.exr"))
+        mi.Bitmap(mi_image.astype(np.float32)).write(os.path.join(folder, "mitsuba.exr"))
     sys.exit(0 if passed else 1)
 
 

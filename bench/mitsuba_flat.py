@@ -4,7 +4,7 @@
     pip install mitsuba numpy
     cargo build --release -p rt-view
     target/release/rt-view bench --out bench-out      # writes the terrain meshes and camera
-    python3 bench/mitsuba_flat.py bench-out --threads 2 [--mesh 1m] [--spp 1,4,16,64]
+    python3 bench/mitsuba_flat.py bench-out --threads 2 [--mesh 1m] [--spp 1,4,16,64] [--llvm-lanes 8]
 
 Both renderers draw the terrain from the bench camera at 640×480 with N
 samples per pixel, every sample one camera ray and nothing else:
@@ -18,6 +18,11 @@ first render at each sample count (which compiles the kernels) untimed; both
 medians of `--runs`, on `--threads` threads. It prints samples per second
 and rt-view's over Mitsuba's, and the fraction of pixels each finds covered
 by the terrain (they should agree).
+
+Dr.Jit compiles Mitsuba's kernels for the host CPU at its widest vectors
+(16 lanes with AVX-512, whose rays then reach Embree 16 at a time);
+`--llvm-lanes 8` makes them 8 wide, as AVX2 has them (rt-view's node and
+leaf tests are 8 wide), to see what the wider vectors bring.
 
 Mitsuba's world is right-handed and ours left-handed: the mesh is mirrored
 in x, and so is the camera, whose up stays.
@@ -58,6 +63,7 @@ def main():
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--threads", type=int, default=os.cpu_count())
     ap.add_argument("--rt-view", default="target/release/rt-view")
+    ap.add_argument("--llvm-lanes", type=int, help="Mitsuba's kernels this many lanes wide (8), not the CPU's widest")
     args = ap.parse_args()
     counts = [int(n) for n in args.spp.split(",")]
 
@@ -72,6 +78,8 @@ def main():
 
     mi.set_variant("llvm_ad_rgb")
     dr.set_thread_count(args.threads)
+    if args.llvm_lanes:
+        mitsuba_compare.set_llvm_lanes(dr, mi, args.llvm_lanes)
     mirror = lambda p: [-p[0], p[1], p[2]]  # noqa: E731
     T = mi.ScalarTransform4f
     scene = mi.load_dict({
@@ -99,7 +107,9 @@ def main():
         arr = np.array(img)
         return time.perf_counter() - t0, arr
 
-    print(f"terrain {args.mesh}, {WIDTH}x{HEIGHT}, {args.threads} threads, medians of {args.runs} runs")
+    lanes = mitsuba_compare.llvm_lanes(dr)
+    print(f"terrain {args.mesh}, {WIDTH}x{HEIGHT}, {args.threads} threads, medians of {args.runs} runs; "
+          f"Mitsuba's kernels {lanes} lanes wide")
     print(f"{'spp':>5} {'rt-view s':>10} {'Mitsuba s':>10} {'rt-view Msamples/s':>19} {'Mitsuba Msamples/s':>19} "
           f"{'ratio':>7} {'covered rt-view':>16} {'covered Mitsuba':>16}")
     for spp in counts:
@@ -111,7 +121,7 @@ def main():
             theirs.append(t)
         a, b = statistics.median(ours), statistics.median(theirs)
         samples = WIDTH * HEIGHT * spp / 1e6
-        ours_img = np.array(mi.Bitmap(exr))[:, :, :3]
+        ours_img = mitsuba_compare.read_exr(mi, exr)
         # The aov integrator's image holds the albedo alone (0 where nothing is hit).
         covered_ours = float((ours_img.sum(axis=2) > 0).mean())
         covered_theirs = float((arr[:, :, :3].sum(axis=2) > 0).mean())

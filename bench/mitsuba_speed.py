@@ -14,7 +14,9 @@ not timed), on the same number of threads. The RMSE of each image against
 the reference (linear radiance, all pixels and channels) falls as 1/√spp
 for an unbiased renderer, so the time each needs to reach a target RMSE is
 `time(n)·(rmse(n)/target)²`; the target is Mitsuba `llvm_ad_rgb`'s RMSE at
-the largest count.
+the largest count. `--llvm-lanes 8` makes `llvm_ad_rgb`'s kernels 8
+lanes wide instead of the CPU's widest (16 with AVX-512), reference
+included (`bench/mitsuba_flat.py` says more).
 """
 
 import argparse
@@ -38,6 +40,7 @@ def main():
     p.add_argument("--threads", type=int, default=os.cpu_count())
     p.add_argument("--rt-view", default="target/release/rt-view")
     p.add_argument("--out", default="mitsuba-out")
+    p.add_argument("--llvm-lanes", type=int, help="llvm_ad_rgb's kernels this many lanes wide (8), not the CPU's widest")
     args = p.parse_args()
     counts = [int(n) for n in args.spp.split(",")]
 
@@ -56,6 +59,8 @@ def main():
         if variant not in scenes:
             mi.set_variant(variant)
             dr.set_thread_count(args.threads)
+            if args.llvm_lanes and variant.startswith("llvm"):
+                mitsuba_compare.set_llvm_lanes(dr, mi, args.llvm_lanes)
             scenes[variant] = mi.load_dict(mitsuba_compare.mitsuba_scene(mi, desc, folder, w, h, 400.0))
         mi.set_variant(variant)
         return scenes[variant]
@@ -78,6 +83,7 @@ def main():
 
     print(f"reference: Mitsuba llvm_ad_rgb, {args.reference_spp} spp ...", flush=True)
     reference, _ = render_mitsuba("llvm_ad_rgb", args.reference_spp, 1000)
+    print(f"Mitsuba llvm_ad_rgb's kernels are {mitsuba_compare.llvm_lanes(dr)} lanes wide", flush=True)
     render_mitsuba("scalar_rgb", 1, 999)  # load and warm up
     renderers = {
         "rt-view": render_rt,
