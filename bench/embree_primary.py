@@ -39,6 +39,14 @@ watertight test always has, so like is compared with like. With
 makes them by default: faster, and it lets a few rays through the edges
 between triangles (its hit counts fall short of rt-view's).
 
+With --embree-config CONFIG (say `max_isa=avx2`, rt-view's widest
+instructions, where Embree would pick AVX-512 kernels on a CPU that has
+it) Embree's device is made with that configuration string: `embreex`
+makes its device with none, so the script compiles a small shim with the
+C compiler (`cc`), which the dynamic loader puts in front of Embree's
+`rtcNewDevice` (LD_PRELOAD), and runs itself again with it. Add
+`verbose=1` to see which kernels Embree chose.
+
 With --build-only it times the commits alone (no rays, no bounce files
 needed), the counterpart of `rt-view bench --build-only`: run the two in
 turn, several times, to compare builds on a machine whose speed drifts
@@ -52,6 +60,9 @@ import json
 import multiprocessing as mp
 import os
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
 
 import numpy as np
@@ -207,7 +218,8 @@ def measure(threads, runs):
 
 def build_only(out, threads, runs):
     """Embree's commit time per mesh and thread count (medians of `runs`)."""
-    print(f"Intel Embree 4 (embreex, {MODE[DATA['robust']]}): the scene commit alone (rtcCommitScene), "
+    config = f", device config {device_config()}" if device_config() else ""
+    print(f"Intel Embree 4 (embreex, {MODE[DATA['robust']]}{config}): the scene commit alone (rtcCommitScene), "
           f"medians of {runs}")
     objs = sorted(glob.glob(os.path.join(out, "terrain_*.obj")), key=os.path.getsize)
     if not objs:
@@ -226,6 +238,51 @@ def build_only(out, threads, runs):
             print(f"terrain {label}: {len(DATA['tris'])} triangles, {t} thread(s): commit {build:.4f} s", flush=True)
 
 
+# `rtcNewDevice` with the configuration in EMBREE_CONFIG, for embreex, whose
+# device is made with none: the loader puts this in front of Embree's own.
+SHIM = r"""
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <stdio.h>
+#include <stdlib.h>
+typedef void *(*new_device_t)(const char *);
+void *rtcNewDevice(const char *config) {
+    void *lib = dlopen(getenv("EMBREE_LIB"), RTLD_NOW | RTLD_NOLOAD);
+    new_device_t real = lib ? (new_device_t)dlsym(lib, "rtcNewDevice") : 0;
+    if (!real) {
+        fprintf(stderr, "embree config shim: no rtcNewDevice in %s\n", getenv("EMBREE_LIB"));
+        abort();
+    }
+    const char *wanted = getenv("EMBREE_CONFIG");
+    return real(wanted ? wanted : config);
+}
+"""
+
+
+def device_config():
+    """The configuration Embree's device is made with here (None: embreex's own)."""
+    shim = "embree-shim-" in os.environ.get("LD_PRELOAD", "")
+    return os.environ.get("EMBREE_CONFIG") if shim else None
+
+
+def rerun_with_config(config):
+    """Runs this script again with Embree's device made with `config`."""
+    import embreex
+    libs = glob.glob(os.path.join(os.path.dirname(embreex.__file__), os.pardir, "embreex.libs", "libembree4*.so*"))
+    if len(libs) != 1:
+        raise SystemExit(f"--embree-config: expected one libembree4 beside embreex, found {libs}")
+    folder = tempfile.mkdtemp(prefix="embree-shim-")
+    source, shim = os.path.join(folder, "shim.c"), os.path.join(folder, "shim.so")
+    with open(source, "w") as f:
+        f.write(SHIM)
+    try:
+        subprocess.run(["cc", "-shared", "-fPIC", "-O2", "-o", shim, source, "-ldl"], check=True)
+    except (OSError, subprocess.CalledProcessError) as e:
+        raise SystemExit(f"--embree-config needs a C compiler (cc) to build its shim: {e}")
+    env = dict(os.environ, EMBREE_CONFIG=config, EMBREE_LIB=os.path.realpath(libs[0]), LD_PRELOAD=shim)
+    os.execve(sys.executable, [sys.executable] + sys.argv, env)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("out", help="the folder `rt-view bench --out` wrote")
@@ -234,7 +291,10 @@ def main():
     ap.add_argument("--build-only", action="store_true", help="time the scene commits alone")
     ap.add_argument("--no-robust", action="store_true",
                     help="scenes without RTC_SCENE_FLAG_ROBUST (Embree's C API default; faster, not watertight)")
+    ap.add_argument("--embree-config", help="Embree's device configuration, e.g. max_isa=avx2 (needs cc)")
     args = ap.parse_args()
+    if args.embree_config and device_config() != args.embree_config:
+        rerun_with_config(args.embree_config)
     DATA["robust"] = not args.no_robust
     threads = [int(t) for t in args.threads.split(",")]
     if args.build_only:
@@ -245,7 +305,9 @@ def main():
     if os.path.exists(bench_csv):
         for row in csv.DictReader(open(bench_csv)):
             ours[(row["mesh"], int(row["threads"]))] = row
-    print(f"Intel Embree 4 (embreex, rtcIntersect1, {MODE[DATA['robust']]}), medians of {args.runs} runs; Mrays/s; "
+    config = f", device config {device_config()}" if device_config() else ""
+    print(f"Intel Embree 4 (embreex, rtcIntersect1, {MODE[DATA['robust']]}{config}), medians of {args.runs} runs; "
+          "Mrays/s; "
           "build s: the scene commit alone (rtcCommitScene), not embreex's copying of the arrays; "
           "B/tri: the memory the commit added and kept (its BVH: the larger of the C heap's growth, "
           "glibc mallinfo2, and the resident size's) plus the mesh's "
