@@ -112,9 +112,12 @@ def write_exr(path, rgb):
     Blender's `Image.save` writes display-encoded values into an EXR)."""
     import mitsuba as mi
 
+    from mitsuba_compare import bitmap_io
+
     if not mi.variant():
         mi.set_variant("scalar_rgb")
-    mi.Bitmap(np.ascontiguousarray(rgb, dtype=np.float32)).write(path)
+    with bitmap_io():
+        mi.Bitmap(np.ascontiguousarray(rgb, dtype=np.float32)).write(path)
 
 
 def read_hdr_plain(path):
@@ -122,9 +125,12 @@ def read_hdr_plain(path):
     m·2^(e−136) (Mitsuba 3's reader)."""
     import mitsuba as mi
 
+    from mitsuba_compare import bitmap_io
+
     if not mi.variant():
         mi.set_variant("scalar_rgb")
-    return np.array(mi.Bitmap(path), dtype=np.float32)[:, :, :3]
+    with bitmap_io():
+        return np.array(mi.Bitmap(path), dtype=np.float32)[:, :, :3]
 
 
 def environment_world(bpy, exr, strength, rotation_degrees):
